@@ -1,0 +1,64 @@
+//===- Yasps.h - the yasps dialect ------------------------------*- C++ -*-===//
+//
+// Dialect, types and operations of yasps, plus the small queries on the
+// scene hierarchy that verifiers and passes share.
+//
+//===----------------------------------------------------------------------===//
+
+#ifndef YASPS_DIALECT_YASPS_IR_YASPS_H
+#define YASPS_DIALECT_YASPS_IR_YASPS_H
+
+#include "mlir/Bytecode/BytecodeOpInterface.h"
+#include "mlir/IR/BuiltinAttributes.h"
+#include "mlir/IR/BuiltinTypes.h"
+#include "mlir/IR/Dialect.h"
+#include "mlir/IR/OpDefinition.h"
+#include "mlir/IR/OpImplementation.h"
+#include "mlir/IR/SymbolTable.h"
+#include "mlir/Interfaces/InferTypeOpInterface.h"
+#include "mlir/Interfaces/SideEffectInterfaces.h"
+
+#include "yasps/Dialect/Yasps/IR/YaspsDialect.h.inc"
+#include "yasps/Dialect/Yasps/IR/YaspsEnums.h.inc"
+
+#define GET_TYPEDEF_CLASSES
+#include "yasps/Dialect/Yasps/IR/YaspsTypes.h.inc"
+
+#define GET_OP_CLASSES
+#include "yasps/Dialect/Yasps/IR/YaspsOps.h.inc"
+
+namespace mlir::yasps {
+
+/// True for the ops that own attributes: scene, mesh, primitive, union.
+bool isEntity(Operation *op);
+
+/// True for the ops that declare an attribute: data, constant, computed.
+bool isAttributeDecl(Operation *op);
+
+/// The matrix type of an attribute declaration (data, constant, computed).
+MatrixType getAttributeType(Operation *attrDecl);
+
+/// The scene that (transitively) contains `op`, or null.
+SceneOp getEnclosingScene(Operation *op);
+
+/// The entity (scene, mesh, primitive or union) that owns the attribute or
+/// expression `op`.
+Operation *getOwningEntity(Operation *op);
+
+/// Resolves a scene-relative symbol path such as `@mesh::@prim::@attr`.
+Operation *lookupInScene(SceneOp scene, SymbolRefAttr path,
+                         SymbolTableCollection *tables = nullptr);
+
+/// The scene-relative path of a symbol op, e.g. `@bunny::@vertices`.
+SymbolRefAttr getScenePath(Operation *symbolOp);
+
+/// Human-readable name of an entity or attribute for diagnostics, e.g.
+/// "primitive @bunny::@vertices" or "scene @s0".
+std::string describe(Operation *symbolOp);
+
+/// True if `ancestor` is `entity` or one of its enclosing entities.
+bool isOnLineageOf(Operation *ancestor, Operation *entity);
+
+} // namespace mlir::yasps
+
+#endif // YASPS_DIALECT_YASPS_IR_YASPS_H

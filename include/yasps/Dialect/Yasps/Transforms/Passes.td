@@ -1,0 +1,40 @@
+//===- Passes.td - yasps transformation passes ---------------*- tablegen -*-===//
+
+#ifndef YASPS_DIALECT_YASPS_TRANSFORMS_PASSES_TD
+#define YASPS_DIALECT_YASPS_TRANSFORMS_PASSES_TD
+
+include "mlir/Pass/PassBase.td"
+
+def YaspsInlineReads : Pass<"yasps-inline-reads", "::mlir::yasps::SceneOp"> {
+  let summary = "Inline reads of computed attributes on the same lineage";
+  let description = [{
+    Replaces every `yasps.read` of a computed attribute (`yasps.attr`) by a
+    copy of that attribute's region, repeatedly, so that each computed
+    attribute becomes one expression over stored attributes (data and
+    constants) and the boundary ops `yasps.join` and `yasps.union`. This is
+    how an attribute is evaluated without materialising its intermediates
+    (paper section 4.3, Fig. 6). JOIN and UNION are kept: they cross to
+    another primitive and are evaluated by their own kernels.
+
+    Run `cse` afterwards to merge the copies of shared subexpressions.
+
+    ```mlir
+    // before
+    yasps.attr @d : !yasps.mat<1x1xf64> {
+      %0 = yasps.read @m::@v::@x : !yasps.mat<3x1xf64>
+      ...
+    }
+    yasps.attr @e : !yasps.mat<1x1xf64> {
+      %0 = yasps.read @m::@v::@d : !yasps.mat<1x1xf64>
+      ...
+    }
+    // after: @e reads @m::@v::@x directly
+    ```
+  }];
+  let dependentDialects = ["::mlir::yasps::YaspsDialect"];
+  let statistics = [
+    Statistic<"numInlined", "num-inlined", "Number of reads inlined">
+  ];
+}
+
+#endif // YASPS_DIALECT_YASPS_TRANSFORMS_PASSES_TD

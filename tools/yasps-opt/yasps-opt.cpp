@@ -1,0 +1,29 @@
+//===- yasps-opt.cpp - mlir-opt with the yasps dialect --------------------===//
+//
+// The driver for debugging every stage of the yasps compiler: it knows the
+// yasps dialect and passes and all upstream dialects, passes and interface
+// extensions the lowering pipelines use.
+//
+//===----------------------------------------------------------------------===//
+
+#include "mlir/IR/DialectRegistry.h"
+#include "mlir/InitAllDialects.h"
+#include "mlir/InitAllExtensions.h"
+#include "mlir/InitAllPasses.h"
+#include "mlir/Tools/mlir-opt/MlirOptMain.h"
+
+#include "yasps/Dialect/Yasps/IR/Yasps.h"
+#include "yasps/Dialect/Yasps/Transforms/Passes.h"
+
+int main(int argc, char **argv) {
+  mlir::registerAllPasses();
+  mlir::yasps::registerYaspsPasses();
+
+  mlir::DialectRegistry registry;
+  mlir::registerAllDialects(registry);
+  mlir::registerAllExtensions(registry);
+  registry.insert<mlir::yasps::YaspsDialect>();
+
+  return mlir::asMainReturnCode(mlir::MlirOptMain(
+      argc, argv, "yasps optimizer driver\n", registry));
+}
