@@ -22,6 +22,11 @@ yasps.scene @structure {
     // CHECK: yasps.primitive @w(0) dynamic {
     yasps.primitive @w(0) dynamic {
       yasps.data_attr @x : !yasps.mat<3x1xf64>
+      yasps.attr @height : !yasps.mat<1x1xf64> {
+        %0 = yasps.read @m::@w::@x : !yasps.mat<3x1xf64>
+        %1 = yasps.element %0[2, 0] : !yasps.mat<3x1xf64>
+        yasps.yield %1 : !yasps.mat<1x1xf64>
+      }
     }
     // CHECK: yasps.primitive_union @all [@m::@v, @m::@w] {
     yasps.primitive_union @all [@m::@v, @m::@w] {
@@ -60,8 +65,8 @@ yasps.scene @structure {
       }
     }
   }
-  // CHECK: yasps.energy @m::@e::@length dynamic_instances
-  yasps.energy @m::@e::@length dynamic_instances
+  // CHECK: yasps.energy @m::@w::@height dynamic_instances
+  yasps.energy @m::@w::@height dynamic_instances
   // CHECK: yasps.energy @m::@e::@length{{$}}
   yasps.energy @m::@e::@length
   // CHECK: yasps.minimize [@m::@v::@x, @m::@stiffness]

@@ -98,3 +98,48 @@ bool mlir::yasps::isOnLineageOf(Operation *ancestor, Operation *entity) {
   return ancestor && entity &&
          (ancestor == entity || ancestor->isProperAncestor(entity));
 }
+
+SmallVector<Operation *>
+mlir::yasps::getAttributeDependencies(AttrOp attr,
+                                      SymbolTableCollection &tables) {
+  SmallVector<Operation *> deps;
+  SceneOp scene = getEnclosingScene(attr);
+  auto add = [&](Operation *decl) {
+    if (isAttributeDecl(decl))
+      deps.push_back(decl);
+  };
+  for (Operation &op : attr.getBodyBlock()) {
+    if (auto read = dyn_cast<ReadOp>(op)) {
+      add(lookupInScene(scene, read.getAttribute(), &tables));
+    } else if (auto join = dyn_cast<JoinOp>(op)) {
+      add(lookupInScene(scene, join.getSource(), &tables));
+    } else if (auto unionOp = dyn_cast<UnionOp>(op)) {
+      auto owner = dyn_cast_or_null<PrimitiveUnionOp>(getOwningEntity(attr));
+      if (!owner)
+        continue;
+      for (auto ref : owner.getMembers().getAsRange<SymbolRefAttr>()) {
+        Operation *member = lookupInScene(scene, ref, &tables);
+        if (isa_and_nonnull<PrimitiveOp, PrimitiveUnionOp>(member))
+          add(tables.lookupSymbolIn(member, unionOp.getNameAttr()));
+      }
+    }
+  }
+  return deps;
+}
+
+static bool hasDynamicInstancesImpl(Operation *entity,
+                                    llvm::SmallPtrSetImpl<Operation *> &seen) {
+  if (auto primitive = dyn_cast_or_null<PrimitiveOp>(entity))
+    return primitive.getDynamic();
+  auto unionOp = dyn_cast_or_null<PrimitiveUnionOp>(entity);
+  if (!unionOp || !seen.insert(unionOp).second)
+    return false;
+  return llvm::any_of(unionOp.getMemberOps(), [&](Operation *member) {
+    return hasDynamicInstancesImpl(member, seen);
+  });
+}
+
+bool mlir::yasps::hasDynamicInstances(Operation *entity) {
+  llvm::SmallPtrSet<Operation *, 4> seen;
+  return hasDynamicInstancesImpl(entity, seen);
+}

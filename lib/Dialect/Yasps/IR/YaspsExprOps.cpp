@@ -113,8 +113,8 @@ LogicalResult UnionOp::verifySymbolUses(SymbolTableCollection &tables) {
   SceneOp scene = getEnclosingScene(*this);
   for (auto ref : owner.getMembers().getAsRange<SymbolRefAttr>()) {
     Operation *member = lookupInScene(scene, ref, &tables);
-    if (!member)
-      continue; // reported by the union's own verifier
+    if (!isa_and_nonnull<PrimitiveOp, PrimitiveUnionOp>(member))
+      return owner.verifySymbolUses(tables); // reports the bad member
     Operation *decl = tables.lookupSymbolIn(member, getNameAttr());
     if (!isAttributeDecl(decl))
       return emitOpError() << "UNION member " << describe(member)

@@ -108,10 +108,18 @@ LogicalResult ConnectivityOp::verifySymbolUses(SymbolTableCollection &tables) {
 LogicalResult AttrOp::verify() {
   // The terminator's verifier checks the yielded type; here only the region's
   // shape, so the message names the attribute.
-  if (getBody().front().empty() ||
-      !isa<YieldOp>(getBody().front().back()))
+  Block &body = getBody().front();
+  if (body.getNumArguments() != 0)
+    return emitOpError() << describe(*this)
+                         << " must not have region arguments: values come "
+                            "from 'yasps.read', 'yasps.join' and 'yasps.union'";
+  if (body.empty() || !isa<YieldOp>(body.back()))
     return emitOpError() << describe(*this)
                          << " must end its region with 'yasps.yield'";
+  for (Operation &op : body)
+    if (!isa<YaspsDialect>(op.getDialect()))
+      return op.emitOpError() << "is not a yasps expression; " << describe(*this)
+                              << " may only contain yasps ops";
   return success();
 }
 
@@ -124,7 +132,47 @@ static unsigned entityDepth(Operation *entity) {
   return depth;
 }
 
+/// Finds a path of computed attributes from `from` back to `target`; on
+/// success `path` holds the attributes in between.
+static bool dependsOn(AttrOp from, AttrOp target, SymbolTableCollection &tables,
+                      llvm::SmallPtrSetImpl<Operation *> &visited,
+                      SmallVectorImpl<Operation *> &path) {
+  for (Operation *dep : getAttributeDependencies(from, tables)) {
+    auto computed = dyn_cast<AttrOp>(dep);
+    if (!computed)
+      continue;
+    if (computed == target)
+      return true;
+    if (!visited.insert(computed).second)
+      continue;
+    path.push_back(computed);
+    if (dependsOn(computed, target, tables, visited, path))
+      return true;
+    path.pop_back();
+  }
+  return false;
+}
+
 LogicalResult AttrOp::verifySymbolUses(SymbolTableCollection &tables) {
+  // The symbol-table walk visits this op before the ops in its region; check
+  // those first so a wrong read is reported as such, not as a consequence.
+  for (Operation &op : getBodyBlock())
+    if (auto user = dyn_cast<SymbolUserOpInterface>(op))
+      if (failed(user.verifySymbolUses(tables)))
+        return failure();
+
+  // An attribute cannot be computed from itself, directly or through reads,
+  // JOINs and UNIONs: evaluation and differentiation need an acyclic graph.
+  llvm::SmallPtrSet<Operation *, 16> visited;
+  SmallVector<Operation *> path;
+  if (dependsOn(*this, *this, tables, visited, path)) {
+    InFlightDiagnostic diag = emitOpError()
+                              << describe(*this) << " depends on itself";
+    for (Operation *step : path)
+      diag << (step == path.front() ? " through " : ", ") << describe(step);
+    return diag;
+  }
+
   // Lineage rule, second half (paper 4.3): the result belongs to the deepest
   // entity among the operands. Reads off the lineage are reported by the read
   // itself; JOIN and UNION results are on the owner by construction.
@@ -169,6 +217,26 @@ LogicalResult EnergyOp::verifySymbolUses(SymbolTableCollection &tables) {
   if (!type.isScalar())
     return emitOpError() << "energy " << describe(decl)
                          << " must be 1x1 per instance, got " << type;
+  Operation *owner = getOwningEntity(decl);
+  bool dynamic = hasDynamicInstances(owner);
+  if (dynamic && !getDynamicInstances())
+    return emitOpError() << "energy " << describe(decl) << " is on "
+                         << describe(owner)
+                         << ", whose instances change at run time; register "
+                            "it with 'dynamic_instances'";
+  if (!dynamic && getDynamicInstances())
+    return emitOpError() << "energy " << describe(decl)
+                         << " is marked 'dynamic_instances' but "
+                         << describe(owner) << " is not dynamic";
+  for (auto other : cast<SceneOp>((*this)->getParentOp())
+                        .getBodyBlock()
+                        .getOps<EnergyOp>()) {
+    if (other == *this)
+      break;
+    if (other.getAttribute() == getAttribute())
+      return emitOpError() << "energy " << describe(decl)
+                           << " is registered twice";
+  }
   return success();
 }
 

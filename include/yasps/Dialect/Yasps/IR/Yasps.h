@@ -10,6 +10,7 @@
 
 #include "mlir/Bytecode/BytecodeOpInterface.h"
 #include "mlir/IR/BuiltinAttributes.h"
+#include "mlir/IR/BuiltinOps.h"
 #include "mlir/IR/BuiltinTypes.h"
 #include "mlir/IR/Dialect.h"
 #include "mlir/IR/OpDefinition.h"
@@ -55,6 +56,16 @@ SymbolRefAttr getScenePath(Operation *symbolOp);
 /// Human-readable name of an entity or attribute for diagnostics, e.g.
 /// "primitive @bunny::@vertices" or "scene @s0".
 std::string describe(Operation *symbolOp);
+
+/// The attribute declarations that `attr`'s region reads directly: targets of
+/// `yasps.read`, sources of `yasps.join` and, for `yasps.union`, the
+/// same-named attribute of every member. Unresolved symbols are skipped.
+SmallVector<Operation *> getAttributeDependencies(AttrOp attr,
+                                                  SymbolTableCollection &tables);
+
+/// True for a dynamic primitive and for a primitive union with a dynamic
+/// member: entities whose instance count changes at run time.
+bool hasDynamicInstances(Operation *entity);
 
 /// True if `ancestor` is `entity` or one of its enclosing entities.
 bool isOnLineageOf(Operation *ancestor, Operation *entity);

@@ -39,7 +39,8 @@ class Yasps_EntityOp<string mnemonic, list<Trait> traits = []>
   ];
 }
 
-def Yasps_SceneOp : Yasps_EntityOp<"scene", [IsolatedFromAbove]> {
+def Yasps_SceneOp : Yasps_EntityOp<"scene", [IsolatedFromAbove,
+                                             HasParent<"::mlir::ModuleOp">]> {
   let summary = "the global scope of a simulation";
   let description = [{
     A scene holds meshes, scene-level attributes (e.g. the time step), energy
