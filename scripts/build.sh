@@ -11,6 +11,6 @@ if [ ! -f "$build/build.ninja" ]; then
     -DCMAKE_BUILD_TYPE=Release \
     -DMLIR_DIR="$llvm/lib/cmake/mlir" \
     -DLLVM_EXTERNAL_LIT="$llvm/bin/lit" \
-    -DPython3_EXECUTABLE="$(command -v python3)"
+    -DPython_EXECUTABLE="$(command -v python3)"
 fi
 cmake --build "$build" -- -j"${JOBS:-$(nproc)}"

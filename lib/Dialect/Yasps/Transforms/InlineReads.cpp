@@ -36,11 +36,11 @@ static void inlineRead(ReadOp read, AttrOp source) {
 }
 
 void InlineReadsPass::runOnOperation() {
-  SceneOp scene = getOperation();
   SymbolTableCollection tables;
   // The verifier rejects cyclic attribute definitions, so repeatedly inlining
   // the first read of a computed attribute terminates.
-  WalkResult result = scene.walk([&](AttrOp attr) {
+  WalkResult result = getOperation().walk([&](AttrOp attr) {
+    SceneOp scene = getEnclosingScene(attr);
     bool changed = true;
     while (changed) {
       changed = false;

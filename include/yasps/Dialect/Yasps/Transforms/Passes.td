@@ -5,7 +5,7 @@
 
 include "mlir/Pass/PassBase.td"
 
-def YaspsInlineReads : Pass<"yasps-inline-reads", "::mlir::yasps::SceneOp"> {
+def YaspsInlineReads : Pass<"yasps-inline-reads", "::mlir::ModuleOp"> {
   let summary = "Inline reads of computed attributes on the same lineage";
   let description = [{
     Replaces every `yasps.read` of a computed attribute (`yasps.attr`) by a

@@ -1,0 +1,201 @@
+"""Printing a scene as yasps IR text (see docs/dialect.md).
+
+Named attributes become declaration ops on their entity; every named
+computed, JOIN or UNION attribute gets a region holding its expression, with
+anonymous sub-expressions inlined and shared sub-expressions emitted once.
+"""
+
+from __future__ import annotations
+
+from typing import Dict, List, Optional, Tuple
+
+import numpy as np
+
+from .attribute import Attribute
+from .scene import Connectivity, Entity, Mesh, Primitive, PrimitiveUnion, Scene
+
+_INDENT = "  "
+
+# Ops printed as `yasps.<op> %a : T` and `yasps.<op> %a, %b : T`.
+_UNARY_SAME = {"neg", "sqrt", "log", "exp", "sin", "cos", "abs",
+               "stop_gradient", "inverse"}
+_BINARY_SAME = {"add", "sub", "elementwise_mul", "atan2", "min", "max", "cross"}
+_TO_SCALAR = {"det", "trace", "norm", "squared_norm", "sum"}
+
+
+def mat_type(attr: Attribute) -> str:
+    return f"!yasps.mat<{attr.rows}x{attr.cols}xf64>"
+
+
+def symbol_path(attr: Attribute) -> str:
+    """Scene-relative symbol path of a named attribute, e.g. @m::@v::@x."""
+    return "::".join("@" + name for name in attr.owner.path + [attr.name])
+
+
+def entity_path(entity: Entity) -> str:
+    return "::".join("@" + name for name in entity.path)
+
+
+def _float(value: float) -> str:
+    text = repr(float(value))
+    # MLIR float literals need a decimal point ("1e-10" would not parse).
+    return text if "." in text else f"{value:.17e}"
+
+
+def dense_literal(array: np.ndarray) -> str:
+    rows, cols = array.shape
+    if np.all(array == array.flat[0]):
+        body = _float(array.flat[0])
+    else:
+        body = "[" + ", ".join(
+            "[" + ", ".join(_float(v) for v in row) + "]" for row in array) + "]"
+    return f"dense<{body}> : tensor<{rows}x{cols}xf64>"
+
+
+def _loc(attr: Attribute, locations: bool) -> str:
+    if not locations or attr._loc is None:
+        return ""
+    filename, line = attr._loc
+    escaped = filename.replace("\\", "\\\\").replace('"', '\\"')
+    return f' loc("{escaped}":{line}:0)'
+
+
+class _RegionPrinter:
+    """Prints one computed attribute's region, numbering SSA values."""
+
+    def __init__(self, locations: bool):
+        self.locations = locations
+        self.names: Dict[int, str] = {}
+        self.lines: List[str] = []
+
+    def value(self, root: Attribute) -> str:
+        # Iterative post-order: expressions can be deeper than Python's
+        # recursion limit.
+        stack: List[Tuple[Attribute, bool]] = [(root, False)]
+        while stack:
+            node, expanded = stack.pop()
+            if id(node) in self.names:
+                continue
+            leaf = node.isNamed or node.kind == "literal"
+            if leaf or expanded:
+                self.names[id(node)] = self._emit(node)
+                continue
+            stack.append((node, True))
+            for operand in reversed(node._operands):
+                if id(operand) not in self.names:
+                    stack.append((operand, False))
+        return self.names[id(root)]
+
+    def _emit(self, node: Attribute) -> str:
+        name = f"%{len(self.names)}"
+        self.lines.append(f"{name} = {self._op_text(node)}"
+                          f"{_loc(node, self.locations)}")
+        return name
+
+    def _op_text(self, node: Attribute) -> str:
+        t = mat_type(node)
+        if node.isNamed:
+            return f"yasps.read {symbol_path(node)} : {t}"
+        if node.kind == "literal":
+            return f"yasps.constant {dense_literal(node._params['value'])}"
+        op, p = node._op, node._params
+        ops = [self.names[id(o)] for o in node._operands]
+        types = [mat_type(o) for o in node._operands]
+        if op in _UNARY_SAME:
+            return f"yasps.{op} {ops[0]} : {t}"
+        if op in _BINARY_SAME:
+            return f"yasps.{op} {ops[0]}, {ops[1]} : {t}"
+        if op in _TO_SCALAR:
+            return f"yasps.{op} {ops[0]} : {types[0]}"
+        if op == "dot":
+            return f"yasps.dot {ops[0]}, {ops[1]} : {types[0]}"
+        if op in ("scale", "div", "pow"):
+            return f"yasps.{op} {ops[0]}, {ops[1]} : {types[0]}, {types[1]}"
+        if op == "matmul":
+            return (f"yasps.matmul {ops[0]}, {ops[1]} : {types[0]}, {types[1]}"
+                    f" -> {t}")
+        if op in ("transpose", "resize"):
+            return f"yasps.{op} {ops[0]} : {types[0]} -> {t}"
+        if op in ("row", "col"):
+            return f"yasps.{op} {ops[0]}[{p['index']}] : {types[0]} -> {t}"
+        if op == "element":
+            return f"yasps.element {ops[0]}[{p['row']}, {p['col']}] : {types[0]}"
+        if op == "slice":
+            return (f"yasps.slice {ops[0]}[{p['row_offset']}, {p['col_offset']}]"
+                    f" : {types[0]} -> {t}")
+        if op == "cmp":
+            return f"yasps.cmp {p['predicate']}, {ops[0]}, {ops[1]} : {t}"
+        if op == "select":
+            return f"yasps.select {ops[0]}, {ops[1]}, {ops[2]} : {types[0]}, {t}"
+        if op == "project":
+            return f"yasps.project {p['method']} {ops[0]} : {t}"
+        if op == "concat":
+            return (f"yasps.concat {p['axis']} {', '.join(ops)} : "
+                    f"{', '.join(types)} -> {t}")
+        raise AssertionError(f"no IR spelling for op {op!r}")
+
+
+def _emit_attribute(attr: Attribute, depth: int, locations: bool) -> List[str]:
+    pad = _INDENT * depth
+    t = mat_type(attr)
+    loc = _loc(attr, locations)
+    decl = {"data": "yasps.data_attr", "constant": "yasps.const_attr"}
+    if attr.kind in decl:
+        return [f"{pad}{decl[attr.kind]} @{attr.name} : {t}{loc}"]
+    region = _RegionPrinter(locations)
+    if attr.kind == "join":
+        conn: Connectivity = attr._params["connectivity"]
+        source = attr._operands[0]
+        result = "%0"
+        region.lines.append(f"%0 = yasps.join @{conn.name}({symbol_path(source)})"
+                            f" : {t}{loc}")
+    elif attr.kind == "union":
+        result = "%0"
+        region.lines.append(f"%0 = yasps.union @{attr.name} : {t}{loc}")
+    else:
+        result = region.value(attr._operands[0])
+    body = [f"{pad}{_INDENT}{line}" for line in region.lines]
+    return ([f"{pad}yasps.attr @{attr.name} : {t} {{"] + body +
+            [f"{pad}{_INDENT}yasps.yield {result} : {t}", f"{pad}}}{loc}"])
+
+
+def _emit_members(entity: Entity, depth: int, locations: bool) -> List[str]:
+    lines: List[str] = []
+    pad = _INDENT * depth
+    for symbol in entity._symbols.values():
+        if isinstance(symbol, Attribute):
+            lines += _emit_attribute(symbol, depth, locations)
+        elif isinstance(symbol, Connectivity):
+            lines.append(f"{pad}yasps.connectivity @{symbol.name} -> "
+                         f"{entity_path(symbol.target)} arity {symbol.arity}")
+        elif isinstance(symbol, Mesh):
+            lines.append(f"{pad}yasps.mesh @{symbol.name} {{")
+            lines += _emit_members(symbol, depth + 1, locations)
+            lines.append(f"{pad}}}")
+        elif isinstance(symbol, Primitive):
+            dynamic = " dynamic" if symbol.isDynamic else ""
+            lines.append(f"{pad}yasps.primitive @{symbol.name}"
+                         f"({symbol.numInstances}){dynamic} {{")
+            lines += _emit_members(symbol, depth + 1, locations)
+            lines.append(f"{pad}}}")
+        elif isinstance(symbol, PrimitiveUnion):
+            members = ", ".join(entity_path(m) for m in symbol.members)
+            lines.append(f"{pad}yasps.primitive_union @{symbol.name} "
+                         f"[{members}] {{")
+            lines += _emit_members(symbol, depth + 1, locations)
+            lines.append(f"{pad}}}")
+    return lines
+
+
+def emit_scene(scene: Scene, locations: bool = False) -> str:
+    """The scene as IR text (one `yasps.scene` op)."""
+    lines = [f"yasps.scene @{scene.name} {{"]
+    lines += _emit_members(scene, 1, locations)
+    for attr, dynamic in scene._energies:
+        flag = " dynamic_instances" if dynamic else ""
+        lines.append(f"{_INDENT}yasps.energy {symbol_path(attr)}{flag}")
+    if scene._targets:
+        targets = ", ".join(symbol_path(t) for t in scene._targets)
+        lines.append(f"{_INDENT}yasps.minimize [{targets}]")
+    lines.append("}")
+    return "\n".join(lines) + "\n"

@@ -1,0 +1,87 @@
+"""Conversion between NumPy values and the runtime's storage layout.
+
+The runtime stores an attribute of N instances of shape r x c as one flat
+float64 array of N*r*c values, each instance column-major (Eigen's default,
+paper Fig. 5). Users think in NumPy's row-major ``(N, r, c)`` arrays; these
+helpers convert between the two and reject values that cannot be right.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from .errors import SceneError, ValueUpdateError
+
+
+def _as_array(values: Any, what: str) -> np.ndarray:
+    try:
+        array = np.asarray(values)
+    except Exception as err:  # ragged lists and the like
+        raise ValueUpdateError(f"{what}: cannot read {type(values).__name__} "
+                               f"as an array ({err})") from None
+    return array
+
+
+def to_column_major(values: Any, count: int, rows: int, cols: int,
+                    what: str) -> np.ndarray:
+    """Validates values for ``count`` instances of ``rows x cols`` and returns
+    them flat, column-major per instance, as a new float64 array.
+
+    Accepted shapes: ``(N, r, c)``, ``(N, r*c)`` (each row read row-major),
+    flat ``N*r*c`` (read as ``(N, r, c)`` in C order), and ``(r, c)`` for N=1.
+    """
+    array = _as_array(values, what)
+    if array.dtype == object or not (np.issubdtype(array.dtype, np.floating)
+                                     or np.issubdtype(array.dtype, np.integer)):
+        raise ValueUpdateError(
+            f"{what}: values must be real numbers, got dtype {array.dtype}")
+    size = count * rows * cols
+    accepted = {(count, rows, cols), (count, rows * cols), (size,)}
+    if count == 1:
+        accepted.add((rows, cols))
+    if array.shape not in accepted:
+        raise ValueUpdateError(
+            f"{what}: expected {count} instance(s) of {rows}x{cols}, i.e. an "
+            f"array of shape ({count}, {rows}, {cols}), ({count}, "
+            f"{rows * cols}) or ({size},); got shape {array.shape}")
+    array = array.astype(np.float64).reshape(count, rows, cols)
+    finite = np.isfinite(array)
+    if not finite.all():
+        bad = int(np.argwhere(~finite)[0][0])
+        raise ValueUpdateError(
+            f"{what}: values contain NaN or inf (first at instance {bad})")
+    # Column-major per instance: instance i's (row, col) entry at
+    # i*r*c + col*r + row.
+    return np.ascontiguousarray(array.transpose(0, 2, 1)).reshape(-1)
+
+
+def from_column_major(flat: np.ndarray, rows: int, cols: int) -> np.ndarray:
+    """The inverse of :func:`to_column_major`: an ``(N, rows, cols)`` array."""
+    return flat.reshape(-1, cols, rows).transpose(0, 2, 1).copy()
+
+
+def to_indices(indices: Any, count: int, arity: int, bound: int,
+               what: str) -> np.ndarray:
+    """Validates connectivity indices for ``count`` instances of arity
+    ``arity`` into a target with ``bound`` instances; returns flat int32."""
+    array = _as_array(indices, what)
+    if array.size == 0:
+        array = array.reshape(0, arity).astype(np.int64)
+    if not np.issubdtype(array.dtype, np.integer):
+        raise SceneError(f"{what}: indices must be integers, got dtype "
+                         f"{array.dtype}")
+    if array.shape not in ((count, arity), (count * arity,)):
+        raise SceneError(
+            f"{what}: expected {count} instance(s) of arity {arity}, i.e. "
+            f"shape ({count}, {arity}) or ({count * arity},); got shape "
+            f"{array.shape}")
+    flat = array.reshape(-1).astype(np.int64)
+    bad = np.flatnonzero((flat < 0) | (flat >= bound))
+    if bad.size:
+        i = int(bad[0])
+        raise SceneError(
+            f"{what}: index {int(flat[i])} (instance {i // arity}, slot "
+            f"{i % arity}) is out of range: the target has {bound} instances")
+    return flat.astype(np.int32)
