@@ -180,6 +180,9 @@ class Attribute:
         return lift(other, like=like, op=op)
 
     def _same_shape(self, op: str, other: "Attribute") -> None:
+        # Lineage first: combining attributes of two primitive types is the
+        # more fundamental mistake, whatever their shapes.
+        _common_owner(op, (self, other))
         if self.shape != other.shape:
             raise ShapeError(
                 f"{op}: shapes differ: {self.describe()} and {other.describe()}")
@@ -210,6 +213,7 @@ class Attribute:
         return self
 
     def _product(self, lhs: "Attribute", rhs: "Attribute") -> "Attribute":
+        _common_owner("mul", (lhs, rhs))
         # A 1x1 factor scales; otherwise it is the matrix product.
         if rhs.shape == (1, 1):
             return self._new("scale", (lhs, rhs), lhs._rows, lhs._cols)
@@ -231,6 +235,7 @@ class Attribute:
 
     def __truediv__(self, other: Operand) -> "Attribute":
         o = self._lift(other, op="div")
+        _common_owner("div", (self, o))
         if o.shape != (1, 1):
             raise ShapeError(
                 f"div: the divisor must be 1x1, got {o.describe()} (dividing "
@@ -247,6 +252,7 @@ class Attribute:
     def pow(self, exponent: Operand) -> "Attribute":
         """Entrywise power; the exponent is a scalar, 1x1 or of this shape."""
         e = self._lift(exponent, op="pow")
+        _common_owner("pow", (self, e))
         if e.shape != (1, 1) and e.shape != self.shape:
             raise ShapeError(
                 f"pow: the exponent must be 1x1 or of the base's shape, got "
@@ -554,6 +560,7 @@ def _common_owner(op: str, operands: Iterable[Attribute]) -> Optional["Entity"]:
 
 
 def _matmul(lhs: Attribute, rhs: Attribute) -> Attribute:
+    _common_owner("matrix product", (lhs, rhs))
     if lhs.cols != rhs.rows:
         raise ShapeError(
             f"matrix product: inner dimensions differ: {lhs.describe()} times "
@@ -568,11 +575,12 @@ def select(condition: Operand, if_true: Operand, if_false: Operand) -> Attribute
     """
     a = if_true if isinstance(if_true, Attribute) else None
     b = if_false if isinstance(if_false, Attribute) else None
-    like = a or b
+    like = a if a is not None else b
     t = lift(if_true, like=like, op="select")
     f = lift(if_false, like=t, op="select")
     t._same_shape("select", f)
     c = lift(condition, op="select")
+    _common_owner("select", (c, t, f))
     if c.shape != (1, 1) and c.shape != t.shape:
         raise ShapeError(f"select: the condition must be 1x1 or of the "
                          f"values' shape, got {c.describe()} for {t.describe()}")
@@ -586,6 +594,7 @@ def concat(parts: Sequence[Operand], axis: int = 0) -> Attribute:
     if not parts:
         raise ShapeError("concat: needs at least one operand")
     items = [lift(p, op="concat") for p in parts]
+    _common_owner("concat", items)
     kept = [(a.cols if axis == 0 else a.rows) for a in items]
     if len(set(kept)) != 1:
         raise ShapeError(

@@ -1,0 +1,119 @@
+"""Shared helpers of the Python tests: small meshes and the paper's scenes."""
+
+from __future__ import annotations
+
+import itertools
+import os
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+REPO = Path(__file__).resolve().parents[2]
+sys.path.insert(0, str(REPO / "python"))
+
+import yasps  # noqa: E402
+
+
+def box_mesh(n: int = 2):
+    """A cube of n^3 cells, each split into 6 positively oriented tets."""
+    grid = np.array(list(itertools.product(range(n + 1), repeat=3)), float)
+    index = {tuple(p.astype(int)): i for i, p in enumerate(grid)}
+    tets = []
+    for cell in itertools.product(range(n), repeat=3):
+        c = np.array(cell)
+        # Kuhn subdivision: one tet per permutation of the axes.
+        for perm in itertools.permutations(range(3)):
+            path = [c.copy()]
+            for axis in perm:
+                step = path[-1].copy()
+                step[axis] += 1
+                path.append(step)
+            tet = [index[tuple(p)] for p in path]
+            a, b, cc, d = grid[tet]
+            if np.linalg.det(np.stack([b - a, cc - a, d - a])) < 0:
+                tet[2], tet[3] = tet[3], tet[2]
+            tets.append(tet)
+    return grid / n, np.array(tets, dtype=np.int32)
+
+
+def running_example(n: int = 2):
+    """The paper's section 4 scene: a soft and an affine bunny (boxes here),
+    the UNION of their vertices, dynamic point-point pairs with the barrier
+    energy, minimised over the soft positions and the affine body."""
+    verts, tets = box_mesh(n)
+    nv, nt = len(verts), len(tets)
+    s = yasps.scene("scene0")
+    bunny_affine = s.addMesh("bunny_affine")
+    bunny_soft = s.addMesh("bunny_soft")
+
+    bunny_affine.addPrimitive("vertices", numInstances=nv)
+    bunny_affine.addPrimitive("affine_body", numInstances=1)
+    bunny_affine.addPrimitive("tets", numInstances=nt)
+    bunny_affine.affine_body.addAttribute("affine_matrix", rows=3, cols=3)
+    bunny_affine.affine_body["affine_matrix"].updateValue(np.eye(3))
+    bunny_affine.affine_body.addAttribute("translation", rows=3, cols=1)
+    bunny_affine.affine_body["translation"].updateValue(np.array([0.0, 0.0, 0.0]))
+    bunny_affine.vertices.addConstant("rest_position", rows=3, cols=1)
+    bunny_affine.vertices["rest_position"].updateValue(verts)
+
+    bv2abd = bunny_affine.vertices.addConnectivity(
+        "bunny_vertex_to_affine_body", bunny_affine.affine_body, [0] * nv, 1)
+    affine_tet2v = bunny_affine.tets.addConnectivity(
+        "tet2v", bunny_affine.vertices, tets, 4)
+    bva = bunny_affine.vertices.addAttribute(
+        "affine_matrix", through=bv2abd,
+        source=bunny_affine.affine_body["affine_matrix"])
+    bvt = bunny_affine.vertices.addAttribute(
+        "translation", through=bv2abd,
+        source=bunny_affine.affine_body["translation"])
+    current = bva.resize(3, 3) * bunny_affine.vertices["rest_position"] + \
+        bvt.resize(3, 1)
+    bunny_affine.vertices.addAttribute("position", computed_attribute=current)
+    bunny_affine.tets.addAttribute(
+        "positions", through=affine_tet2v,
+        source=bunny_affine.vertices["position"])
+
+    bunny_soft.addPrimitive("vertices", numInstances=nv)
+    bunny_soft.vertices.addAttribute("position", rows=3, cols=1)
+    bunny_soft.vertices["position"].updateValue(verts + [2.0, 0.0, 0.0])
+    bunny_soft.vertices.addConstant("rest_position", rows=3, cols=1)
+    bunny_soft.vertices["rest_position"].updateValue(verts + [2.0, 0.0, 0.0])
+
+    bunnies = s.addMesh("bunnies")
+    bunnies.addPrimitiveUnion("vertices", [bunny_affine.vertices,
+                                           bunny_soft.vertices])
+    bunnies.vertices.addAttribute("rest_position")
+    bunnies.vertices.addAttribute("position")
+    bunnies.addPrimitive("pp", numInstances=0, isDynamic=True)
+    pp2v = bunnies.pp.addConnectivity("pp2v", bunnies.vertices, [], 2)
+    pp_positions = bunnies.pp.addAttribute(
+        "positions", through=pp2v, source=bunnies.vertices["position"])
+
+    def point_point(position, dHat, kappa):
+        p0 = position.row(0)
+        p1 = position.row(1)
+        d = (p1 - p0).dot(p1 - p0)
+        I5 = d / dHat
+        lenE = d - dHat
+        I5log = I5.log()
+        return kappa * lenE * lenE * I5log * I5log
+
+    pp = point_point(pp_positions, 1e-3, 1e4)
+    pp_energy = bunnies.pp.addAttribute("point_point", computed_attribute=pp)
+    s.addEnergy(pp_energy, dynamic_instances=True)
+    s.addMinimizeTarget([bunny_soft.vertices["position"],
+                         bunny_affine.affine_body["affine_matrix"],
+                         bunny_affine.affine_body["translation"]])
+    return s
+
+
+@pytest.fixture
+def example_scene():
+    return running_example()
+
+
+def yasps_opt() -> Path:
+    build = Path(os.environ.get("YASPS_BUILD_DIR", REPO / "build"))
+    return build / "bin" / "yasps-opt"

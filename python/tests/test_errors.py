@@ -1,0 +1,211 @@
+"""User mistakes raise at the line that makes them, with a message naming
+attributes, owners and shapes, and leave the scene as it was."""
+
+import numpy as np
+import pytest
+
+import yasps
+from yasps import LineageError, SceneError, ShapeError, ValueUpdateError
+
+from conftest import box_mesh, running_example
+
+
+def small_scene():
+    verts, tets = box_mesh(1)
+    s = yasps.scene("s")
+    m = s.addMesh("bunny")
+    m.addPrimitive("vertices", numInstances=len(verts))
+    m.addPrimitive("tets", numInstances=len(tets))
+    x = m.vertices.addAttribute("position", rows=3, cols=1)
+    x.updateValue(verts)
+    m.tets.addConstant("volume", rows=1, cols=1)
+    m.tets.addConstant("Dm", rows=3, cols=3)
+    t2v = m.tets.addConnectivity("tet2v", m.vertices, tets, 4)
+    m.tets.addAttribute("x", through=t2v, source=x)
+    other = s.addMesh("other")
+    other.addPrimitive("vertices", numInstances=2)
+    other.vertices.addAttribute("position", rows=3, cols=1)
+    return s
+
+
+def unchanged(s, action, error, *fragments):
+    """Runs `action`, expects `error` with every fragment in its message, and
+    checks that the scene's IR is what it was and still verifies."""
+    before = s.ir()
+    with pytest.raises(error) as info:
+        action()
+    for fragment in fragments:
+        assert fragment in str(info.value), (fragment, str(info.value))
+    assert s.ir() == before
+    return info.value
+
+
+def test_tet_attribute_plus_vertex_attribute():
+    s = small_scene()
+    m = s.bunny
+    unchanged(s, lambda: m.tets["volume"] + m.vertices["position"],
+              LineageError, "constant attribute 'volume' [1x1] on primitive "
+              "'bunny.tets'", "data attribute 'position' [3x1] on primitive "
+              "'bunny.vertices'", "JOIN")
+
+
+def test_attributes_of_two_meshes():
+    s = small_scene()
+    unchanged(s, lambda: s.bunny.vertices["position"] +
+              s.other.vertices["position"], LineageError,
+              "'bunny.vertices'", "'other.vertices'", "not on one lineage")
+
+
+def test_join_of_3x3_through_arity_4_used_as_4x3():
+    s = small_scene()
+    m = s.bunny
+    t2v = m.tets.connectivities["tet2v"]
+    m.vertices.addConstant("F", rows=3, cols=3)
+    joined = m.tets.addAttribute("F", through=t2v, source=m.vertices["F"])
+    assert joined.shape == (4, 9)
+    unchanged(s, lambda: joined + m.tets["x"], ShapeError,
+              "join attribute 'F' [4x9] on primitive 'bunny.tets'",
+              "join attribute 'x' [4x3]")
+    unchanged(s, lambda: joined.T * m.tets["Dm"], ShapeError,
+              "inner dimensions differ", "[9x4]", "'Dm' [3x3]")
+
+
+def test_join_through_a_foreign_connectivity_or_of_a_wrong_source():
+    s = small_scene()
+    m = s.bunny
+    t2v = m.tets.connectivities["tet2v"]
+    unchanged(s, lambda: m.vertices.addAttribute("y", through=t2v,
+                                                 source=m.vertices["position"]),
+              LineageError, "is not a connectivity of primitive "
+              "'bunny.vertices'")
+    unchanged(s, lambda: m.tets.addAttribute("y", through=t2v,
+                                             source=s.other.vertices["position"]),
+              LineageError, "not an attribute of the connectivity's target "
+              "primitive 'bunny.vertices'")
+    unchanged(s, lambda: m.tets.addAttribute(
+        "y", through=t2v, source=m.vertices["position"] * 2.0),
+        LineageError, "unnamed expression")
+
+
+def test_union_over_primitives_without_the_attribute():
+    s = small_scene()
+    all_ = s.addMesh("all")
+    u = all_.addPrimitiveUnion("vertices", [s.bunny.vertices, s.bunny.tets])
+    unchanged(s, lambda: u.addAttribute("position"), LineageError,
+              "UNION needs attribute 'position' on every member",
+              "primitive 'bunny.tets'")
+    unchanged(s, lambda: u.addAttribute("volume"), LineageError,
+              "primitive 'bunny.vertices'")
+
+
+def test_union_of_different_shapes():
+    s = small_scene()
+    s.other.vertices.addConstant("volume", rows=3, cols=1)
+    all_ = s.addMesh("all")
+    u = all_.addPrimitiveUnion("mixed", [s.bunny.tets, s.other.vertices])
+    unchanged(s, lambda: u.addAttribute("volume"), ShapeError,
+              "UNION needs one shape", "[1x1]", "[3x1]")
+
+
+@pytest.mark.parametrize("values, fragment", [
+    (np.zeros((7, 3)), "expected 8 instance(s) of 3x1"),
+    (np.zeros(25), "got shape (25,)"),
+    (np.array(["a"] * 24), "values must be real numbers"),
+    (np.zeros((8, 3), dtype=complex), "values must be real numbers"),
+    ([[0.0, 0.0, float("nan")]] * 8, "NaN or inf (first at instance 0)"),
+    ([[1, 2], [3]], "cannot read"),
+])
+def test_update_value_rejects_bad_values(values, fragment):
+    s = small_scene()
+    x = s.bunny.vertices["position"]
+    old = x.value.copy()
+    unchanged(s, lambda: x.updateValue(values), ValueUpdateError,
+              "data attribute 'position' [3x1] on primitive 'bunny.vertices'",
+              fragment)
+    np.testing.assert_array_equal(x.value, old)
+
+
+def test_update_value_of_a_computed_attribute():
+    s = small_scene()
+    unchanged(s, lambda: s.bunny.tets["x"].updateValue(np.zeros((6, 4, 3))),
+              ValueUpdateError, "computed from other attributes")
+
+
+def test_connectivity_errors():
+    s = small_scene()
+    m = s.bunny
+    _, tets = box_mesh(1)
+    bad = tets.copy()
+    bad[2, 1] = 8
+    unchanged(s, lambda: m.tets.addConnectivity("t", m.vertices, bad, 4),
+              SceneError, "index 8 (instance 2, slot 1) is out of range: the "
+              "target has 8 instances")
+    unchanged(s, lambda: m.tets.addConnectivity("t", m.vertices, tets[:3], 4),
+              SceneError, "expected 6 instance(s) of arity 4")
+    unchanged(s, lambda: m.tets.addConnectivity("t", m.vertices,
+                                                tets.astype(float), 4),
+              SceneError, "indices must be integers")
+    unchanged(s, lambda: m.tets.addConnectivity("t", m.vertices, tets, 0),
+              SceneError, "arity must be a positive integer")
+
+
+def test_names():
+    s = small_scene()
+    m = s.bunny
+    unchanged(s, lambda: m.vertices.addAttribute("position", rows=3),
+              SceneError, "already has", "'position'")
+    unchanged(s, lambda: m.addPrimitive("vertices", numInstances=3),
+              SceneError, "already has")
+    unchanged(s, lambda: m.addPrimitive("2d", numInstances=3), SceneError,
+              "must be an identifier")
+    with pytest.raises(KeyError, match="has no attribute 'pos'.*position"):
+        m.vertices["pos"]
+    with pytest.raises(AttributeError, match="has no primitive 'edges'"):
+        m.edges
+
+
+def test_energy_and_target_errors():
+    s = small_scene()
+    m = s.bunny
+    x = m.vertices["position"]
+    unchanged(s, lambda: s.addEnergy(x), ShapeError, "must be 1x1",
+              "'position' [3x1]")
+    unchanged(s, lambda: s.addMinimizeTarget([m.tets["volume"]]), SceneError,
+              "constant attribute 'volume'", "not a data attribute")
+    unchanged(s, lambda: s.addMinimizeTarget([x, x]), SceneError,
+              "listed twice")
+    unchanged(s, lambda: s.addEnergy(x.squaredNorm(), dynamic_instances=True),
+              SceneError, "is not dynamic")
+    pairs = m.addPrimitive("pairs", numInstances=0, isDynamic=True)
+    e = pairs.addConstant("e", rows=1, cols=1)
+    unchanged(s, lambda: s.addEnergy(e), SceneError, "dynamic_instances=True")
+
+
+def test_computed_attribute_on_the_wrong_entity():
+    s = small_scene()
+    m = s.bunny
+    m.addConstant("k", rows=1, cols=1)
+    unchanged(s, lambda: m.vertices.addAttribute("kk",
+                                                 computed_attribute=m["k"] * 2.0),
+              LineageError, "only reads attributes of mesh 'bunny'",
+              "add it to mesh 'bunny'")
+    unchanged(s, lambda: m.tets.addAttribute(
+        "y", computed_attribute=m.vertices["position"] * 2.0),
+        LineageError, "not on the lineage of primitive 'bunny.tets'")
+
+
+def test_dynamic_primitive_updates():
+    s = running_example(1)
+    pp = s.bunnies.pp
+    conn = pp.connectivities["pp2v"]
+    with pytest.raises(SceneError, match="expected 0 instance"):
+        conn.updateConnectivity([[0, 1]])
+    pp.updateNumInstances(1)
+    with pytest.raises(SceneError, match="no indices"):
+        conn.indices
+    conn.updateConnectivity([[0, s.bunnies.vertices.indexOf(
+        s.bunny_soft.vertices, 0)]])
+    assert conn.indices.tolist() == [[0, 8]]
+    with pytest.raises(SceneError, match="not dynamic"):
+        s.bunny_soft.vertices.updateNumInstances(3)
+    assert "yasps.primitive @pp(1) dynamic" in s.ir()
