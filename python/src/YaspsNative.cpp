@@ -18,11 +18,22 @@
 #include "llvm/Support/SourceMgr.h"
 #include "llvm/Support/raw_ostream.h"
 
+#include "mlir/Conversion/Passes.h"
+#include "yasps/Conversion/Passes.h"
 #include "yasps/Dialect/Yasps/IR/Yasps.h"
 #include "yasps/Dialect/Yasps/Transforms/Passes.h"
+#include "yasps/Runtime/CpuKernel.h"
+#include "yasps/Runtime/ThreadPool.h"
+#include "yasps/Target/CPU/CpuCompiler.h"
 
 #include <nanobind/nanobind.h>
+#include <nanobind/ndarray.h>
+#include <nanobind/stl/pair.h>
 #include <nanobind/stl/string.h>
+#include <nanobind/stl/vector.h>
+
+#include <map>
+#include <memory>
 
 #include <mutex>
 #include <stdexcept>
@@ -42,14 +53,16 @@ struct IRError : std::runtime_error {
 MLIRContext &getContext() {
   static MLIRContext *context = [] {
     DialectRegistry registry;
-    registry.insert<yasps::YaspsDialect>();
+    mlir::yasps::registerCpuCompilerDialects(registry);
     auto *ctx = new MLIRContext(registry, MLIRContext::Threading::DISABLED);
     ctx->loadAllAvailableDialects();
     // Diagnostics quote the user's line; the generic form of the op adds
     // nothing for a scene author.
     ctx->printOpOnDiagnostic(false);
-    yasps::registerYaspsPasses();
+    mlir::yasps::registerYaspsPasses();
+    mlir::yasps::registerYaspsConversionPasses();
     registerTransformsPasses();
+    registerConversionPasses();
     return ctx;
   }();
   return *context;
@@ -80,6 +93,21 @@ std::string printModule(ModuleOp module) {
   return out;
 }
 
+/// Parses and verifies `ir` into the shared context; the caller holds the
+/// lock and the source manager that diagnostics refer to.
+OwningOpRef<ModuleOp> parseVerified(const std::string &ir,
+                                    const std::string &bufferName,
+                                    llvm::SourceMgr &sourceMgr,
+                                    DiagnosticCollector &diagnostics) {
+  sourceMgr.AddNewSourceBuffer(
+      llvm::MemoryBuffer::getMemBufferCopy(ir, bufferName), llvm::SMLoc());
+  OwningOpRef<ModuleOp> module =
+      parseSourceFile<ModuleOp>(sourceMgr, ParserConfig(&getContext()));
+  if (!module)
+    throw IRError(diagnostics.take());
+  return module;
+}
+
 /// Parses and verifies `ir`, then runs `pipeline` (textual pass pipeline on
 /// the module, e.g. "yasps-inline-reads,cse"; empty for none) and returns the
 /// printed result.
@@ -88,14 +116,9 @@ std::string runPipeline(const std::string &ir, const std::string &pipeline,
   std::lock_guard<std::mutex> guard(getLock());
   MLIRContext &context = getContext();
   llvm::SourceMgr sourceMgr;
-  sourceMgr.AddNewSourceBuffer(
-      llvm::MemoryBuffer::getMemBufferCopy(ir, bufferName), llvm::SMLoc());
   DiagnosticCollector diagnostics(context, sourceMgr);
-
   OwningOpRef<ModuleOp> module =
-      parseSourceFile<ModuleOp>(sourceMgr, ParserConfig(&context));
-  if (!module)
-    throw IRError(diagnostics.take());
+      parseVerified(ir, bufferName, sourceMgr, diagnostics);
 
   PassManager pm(&context, ModuleOp::getOperationName(),
                  OpPassManager::Nesting::Implicit);
@@ -108,6 +131,82 @@ std::string runPipeline(const std::string &ir, const std::string &pipeline,
   if (failed(pm.run(*module)))
     throw IRError(diagnostics.take());
   return printModule(*module);
+}
+
+/// Compiled CPU kernels of one scene, with what launching them needs.
+struct CpuLibrary {
+  std::shared_ptr<mlir::yasps::CpuKernelLibrary> library;
+  mlir::yasps::CpuCompileStats stats;
+};
+
+CpuLibrary compileCpu(const std::string &ir,
+                      const std::vector<std::string> &attributes,
+                      const std::string &cacheDir, unsigned optLevel,
+                      const std::string &bufferName) {
+  std::lock_guard<std::mutex> guard(getLock());
+  llvm::SourceMgr sourceMgr;
+  DiagnosticCollector diagnostics(getContext(), sourceMgr);
+  OwningOpRef<ModuleOp> module =
+      parseVerified(ir, bufferName, sourceMgr, diagnostics);
+  mlir::yasps::CpuCompileOptions options;
+  options.cacheDir = cacheDir;
+  options.optLevel = optLevel;
+  CpuLibrary result;
+  auto library =
+      mlir::yasps::compileCpuKernels(*module, attributes, options, &result.stats);
+  if (!library) {
+    std::string message = llvm::toString(library.takeError());
+    std::string collected = diagnostics.take();
+    throw IRError(collected.empty() ? message : collected + message);
+  }
+  result.library = *library;
+  return result;
+}
+
+::yasps::runtime::ThreadPool &poolFor(unsigned threads) {
+  if (threads == 0)
+    return ::yasps::runtime::defaultThreadPool();
+  static std::mutex lock;
+  static std::map<unsigned, std::unique_ptr<::yasps::runtime::ThreadPool>> pools;
+  std::lock_guard<std::mutex> guard(lock);
+  auto &pool = pools[threads];
+  if (!pool)
+    pool = std::make_unique<::yasps::runtime::ThreadPool>(threads);
+  return *pool;
+}
+
+using Buffer = nb::ndarray<nb::c_contig, nb::device::cpu>;
+
+/// Runs the kernel of `attribute` on `numInstances` instances; `buffers`
+/// follow the kernel's argument list (float64 for out/attr, int32 for
+/// conn, int64 for offsets).
+void launchCpu(const CpuLibrary &self, const std::string &attribute,
+               int64_t numInstances, const std::vector<Buffer> &buffers,
+               unsigned threads) {
+  const mlir::yasps::CpuKernel *kernel = self.library->lookup(attribute);
+  if (!kernel)
+    throw std::invalid_argument("no compiled kernel for " + attribute);
+  if (buffers.size() != kernel->arguments.size())
+    throw std::invalid_argument(
+        "kernel for " + attribute + " takes " +
+        std::to_string(kernel->arguments.size()) + " buffers, got " +
+        std::to_string(buffers.size()));
+  std::vector<::yasps::runtime::KernelBuffer> args;
+  for (size_t i = 0; i < buffers.size(); ++i) {
+    const std::string &kind = kernel->arguments[i].kind;
+    nb::dlpack::dtype expected =
+        kind == "conn"      ? nb::dtype<int32_t>()
+        : kind == "offsets" ? nb::dtype<int64_t>()
+                            : nb::dtype<double>();
+    if (buffers[i].dtype() != expected || buffers[i].ndim() != 1)
+      throw std::invalid_argument("buffer " + std::to_string(i) + " (" +
+                                  kind + " " + kernel->arguments[i].path +
+                                  ") has the wrong dtype or rank");
+    args.push_back({buffers[i].data(), (int64_t)buffers[i].shape(0)});
+  }
+  nb::gil_scoped_release release;
+  ::yasps::runtime::launchCpuKernel(kernel->packed, args, numInstances,
+                                  poolFor(threads), /*minChunk=*/256);
 }
 
 } // namespace
@@ -124,6 +223,50 @@ NB_MODULE(_yasps_native, m) {
       },
       nb::arg("ir"), nb::arg("name") = "<yasps>",
       "Parses and verifies yasps IR; raises IRError with the diagnostics.");
+  nb::class_<CpuLibrary>(m, "CpuLibrary",
+                         "Compiled CPU kernels of a scene's attributes.")
+      .def_prop_ro(
+          "kernels",
+          [](const CpuLibrary &self) {
+            std::vector<std::pair<std::string,
+                                  std::vector<std::pair<std::string,
+                                                        std::string>>>>
+                out;
+            for (const auto &kernel : self.library->kernels()) {
+              std::vector<std::pair<std::string, std::string>> args;
+              for (const auto &arg : kernel.arguments)
+                args.emplace_back(arg.kind, arg.path);
+              out.emplace_back(kernel.attribute, args);
+            }
+            return out;
+          },
+          "[(attribute path, [(kind, path), ...])] per kernel")
+      .def_prop_ro(
+          "stats",
+          [](const CpuLibrary &self) {
+            nb::dict d;
+            d["from_memory"] = self.stats.fromMemory;
+            d["from_disk"] = self.stats.fromDisk;
+            d["lower_seconds"] = self.stats.lowerSeconds;
+            d["codegen_seconds"] = self.stats.codegenSeconds;
+            d["key"] = self.stats.key;
+            return d;
+          },
+          "how the compilation went (cache hits, times, cache key)")
+      .def("launch", &launchCpu, nb::arg("attribute"),
+           nb::arg("num_instances"), nb::arg("buffers"),
+           nb::arg("threads") = 0,
+           "Evaluates an attribute's kernel on num_instances instances.");
+
+  m.def("compile_cpu", &compileCpu, nb::arg("ir"), nb::arg("attributes"),
+        nb::arg("cache_dir") = "", nb::arg("opt_level") = 3,
+        nb::arg("name") = "<yasps>",
+        "Compiles CPU kernels for the attributes (scene-relative paths) of "
+        "the IR's scene, reusing in-memory and on-disk caches.");
+  m.def("cpu_lowering_pipeline",
+        [] { return mlir::yasps::getCpuLoweringPipeline().str(); },
+        "The pass pipeline from kernel functions to the LLVM dialect.");
+
   m.def("run_pipeline", &runPipeline, nb::arg("ir"), nb::arg("pipeline"),
         nb::arg("name") = "<yasps>",
         "Parses and verifies yasps IR, runs a textual pass pipeline on the "

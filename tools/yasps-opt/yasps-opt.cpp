@@ -12,12 +12,14 @@
 #include "mlir/InitAllPasses.h"
 #include "mlir/Tools/mlir-opt/MlirOptMain.h"
 
+#include "yasps/Conversion/Passes.h"
 #include "yasps/Dialect/Yasps/IR/Yasps.h"
 #include "yasps/Dialect/Yasps/Transforms/Passes.h"
 
 int main(int argc, char **argv) {
   mlir::registerAllPasses();
   mlir::yasps::registerYaspsPasses();
+  mlir::yasps::registerYaspsConversionPasses();
 
   mlir::DialectRegistry registry;
   mlir::registerAllDialects(registry);

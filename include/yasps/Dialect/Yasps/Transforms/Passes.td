@@ -37,4 +37,12 @@ def YaspsInlineReads : Pass<"yasps-inline-reads", "::mlir::ModuleOp"> {
   ];
 }
 
+def YaspsStripScenes : Pass<"yasps-strip-scenes", "::mlir::ModuleOp"> {
+  let summary = "Erase the scene description once kernels are generated";
+  let description = [{
+    Removes every `yasps.scene` op, leaving the generated kernel functions in
+    upstream dialects only, ready for lowering to LLVM or GPU code.
+  }];
+}
+
 #endif // YASPS_DIALECT_YASPS_TRANSFORMS_PASSES_TD

@@ -1,0 +1,48 @@
+//===- Passes.td - yasps conversion passes -------------------*- tablegen -*-===//
+
+#ifndef YASPS_CONVERSION_PASSES_TD
+#define YASPS_CONVERSION_PASSES_TD
+
+include "mlir/Pass/PassBase.td"
+
+def YaspsLowerToLoops : Pass<"yasps-lower-to-loops", "::mlir::ModuleOp"> {
+  let summary = "Generate per-instance loop kernels that evaluate attributes";
+  let description = [{
+    For every requested attribute of the scene, adds a function
+
+    ```mlir
+    func.func @yasps_eval_<mesh>__<primitive>__<attr>(
+        %begin: index, %end: index, %out: memref<?xf64>, %arg: memref<?x...>...)
+    ```
+
+    that evaluates the attribute on the instances `[begin, end)` of its owner
+    and stores them in `out` (column-major per instance, instance after
+    instance). The body is one `scf.parallel` loop over instances; small
+    matrices are scalarised into `arith`/`math` ops; stored attributes are
+    loaded from one buffer each (scene- and mesh-level ones at instance 0, a
+    broadcast); a JOIN gathers through its connectivity's int32 buffer and
+    evaluates its source at the gathered instances; a UNION decodes the union
+    index with the union's prefix offsets (an i64 buffer) and evaluates the
+    member's attribute. Computed attributes are evaluated where they are used:
+    nothing intermediate is stored (paper section 4.3, Fig. 6 and 9).
+
+    The function's `yasps.kernel_args` lists what each buffer argument holds
+    (`out`, `attr`, `conn`, `offsets`, with the symbol it belongs to); the
+    runtime binds buffers by it. Instance counts are not compiled in: a
+    dynamic primitive changes size without a new kernel.
+  }];
+  let options = [
+    ListOption<"attributes", "attributes", "std::string",
+               "Scene-relative paths of the attributes to evaluate "
+               "(e.g. @mesh::@prim::@attr); empty means every energy">,
+    Option<"sceneName", "scene", "std::string", /*default=*/"\"\"",
+           "The scene to compile (default: the module's only scene)">
+  ];
+  let dependentDialects = [
+    "::mlir::arith::ArithDialect", "::mlir::func::FuncDialect",
+    "::mlir::math::MathDialect", "::mlir::memref::MemRefDialect",
+    "::mlir::scf::SCFDialect"
+  ];
+}
+
+#endif // YASPS_CONVERSION_PASSES_TD

@@ -1,0 +1,38 @@
+//===- ScalarLowering.h - yasps expressions as scalar arithmetic -*- C++ -*-===//
+//
+// Kernels work on small matrices entry by entry: a per-instance matrix becomes
+// rows*cols SSA scalars (column-major), and every yasps expression op becomes
+// arith/math ops on them. Matrix-level ops (det, inverse, matmul, ...) are
+// expanded here, as late as possible, so that everything before kernel
+// generation stays matrix-level.
+//
+//===----------------------------------------------------------------------===//
+
+#ifndef YASPS_CONVERSION_YASPSTOLOOPS_SCALARLOWERING_H
+#define YASPS_CONVERSION_YASPSTOLOOPS_SCALARLOWERING_H
+
+#include "mlir/IR/Builders.h"
+#include "mlir/IR/Value.h"
+#include "llvm/ADT/SmallVector.h"
+
+namespace mlir::yasps {
+
+/// A per-instance matrix held as SSA scalars in column-major order.
+struct ScalarMatrix {
+  int64_t rows = 0;
+  int64_t cols = 0;
+  SmallVector<Value> values;
+
+  Value at(int64_t r, int64_t c) const { return values[c * rows + r]; }
+};
+
+/// Emits the scalar arithmetic of the yasps expression `op` (every op but
+/// `yasps.read`, `yasps.join` and `yasps.union`, which need the kernel's
+/// buffers) given its operands. Reports an error on `op` and fails for ops
+/// that kernels do not support.
+FailureOr<ScalarMatrix> lowerToScalars(OpBuilder &b, Operation *op,
+                                       ArrayRef<ScalarMatrix> operands);
+
+} // namespace mlir::yasps
+
+#endif // YASPS_CONVERSION_YASPSTOLOOPS_SCALARLOWERING_H

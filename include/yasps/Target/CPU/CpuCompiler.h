@@ -1,0 +1,86 @@
+//===- CpuCompiler.h - attribute kernels for the CPU ------------*- C++ -*-===//
+//
+// Compiles the attributes of a scene into CPU kernels: yasps IR is lowered to
+// loop kernels (yasps-lower-to-loops), then to the LLVM dialect, and JIT
+// compiled by mlir::ExecutionEngine with LLVM's -O3 pipeline for the host.
+// Compiled objects are cached in memory and on disk, keyed by a hash of the
+// kernel IR, the pipeline and the host CPU, so a second process with the
+// same scene compiles nothing.
+//
+//===----------------------------------------------------------------------===//
+
+#ifndef YASPS_TARGET_CPU_CPUCOMPILER_H
+#define YASPS_TARGET_CPU_CPUCOMPILER_H
+
+#include "mlir/IR/BuiltinOps.h"
+#include "mlir/IR/DialectRegistry.h"
+#include "llvm/Support/Error.h"
+
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace mlir::yasps {
+
+/// What one buffer argument of a kernel holds.
+struct KernelArgument {
+  std::string kind; ///< "out", "attr", "conn" or "offsets"
+  std::string path; ///< scene-relative symbol path, e.g. "@m::@v::@x"
+};
+
+/// One compiled attribute kernel, callable with MLIR's packed ABI:
+/// (index begin, index end, memref<?x...> buffers...).
+struct CpuKernel {
+  std::string attribute; ///< the attribute it evaluates
+  std::string symbol;    ///< the kernel function's name
+  std::vector<KernelArgument> arguments;
+  void (*packed)(void **) = nullptr;
+};
+
+/// How a compilation went, for users and benchmarks.
+struct CpuCompileStats {
+  bool fromMemory = false;   ///< reused a kernel library of this process
+  bool fromDisk = false;     ///< loaded a cached object, no code generation
+  double lowerSeconds = 0;   ///< yasps IR to LLVM dialect
+  double codegenSeconds = 0; ///< LLVM optimisation, code generation, loading
+  std::string key;           ///< the cache key
+};
+
+/// A set of compiled kernels and the JIT session that owns their code.
+class CpuKernelLibrary {
+public:
+  virtual ~CpuKernelLibrary();
+  /// The kernel evaluating `attributePath`, or null.
+  const CpuKernel *lookup(llvm::StringRef attributePath) const;
+  const std::vector<CpuKernel> &kernels() const { return kernelList; }
+
+protected:
+  std::vector<CpuKernel> kernelList;
+  friend class CpuCompiler;
+};
+
+struct CpuCompileOptions {
+  /// Directory of the on-disk object cache; empty disables it.
+  std::string cacheDir;
+  /// LLVM optimisation level of the kernels (0-3).
+  unsigned optLevel = 3;
+};
+
+/// Registers the dialects, interfaces and translations the CPU pipeline uses.
+void registerCpuCompilerDialects(DialectRegistry &registry);
+
+/// The pass pipeline from kernel functions (after yasps-lower-to-loops) to
+/// the LLVM dialect, as a yasps-opt pipeline string.
+llvm::StringRef getCpuLoweringPipeline();
+
+/// Compiles kernels for `attributes` (scene-relative paths; empty: every
+/// energy) of the module's scene. The module is left unchanged. Libraries
+/// are shared between calls with the same kernels.
+llvm::Expected<std::shared_ptr<CpuKernelLibrary>>
+compileCpuKernels(ModuleOp module, const std::vector<std::string> &attributes,
+                  const CpuCompileOptions &options,
+                  CpuCompileStats *stats = nullptr);
+
+} // namespace mlir::yasps
+
+#endif // YASPS_TARGET_CPU_CPUCOMPILER_H

@@ -1,0 +1,335 @@
+//===- YaspsToLoops.cpp - per-instance loop kernels for attributes --------===//
+//
+// Each requested attribute becomes a function with one parallel loop over the
+// instances of its owner. Inside the loop the attribute is evaluated by
+// walking its definition: stored attributes are loaded, computed attributes
+// are evaluated in place (nothing intermediate is materialised), JOINs gather
+// through connectivity buffers and evaluate their source at the gathered
+// instances, UNIONs decode the union index and evaluate the member's
+// attribute in an scf.if chain.
+//
+//===----------------------------------------------------------------------===//
+
+#include "yasps/Conversion/Passes.h"
+
+#include "yasps/Conversion/YaspsToLoops/ScalarLowering.h"
+#include "yasps/Dialect/Yasps/IR/Yasps.h"
+
+#include "mlir/AsmParser/AsmParser.h"
+
+namespace mlir::yasps {
+#define GEN_PASS_DEF_YASPSLOWERTOLOOPS
+#include "yasps/Conversion/Passes.h.inc"
+} // namespace mlir::yasps
+
+using namespace mlir;
+using namespace mlir::yasps;
+
+namespace {
+
+/// Builds the body of one kernel function, adding buffer arguments to it as
+/// the evaluation meets stored attributes, connectivities and unions.
+class KernelEmitter {
+public:
+  KernelEmitter(SceneOp scene, SymbolTableCollection &tables,
+                func::FuncOp func)
+      : scene(scene), tables(tables), func(func) {}
+
+  /// The buffer argument holding `symbol`'s data, created on first use.
+  Value buffer(StringRef kind, Operation *symbol, Type elementType) {
+    auto key = std::make_pair(kind, symbol);
+    auto it = buffers.find(key);
+    if (it != buffers.end())
+      return it->second;
+    Block &entry = func.getBody().front();
+    Type type = MemRefType::get({ShapedType::kDynamic}, elementType);
+    Value arg = entry.addArgument(type, symbol->getLoc());
+    buffers[key] = arg;
+    MLIRContext *ctx = func.getContext();
+    roles.push_back(ArrayAttr::get(
+        ctx, {StringAttr::get(ctx, kind), getScenePath(symbol)}));
+    return arg;
+  }
+
+  /// The value of the attribute declared by `decl` at instance `index`.
+  FailureOr<ScalarMatrix> evaluate(OpBuilder &b, Operation *decl,
+                                   Value index) {
+    for (auto &scope : llvm::reverse(scopes))
+      if (auto it = scope.find({decl, index}); it != scope.end())
+        return it->second;
+    FailureOr<ScalarMatrix> result = failure();
+    if (auto computed = dyn_cast<AttrOp>(decl))
+      result = evaluateComputed(b, computed, index);
+    else
+      result = load(b, decl, index);
+    if (succeeded(result))
+      scopes.back()[{decl, index}] = *result;
+    return result;
+  }
+
+  void store(OpBuilder &b, Value out, const ScalarMatrix &value, Value index) {
+    Location loc = func.getLoc();
+    Value base = offset(b, index, value.values.size());
+    for (auto [i, scalar] : llvm::enumerate(value.values))
+      memref::StoreOp::create(b, loc, scalar, out,
+                              ValueRange{add(b, base, i)});
+  }
+
+  ArrayAttr getRoles() { return ArrayAttr::get(func.getContext(), roles); }
+
+private:
+  Value constIndex(OpBuilder &b, int64_t value) {
+    return arith::ConstantIndexOp::create(b, func.getLoc(), value);
+  }
+  Value add(OpBuilder &b, Value base, int64_t value) {
+    if (value == 0)
+      return base;
+    return arith::AddIOp::create(b, func.getLoc(), base,
+                                 constIndex(b, value));
+  }
+  Value offset(OpBuilder &b, Value index, int64_t stride) {
+    if (stride == 1)
+      return index;
+    return arith::MulIOp::create(b, func.getLoc(), index,
+                                 constIndex(b, stride));
+  }
+
+  /// Entries of a stored attribute, read from its buffer.
+  FailureOr<ScalarMatrix> load(OpBuilder &b, Operation *decl, Value index) {
+    MatrixType type = getAttributeType(decl);
+    Value data = buffer("attr", decl, type.getElementType());
+    Value base = offset(b, index, type.getNumElements());
+    ScalarMatrix out{type.getRows(), type.getCols(), {}};
+    for (int64_t i = 0; i < type.getNumElements(); ++i)
+      out.values.push_back(memref::LoadOp::create(
+          b, decl->getLoc(), data, ValueRange{add(b, base, i)}));
+    return out;
+  }
+
+  FailureOr<ScalarMatrix> evaluateComputed(OpBuilder &b, AttrOp attr,
+                                           Value index) {
+    Operation *owner = getOwningEntity(attr);
+    DenseMap<Value, ScalarMatrix> values;
+    for (Operation &op : attr.getBodyBlock()) {
+      if (auto yield = dyn_cast<YieldOp>(op))
+        return values.lookup(yield.getValue());
+      FailureOr<ScalarMatrix> result = failure();
+      if (auto read = dyn_cast<ReadOp>(op)) {
+        Operation *decl = lookupInScene(scene, read.getAttribute(), &tables);
+        // Scene and mesh attributes have one instance: a broadcast.
+        Value at = getOwningEntity(decl) == owner ? index : constIndex(b, 0);
+        result = evaluate(b, decl, at);
+      } else if (auto join = dyn_cast<JoinOp>(op)) {
+        result = evaluateJoin(b, join, index);
+      } else if (auto unionOp = dyn_cast<UnionOp>(op)) {
+        result = evaluateUnion(
+            b, cast<PrimitiveUnionOp>(owner), unionOp.getNameAttr(),
+            cast<MatrixType>(unionOp.getType()), index);
+      } else {
+        SmallVector<ScalarMatrix> operands;
+        for (Value operand : op.getOperands())
+          operands.push_back(values.lookup(operand));
+        result = lowerToScalars(b, &op, operands);
+      }
+      if (failed(result))
+        return failure();
+      values[op.getResult(0)] = *result;
+    }
+    llvm_unreachable("verified attribute regions end in yasps.yield");
+  }
+
+  /// Row l of the result is the source at the l-th connected instance.
+  FailureOr<ScalarMatrix> evaluateJoin(OpBuilder &b, JoinOp join,
+                                       Value index) {
+    Location loc = join.getLoc();
+    auto primitive = cast<PrimitiveOp>(getOwningEntity(join));
+    auto connectivity = cast<ConnectivityOp>(
+        tables.lookupSymbolIn(primitive, join.getConnectivityAttr()));
+    Operation *source = lookupInScene(scene, join.getSource(), &tables);
+    int64_t arity = connectivity.getArity();
+    Value indices = buffer("conn", connectivity, b.getI32Type());
+    Value base = offset(b, index, arity);
+    auto type = cast<MatrixType>(join.getType());
+    ScalarMatrix out{type.getRows(), type.getCols(), {}};
+    out.values.resize(type.getNumElements());
+    for (int64_t l = 0; l < arity; ++l) {
+      Value raw = memref::LoadOp::create(b, loc, indices,
+                                         ValueRange{add(b, base, l)});
+      Value target =
+          arith::IndexCastOp::create(b, loc, b.getIndexType(), raw);
+      FailureOr<ScalarMatrix> row = evaluate(b, source, target);
+      if (failed(row))
+        return failure();
+      for (auto [m, scalar] : llvm::enumerate(row->values))
+        out.values[m * arity + l] = scalar;
+    }
+    return out;
+  }
+
+  /// Finds the member that `index` falls in and evaluates its attribute.
+  FailureOr<ScalarMatrix> evaluateUnion(OpBuilder &b, PrimitiveUnionOp owner,
+                                        FlatSymbolRefAttr name,
+                                        MatrixType type, Value index) {
+    Location loc = owner.getLoc();
+    Value offsets = buffer("offsets", owner, b.getI64Type());
+    SmallVector<Operation *> members = owner.getMemberOps();
+    auto offsetOf = [&](OpBuilder &ib, int64_t member) -> Value {
+      Value raw = memref::LoadOp::create(ib, loc, offsets,
+                                         ValueRange{constIndex(ib, member)});
+      return arith::IndexCastOp::create(ib, loc, ib.getIndexType(), raw);
+    };
+    auto evaluateMember = [&](OpBuilder &ib,
+                              size_t member) -> FailureOr<ScalarMatrix> {
+      Operation *decl = tables.lookupSymbolIn(members[member], name);
+      Value local =
+          arith::SubIOp::create(ib, loc, index, offsetOf(ib, member));
+      return evaluate(ib, decl, local);
+    };
+    return chain(b, loc, type, 0, members.size(), offsetOf, evaluateMember,
+                 index);
+  }
+
+  /// scf.if chain: member m when index < offsets[m+1], else the rest.
+  template <typename OffsetFn, typename MemberFn>
+  FailureOr<ScalarMatrix> chain(OpBuilder &b, Location loc, MatrixType type,
+                                size_t member, size_t numMembers,
+                                OffsetFn offsetOf, MemberFn evaluateMember,
+                                Value index) {
+    if (member + 1 == numMembers)
+      return evaluateMember(b, member);
+    Value inMember = arith::CmpIOp::create(b, loc, arith::CmpIPredicate::ult,
+                                           index, offsetOf(b, member + 1));
+    SmallVector<Type> resultTypes(type.getNumElements(),
+                                  type.getElementType());
+    auto ifOp = scf::IfOp::create(b, loc, resultTypes, inMember,
+                                  /*withElseRegion=*/true);
+    for (int branch = 0; branch < 2; ++branch) {
+      Block *block = branch == 0 ? ifOp.thenBlock() : ifOp.elseBlock();
+      OpBuilder inner = OpBuilder::atBlockEnd(block);
+      scopes.emplace_back();
+      FailureOr<ScalarMatrix> value =
+          branch == 0 ? evaluateMember(inner, member)
+                      : chain(inner, loc, type, member + 1, numMembers,
+                              offsetOf, evaluateMember, index);
+      scopes.pop_back();
+      if (failed(value))
+        return failure();
+      scf::YieldOp::create(inner, loc, value->values);
+    }
+    ScalarMatrix out{type.getRows(), type.getCols(), {}};
+    out.values.append(ifOp.getResults().begin(), ifOp.getResults().end());
+    return out;
+  }
+
+  SceneOp scene;
+  SymbolTableCollection &tables;
+  func::FuncOp func;
+  std::map<std::pair<StringRef, Operation *>, Value> buffers;
+  SmallVector<Attribute> roles;
+  /// Values already computed, per region: an inner region may reuse the
+  /// values of enclosing ones but not those of its siblings.
+  SmallVector<DenseMap<std::pair<Operation *, Value>, ScalarMatrix>> scopes{
+      1};
+};
+
+std::string kernelName(SymbolRefAttr path) {
+  std::string name = "yasps_eval_" + path.getRootReference().str();
+  for (FlatSymbolRefAttr nested : path.getNestedReferences())
+    name += "__" + nested.getValue().str();
+  return name;
+}
+
+struct LowerToLoopsPass
+    : public mlir::yasps::impl::YaspsLowerToLoopsBase<LowerToLoopsPass> {
+  using YaspsLowerToLoopsBase::YaspsLowerToLoopsBase;
+
+  void runOnOperation() override;
+  LogicalResult lowerAttribute(SceneOp scene, SymbolTableCollection &tables,
+                               SymbolRefAttr path);
+};
+
+} // namespace
+
+LogicalResult LowerToLoopsPass::lowerAttribute(SceneOp scene,
+                                               SymbolTableCollection &tables,
+                                               SymbolRefAttr path) {
+  ModuleOp module = getOperation();
+  Operation *decl = lookupInScene(scene, path, &tables);
+  if (!isAttributeDecl(decl))
+    return scene.emitError() << "yasps-lower-to-loops: " << path
+                             << " does not name an attribute of scene @"
+                             << scene.getSymName();
+  MatrixType type = getAttributeType(decl);
+  Location loc = decl->getLoc();
+  std::string name = kernelName(path);
+  if (SymbolTable::lookupSymbolIn(module, name))
+    return decl->emitError() << "kernel @" << name << " already exists";
+
+  OpBuilder builder = OpBuilder::atBlockEnd(module.getBody());
+  Type indexType = builder.getIndexType();
+  auto func = func::FuncOp::create(
+      builder, loc, name, builder.getFunctionType({indexType, indexType}, {}));
+  Block *entry = func.addEntryBlock();
+  OpBuilder b = OpBuilder::atBlockBegin(entry);
+
+  KernelEmitter emitter(scene, tables, func);
+  Value out = emitter.buffer("out", decl, type.getElementType());
+  Value one = arith::ConstantIndexOp::create(b, loc, 1);
+  bool failedToLower = false;
+  scf::ParallelOp::create(
+      b, loc, ValueRange{entry->getArgument(0)},
+      ValueRange{entry->getArgument(1)}, ValueRange{one},
+      [&](OpBuilder &body, Location, ValueRange ivs) {
+        FailureOr<ScalarMatrix> value = emitter.evaluate(body, decl, ivs[0]);
+        if (failed(value)) {
+          failedToLower = true;
+          return;
+        }
+        emitter.store(body, out, *value, ivs[0]);
+      });
+  func::ReturnOp::create(b, loc);
+  if (failedToLower)
+    return failure();
+
+  func.setType(builder.getFunctionType(entry->getArgumentTypes(), {}));
+  func->setAttr("yasps.kernel_of", path);
+  func->setAttr("yasps.kernel_args", emitter.getRoles());
+  return success();
+}
+
+void LowerToLoopsPass::runOnOperation() {
+  ModuleOp module = getOperation();
+  SmallVector<SceneOp> scenes = llvm::to_vector(module.getOps<SceneOp>());
+  SceneOp scene;
+  for (SceneOp candidate : scenes)
+    if (sceneName.empty() || candidate.getSymName() == sceneName)
+      scene = candidate;
+  if (!scene || (sceneName.empty() && scenes.size() != 1)) {
+    module.emitError() << "yasps-lower-to-loops: "
+                       << (sceneName.empty()
+                               ? "the module must hold exactly one scene "
+                                 "(or name one with scene=)"
+                               : "no scene @" + sceneName);
+    return signalPassFailure();
+  }
+
+  SmallVector<SymbolRefAttr> paths;
+  for (const std::string &text : attributes) {
+    auto path = dyn_cast_or_null<SymbolRefAttr>(
+        parseAttribute(text, &getContext()));
+    if (!path) {
+      module.emitError() << "yasps-lower-to-loops: '" << text
+                         << "' is not a symbol path like @mesh::@prim::@attr";
+      return signalPassFailure();
+    }
+    paths.push_back(path);
+  }
+  if (attributes.empty())
+    for (auto energy : scene.getBodyBlock().getOps<EnergyOp>())
+      paths.push_back(energy.getAttribute());
+
+  SymbolTableCollection tables;
+  for (SymbolRefAttr path : paths)
+    if (failed(lowerAttribute(scene, tables, path)))
+      return signalPassFailure();
+}

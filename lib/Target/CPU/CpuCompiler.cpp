@@ -1,0 +1,321 @@
+//===- CpuCompiler.cpp - attribute kernels for the CPU --------------------===//
+
+#include "yasps/Target/CPU/CpuCompiler.h"
+
+#include "yasps/Conversion/Passes.h"
+#include "yasps/Dialect/Yasps/IR/Yasps.h"
+#include "yasps/Dialect/Yasps/Transforms/Passes.h"
+
+#include "mlir/Conversion/ArithToLLVM/ArithToLLVM.h"
+#include "mlir/Conversion/ControlFlowToLLVM/ControlFlowToLLVM.h"
+#include "mlir/Conversion/FuncToLLVM/ConvertFuncToLLVM.h"
+#include "mlir/Conversion/IndexToLLVM/IndexToLLVM.h"
+#include "mlir/Conversion/MathToLLVM/MathToLLVM.h"
+#include "mlir/Conversion/MemRefToLLVM/MemRefToLLVM.h"
+#include "mlir/Conversion/Passes.h"
+#include "mlir/Conversion/UBToLLVM/UBToLLVM.h"
+#include "mlir/Dialect/ControlFlow/IR/ControlFlow.h"
+#include "mlir/Dialect/Index/IR/IndexDialect.h"
+#include "mlir/Dialect/LLVMIR/LLVMDialect.h"
+#include "mlir/Dialect/UB/IR/UBOps.h"
+#include "mlir/ExecutionEngine/ExecutionEngine.h"
+#include "mlir/ExecutionEngine/OptUtils.h"
+#include "mlir/Pass/PassManager.h"
+#include "mlir/Pass/PassRegistry.h"
+#include "mlir/Target/LLVMIR/Dialect/Builtin/BuiltinToLLVMIRTranslation.h"
+#include "mlir/Target/LLVMIR/Dialect/LLVMIR/LLVMToLLVMIRTranslation.h"
+#include "mlir/Transforms/Passes.h"
+
+#include "llvm/ExecutionEngine/Orc/ExecutionUtils.h"
+#include "llvm/ExecutionEngine/Orc/LLJIT.h"
+#include "llvm/Support/FileSystem.h"
+#include "llvm/Support/MemoryBuffer.h"
+#include "llvm/Support/Path.h"
+#include "llvm/Support/SHA256.h"
+#include "llvm/Support/TargetSelect.h"
+#include "llvm/TargetParser/Host.h"
+
+#include <unistd.h>
+
+#include <chrono>
+#include <map>
+#include <mutex>
+
+using namespace mlir;
+using namespace mlir::yasps;
+
+// Bumped whenever generated code changes for the same IR, so that stale
+// objects in an on-disk cache are never reused.
+static constexpr const char *kCodegenVersion = "yasps-cpu-1";
+
+static constexpr const char *kLoweringPipeline =
+    "convert-scf-to-cf,convert-math-to-libm,convert-to-llvm,"
+    "reconcile-unrealized-casts";
+
+StringRef mlir::yasps::getCpuLoweringPipeline() { return kLoweringPipeline; }
+
+void mlir::yasps::registerCpuCompilerDialects(DialectRegistry &registry) {
+  registry.insert<YaspsDialect, arith::ArithDialect, cf::ControlFlowDialect,
+                  func::FuncDialect, index::IndexDialect, LLVM::LLVMDialect,
+                  math::MathDialect, memref::MemRefDialect, scf::SCFDialect,
+                  ub::UBDialect>();
+  arith::registerConvertArithToLLVMInterface(registry);
+  cf::registerConvertControlFlowToLLVMInterface(registry);
+  registerConvertFuncToLLVMInterface(registry);
+  index::registerConvertIndexToLLVMInterface(registry);
+  registerConvertMathToLLVMInterface(registry);
+  registerConvertMemRefToLLVMInterface(registry);
+  ub::registerConvertUBToLLVMInterface(registry);
+  registerBuiltinDialectTranslation(registry);
+  registerLLVMDialectTranslation(registry);
+}
+
+CpuKernelLibrary::~CpuKernelLibrary() = default;
+
+const CpuKernel *CpuKernelLibrary::lookup(StringRef attributePath) const {
+  for (const CpuKernel &kernel : kernelList)
+    if (kernel.attribute == attributePath)
+      return &kernel;
+  return nullptr;
+}
+
+namespace {
+
+/// Kernels JIT-compiled in this process by mlir::ExecutionEngine.
+class EngineLibrary : public CpuKernelLibrary {
+public:
+  EngineLibrary(std::unique_ptr<ExecutionEngine> engine,
+                std::vector<CpuKernel> kernels)
+      : engine(std::move(engine)) {
+    kernelList = std::move(kernels);
+  }
+
+private:
+  std::unique_ptr<ExecutionEngine> engine;
+};
+
+/// Kernels loaded from a cached object file.
+class ObjectLibrary : public CpuKernelLibrary {
+public:
+  ObjectLibrary(std::unique_ptr<llvm::orc::LLJIT> jit,
+                std::vector<CpuKernel> kernels)
+      : jit(std::move(jit)) {
+    kernelList = std::move(kernels);
+  }
+
+private:
+  std::unique_ptr<llvm::orc::LLJIT> jit;
+};
+
+using Clock = std::chrono::steady_clock;
+
+double secondsSince(Clock::time_point start) {
+  return std::chrono::duration<double>(Clock::now() - start).count();
+}
+
+llvm::Error diagnosticsError(const std::string &what,
+                             const std::string &diagnostics) {
+  return llvm::createStringError(llvm::inconvertibleErrorCode(),
+                                 what + (diagnostics.empty() ? "" : ":\n") +
+                                     diagnostics);
+}
+
+/// Runs `populate`'s passes on `module`, returning the diagnostics as an
+/// error if they fail.
+template <typename Populate>
+llvm::Error runPasses(ModuleOp module, const std::string &what,
+                      Populate populate) {
+  std::string diagnostics;
+  llvm::raw_string_ostream os(diagnostics);
+  ScopedDiagnosticHandler handler(module.getContext(), [&](Diagnostic &diag) {
+    os << diag.getLocation() << ": " << diag << "\n";
+    for (Diagnostic &note : diag.getNotes())
+      os << "  note: " << note << "\n";
+    return success();
+  });
+  PassManager pm(module.getContext());
+  if (failed(populate(pm)) || failed(pm.run(module)))
+    return diagnosticsError(what, diagnostics);
+  return llvm::Error::success();
+}
+
+/// The kernels' metadata, read from the functions yasps-lower-to-loops made.
+std::vector<CpuKernel> describeKernels(ModuleOp kernels) {
+  std::vector<CpuKernel> result;
+  for (auto func : kernels.getOps<func::FuncOp>()) {
+    auto of = func->getAttrOfType<SymbolRefAttr>("yasps.kernel_of");
+    auto args = func->getAttrOfType<ArrayAttr>("yasps.kernel_args");
+    if (!of || !args)
+      continue;
+    CpuKernel kernel;
+    llvm::raw_string_ostream(kernel.attribute) << of;
+    kernel.symbol = func.getSymName().str();
+    for (auto role : args.getAsRange<ArrayAttr>()) {
+      KernelArgument arg;
+      arg.kind = cast<StringAttr>(role[0]).str();
+      llvm::raw_string_ostream(arg.path) << role[1];
+      kernel.arguments.push_back(arg);
+    }
+    result.push_back(std::move(kernel));
+  }
+  return result;
+}
+
+std::string hostDescription() {
+  std::string text = llvm::sys::getHostCPUName().str();
+  for (const auto &feature : llvm::sys::getHostCPUFeatures())
+    if (feature.second)
+      text += "," + feature.first().str();
+  return text;
+}
+
+std::string cacheKey(ModuleOp kernels, const CpuCompileOptions &options) {
+  std::string text;
+  llvm::raw_string_ostream os(text);
+  kernels.print(os, OpPrintingFlags().printGenericOpForm());
+  os << "\n" << kLoweringPipeline << "\nO" << options.optLevel << "\n"
+     << kCodegenVersion << "\n" << hostDescription();
+  std::array<uint8_t, 32> hash = llvm::SHA256::hash(
+      llvm::ArrayRef(reinterpret_cast<const uint8_t *>(text.data()),
+                     text.size()));
+  return llvm::toHex(hash, /*LowerCase=*/true);
+}
+
+void initializeNativeTarget() {
+  static std::once_flag once;
+  std::call_once(once, [] {
+    llvm::InitializeNativeTarget();
+    llvm::InitializeNativeTargetAsmPrinter();
+  });
+}
+
+llvm::Expected<std::shared_ptr<CpuKernelLibrary>>
+loadObject(const std::string &path, std::vector<CpuKernel> kernels) {
+  auto buffer = llvm::MemoryBuffer::getFile(path);
+  if (!buffer)
+    return llvm::errorCodeToError(buffer.getError());
+  auto jit = llvm::orc::LLJITBuilder().create();
+  if (!jit)
+    return jit.takeError();
+  auto &mainLib = (*jit)->getMainJITDylib();
+  auto generator =
+      llvm::orc::DynamicLibrarySearchGenerator::GetForCurrentProcess(
+          (*jit)->getDataLayout().getGlobalPrefix());
+  if (!generator)
+    return generator.takeError();
+  mainLib.addGenerator(std::move(*generator));
+  if (llvm::Error err = (*jit)->addObjectFile(std::move(*buffer)))
+    return std::move(err);
+  for (CpuKernel &kernel : kernels) {
+    auto address = (*jit)->lookup("_mlir_" + kernel.symbol);
+    if (!address)
+      return address.takeError();
+    kernel.packed = address->toPtr<void (*)(void **)>();
+  }
+  return std::make_shared<ObjectLibrary>(std::move(*jit), std::move(kernels));
+}
+
+/// Writes `write`'s file under a temporary name, then renames it into place
+/// so that concurrent processes never read a partial object.
+void storeAtomically(const std::string &path,
+                     llvm::function_ref<void(StringRef)> write) {
+  std::string tmp = path + ".tmp." + std::to_string(::getpid());
+  write(tmp);
+  if (llvm::sys::fs::rename(tmp, path))
+    llvm::sys::fs::remove(tmp);
+}
+
+} // namespace
+
+llvm::Expected<std::shared_ptr<CpuKernelLibrary>>
+mlir::yasps::compileCpuKernels(ModuleOp module,
+                               const std::vector<std::string> &attributes,
+                               const CpuCompileOptions &options,
+                               CpuCompileStats *stats) {
+  CpuCompileStats localStats;
+  CpuCompileStats &st = stats ? *stats : localStats;
+  Clock::time_point start = Clock::now();
+
+  // 1. Kernel functions in upstream dialects.
+  OwningOpRef<ModuleOp> kernels(cast<ModuleOp>(module->clone()));
+  if (llvm::Error err = runPasses(
+          *kernels, "kernel generation failed", [&](PassManager &pm) {
+            YaspsLowerToLoopsOptions lowerOptions;
+            lowerOptions.attributes.assign(attributes.begin(),
+                                           attributes.end());
+            pm.addPass(createYaspsLowerToLoops(lowerOptions));
+            pm.addPass(createYaspsStripScenes());
+            pm.addPass(createCanonicalizerPass());
+            pm.addPass(createCSEPass());
+            return success();
+          }))
+    return std::move(err);
+  std::vector<CpuKernel> described = describeKernels(*kernels);
+  st.lowerSeconds = secondsSince(start);
+
+  // 2. Caches: this process, then disk.
+  st.key = cacheKey(*kernels, options);
+  static std::mutex cacheLock;
+  static std::map<std::string, std::weak_ptr<CpuKernelLibrary>> memory;
+  std::lock_guard<std::mutex> guard(cacheLock);
+  if (auto cached = memory[st.key].lock()) {
+    st.fromMemory = true;
+    return cached;
+  }
+  initializeNativeTarget();
+  std::string objectPath;
+  if (!options.cacheDir.empty()) {
+    llvm::SmallString<256> path(options.cacheDir);
+    llvm::sys::path::append(path, st.key + ".o");
+    objectPath = path.str().str();
+    if (llvm::sys::fs::exists(objectPath)) {
+      Clock::time_point loadStart = Clock::now();
+      auto library = loadObject(objectPath, described);
+      if (library) {
+        st.fromDisk = true;
+        st.codegenSeconds = secondsSince(loadStart);
+        memory[st.key] = *library;
+        return library;
+      }
+      // A damaged cache entry is rebuilt below.
+      llvm::consumeError(library.takeError());
+    }
+  }
+
+  // 3. LLVM dialect, then JIT.
+  if (llvm::Error err = runPasses(
+          *kernels, "lowering to the LLVM dialect failed",
+          [&](PassManager &pm) {
+            return parsePassPipeline(kLoweringPipeline, pm);
+          }))
+    return std::move(err);
+  st.lowerSeconds = secondsSince(start);
+  Clock::time_point codegenStart = Clock::now();
+
+  ExecutionEngineOptions engineOptions;
+  engineOptions.transformer = makeOptimizingTransformer(
+      options.optLevel, /*sizeLevel=*/0, /*targetMachine=*/nullptr);
+  engineOptions.jitCodeGenOptLevel =
+      static_cast<llvm::CodeGenOptLevel>(std::min(options.optLevel, 3u));
+  engineOptions.enableObjectDump = !objectPath.empty();
+  auto engine = ExecutionEngine::create(*kernels, engineOptions);
+  if (!engine)
+    return engine.takeError();
+  for (CpuKernel &kernel : described) {
+    auto fn = (*engine)->lookupPacked(kernel.symbol);
+    if (!fn)
+      return fn.takeError();
+    kernel.packed = *fn;
+  }
+  if (!objectPath.empty()) {
+    llvm::sys::fs::create_directories(options.cacheDir);
+    storeAtomically(objectPath, [&](StringRef tmp) {
+      (*engine)->dumpToObjectFile(tmp);
+    });
+  }
+  st.codegenSeconds = secondsSince(codegenStart);
+  auto library =
+      std::make_shared<EngineLibrary>(std::move(*engine), std::move(described));
+  memory[st.key] = library;
+  return library;
+}

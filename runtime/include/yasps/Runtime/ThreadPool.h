@@ -1,0 +1,84 @@
+//===- ThreadPool.h - persistent pool for parallel loops --------*- C++ -*-===//
+//
+// Kernels run once per simulation step, so the threads that run them are
+// created once and kept: starting threads every step would cost more than
+// small steps take. The calling thread takes chunks too, so a pool of N
+// threads keeps only N - 1 workers.
+//
+//===----------------------------------------------------------------------===//
+
+#ifndef YASPS_RUNTIME_THREADPOOL_H
+#define YASPS_RUNTIME_THREADPOOL_H
+
+#include <condition_variable>
+#include <cstdint>
+#include <functional>
+#include <mutex>
+#include <thread>
+#include <vector>
+
+namespace yasps::runtime {
+
+class ThreadPool {
+public:
+  /// A pool of `numThreads` threads counting the caller of parallelFor; 0
+  /// means std::thread::hardware_concurrency() (at least 1).
+  explicit ThreadPool(unsigned numThreads = 0);
+  ~ThreadPool();
+
+  ThreadPool(const ThreadPool &) = delete;
+  ThreadPool &operator=(const ThreadPool &) = delete;
+
+  /// Number of threads that run chunks, the caller of parallelFor included.
+  unsigned size() const { return static_cast<unsigned>(workers_.size()) + 1; }
+
+  /// Runs `body(chunkBegin, chunkEnd)` on contiguous chunks that partition
+  /// [begin, end), on the pool's threads and the calling thread, and returns
+  /// when all have finished. Chunks hold at least `minChunk` indices unless
+  /// the range is smaller; a range of at most `minChunk` indices, a pool of
+  /// one thread, or a call from inside a body of this pool runs inline as one
+  /// chunk. An empty range calls nothing.
+  ///
+  /// If bodies throw, chunks not yet started are skipped and the first
+  /// exception is rethrown here once no chunk is running. Calls from several
+  /// threads are serialised. Throws std::invalid_argument if `end < begin`,
+  /// the range holds more than INT64_MAX indices, or `minChunk < 1`.
+  void parallelFor(std::int64_t begin, std::int64_t end, std::int64_t minChunk,
+                   const std::function<void(std::int64_t, std::int64_t)> &body);
+
+private:
+  struct Job;
+
+  void workerLoop();
+  void stopWorkers();
+  void runChunks(Job &job);
+
+  std::vector<std::thread> workers_;
+  // Held while a job runs: one job at a time.
+  std::mutex callMutex_;
+  // Guards the fields below, which hand a job to the workers.
+  std::mutex mutex_;
+  std::condition_variable wakeWorkers_;
+  std::condition_variable jobDone_;
+  Job *job_ = nullptr;
+  // Bumped per job so that each worker takes part in each job exactly once.
+  std::uint64_t generation_ = 0;
+  // Workers that have not yet finished with the current job; the job lives
+  // on the caller's stack until this is 0.
+  unsigned pendingWorkers_ = 0;
+  bool stopping_ = false;
+};
+
+/// The size defaultThreadPool() gets: the positive integer in environment
+/// variable YASPS_NUM_THREADS if it is set and not empty, otherwise
+/// std::thread::hardware_concurrency() (at least 1). Throws
+/// std::invalid_argument if the variable holds anything else.
+unsigned defaultThreadCount();
+
+/// The process-wide pool, created on first use with defaultThreadCount()
+/// threads.
+ThreadPool &defaultThreadPool();
+
+} // namespace yasps::runtime
+
+#endif // YASPS_RUNTIME_THREADPOOL_H

@@ -1,0 +1,186 @@
+//===- ThreadPool.cpp - persistent pool for parallel loops ----------------===//
+
+#include "yasps/Runtime/ThreadPool.h"
+
+#include <algorithm>
+#include <atomic>
+#include <cerrno>
+#include <climits>
+#include <cstdlib>
+#include <exception>
+#include <stdexcept>
+#include <string>
+
+using namespace yasps::runtime;
+
+// A few chunks per thread let threads that finish early, or the caller that
+// starts before the workers wake, take over work from slower ones.
+static constexpr std::int64_t kChunksPerThread = 4;
+
+// The pool whose chunk the current thread is running, so that a nested
+// parallelFor on the same pool runs inline instead of waiting for itself.
+static thread_local const ThreadPool *currentPool = nullptr;
+
+namespace {
+/// Sets currentPool for a scope and restores the previous value.
+class CurrentPoolScope {
+public:
+  explicit CurrentPoolScope(const ThreadPool *pool) : saved_(currentPool) {
+    currentPool = pool;
+  }
+  ~CurrentPoolScope() { currentPool = saved_; }
+
+private:
+  const ThreadPool *saved_;
+};
+} // namespace
+
+/// One parallelFor call. Chunk k is [begin + k * base + min(k, rem), ...):
+/// the first `rem` chunks get one index more, so sizes differ by at most one
+/// and none is below minChunk.
+struct ThreadPool::Job {
+  const std::function<void(std::int64_t, std::int64_t)> &body;
+  std::int64_t begin;
+  std::int64_t base;
+  std::int64_t rem;
+  std::int64_t numChunks;
+  std::atomic<std::int64_t> nextChunk{0};
+  std::atomic<bool> failed{false};
+  std::mutex errorMutex;
+  std::exception_ptr error;
+};
+
+ThreadPool::ThreadPool(unsigned numThreads) {
+  if (numThreads == 0)
+    numThreads = std::max(1u, std::thread::hardware_concurrency());
+  try {
+    workers_.reserve(numThreads - 1);
+    for (unsigned i = 1; i < numThreads; ++i)
+      workers_.emplace_back([this] { workerLoop(); });
+  } catch (...) {
+    // Joinable threads left in workers_ would call std::terminate.
+    stopWorkers();
+    throw;
+  }
+}
+
+ThreadPool::~ThreadPool() { stopWorkers(); }
+
+void ThreadPool::stopWorkers() {
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    stopping_ = true;
+  }
+  wakeWorkers_.notify_all();
+  for (std::thread &worker : workers_)
+    worker.join();
+  workers_.clear();
+}
+
+void ThreadPool::workerLoop() {
+  CurrentPoolScope scope(this);
+  std::uint64_t seen = 0;
+  std::unique_lock<std::mutex> lock(mutex_);
+  while (true) {
+    wakeWorkers_.wait(lock, [&] { return stopping_ || generation_ != seen; });
+    if (stopping_)
+      return;
+    seen = generation_;
+    Job *job = job_;
+    lock.unlock();
+    runChunks(*job);
+    lock.lock();
+    if (--pendingWorkers_ == 0)
+      jobDone_.notify_one();
+  }
+}
+
+void ThreadPool::runChunks(Job &job) {
+  while (!job.failed.load(std::memory_order_relaxed)) {
+    std::int64_t k = job.nextChunk.fetch_add(1, std::memory_order_relaxed);
+    if (k >= job.numChunks)
+      return;
+    std::int64_t chunkBegin = job.begin + k * job.base + std::min(k, job.rem);
+    std::int64_t chunkEnd = chunkBegin + job.base + (k < job.rem ? 1 : 0);
+    try {
+      job.body(chunkBegin, chunkEnd);
+    } catch (...) {
+      std::lock_guard<std::mutex> lock(job.errorMutex);
+      if (!job.error)
+        job.error = std::current_exception();
+      job.failed.store(true, std::memory_order_relaxed);
+    }
+  }
+}
+
+void ThreadPool::parallelFor(
+    std::int64_t begin, std::int64_t end, std::int64_t minChunk,
+    const std::function<void(std::int64_t, std::int64_t)> &body) {
+  if (end < begin)
+    throw std::invalid_argument("parallelFor range [" + std::to_string(begin) +
+                                ", " + std::to_string(end) +
+                                ") ends before it begins");
+  if (minChunk < 1)
+    throw std::invalid_argument("parallelFor minimum chunk size must be "
+                                "positive, got " +
+                                std::to_string(minChunk));
+  if (begin == end)
+    return;
+  // Unsigned so that a range wider than INT64_MAX does not overflow.
+  std::uint64_t count =
+      static_cast<std::uint64_t>(end) - static_cast<std::uint64_t>(begin);
+  if (count > static_cast<std::uint64_t>(INT64_MAX))
+    throw std::invalid_argument("parallelFor range [" + std::to_string(begin) +
+                                ", " + std::to_string(end) +
+                                ") holds more than INT64_MAX indices");
+  if (count <= static_cast<std::uint64_t>(minChunk) || workers_.empty() ||
+      currentPool == this) {
+    body(begin, end);
+    return;
+  }
+  std::int64_t n = static_cast<std::int64_t>(count);
+  std::int64_t numChunks = std::min(
+      n / minChunk, static_cast<std::int64_t>(size()) * kChunksPerThread);
+
+  std::lock_guard<std::mutex> callLock(callMutex_);
+  CurrentPoolScope scope(this);
+  Job job{body, begin, n / numChunks, n % numChunks, numChunks};
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    job_ = &job;
+    pendingWorkers_ = static_cast<unsigned>(workers_.size());
+    ++generation_;
+  }
+  wakeWorkers_.notify_all();
+  runChunks(job);
+  {
+    std::unique_lock<std::mutex> lock(mutex_);
+    jobDone_.wait(lock, [&] { return pendingWorkers_ == 0; });
+    job_ = nullptr;
+  }
+  if (job.error)
+    std::rethrow_exception(job.error);
+}
+
+unsigned yasps::runtime::defaultThreadCount() {
+  const char *value = std::getenv("YASPS_NUM_THREADS");
+  if (!value || !*value)
+    return std::max(1u, std::thread::hardware_concurrency());
+  // strtoul accepts leading blanks and a minus sign; a count should be
+  // digits only.
+  bool digitsOnly = true;
+  for (const char *c = value; *c; ++c)
+    digitsOnly &= *c >= '0' && *c <= '9';
+  errno = 0;
+  unsigned long parsed = digitsOnly ? std::strtoul(value, nullptr, 10) : 0;
+  if (!digitsOnly || errno == ERANGE || parsed == 0 || parsed > UINT_MAX)
+    throw std::invalid_argument(
+        std::string("YASPS_NUM_THREADS must be a positive integer, got \"") +
+        value + "\"");
+  return static_cast<unsigned>(parsed);
+}
+
+ThreadPool &yasps::runtime::defaultThreadPool() {
+  static ThreadPool pool(defaultThreadCount());
+  return pool;
+}
