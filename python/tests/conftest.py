@@ -5,6 +5,7 @@ from __future__ import annotations
 import itertools
 import os
 import sys
+import tempfile
 from pathlib import Path
 
 import numpy as np
@@ -12,6 +13,9 @@ import pytest
 
 REPO = Path(__file__).resolve().parents[2]
 sys.path.insert(0, str(REPO / "python"))
+# Kernels compiled by the tests go to a fresh cache, not the user's.
+os.environ.setdefault("YASPS_CACHE_DIR",
+                      tempfile.mkdtemp(prefix="yasps-test-cache-"))
 
 import yasps  # noqa: E402
 

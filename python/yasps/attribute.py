@@ -164,6 +164,15 @@ class Attribute:
                 f"{self._owner.numInstances} instances; call updateValue")
         return _values.from_column_major(self._values, self._rows, self._cols)
 
+    def compute(self, threads: Optional[int] = None):
+        """Evaluates the attribute on every instance of its owner with a
+        compiled kernel; ``.value`` of the result is an ``(N, rows, cols)``
+        array. Intermediate attributes are not stored. ``threads``
+        overrides ``yasps.config.num_threads`` (0: every core)."""
+        from .evaluate import compute
+
+        return compute(self, threads)
+
     def _invalidate_values(self) -> None:
         self._values = None
 

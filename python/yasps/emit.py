@@ -159,10 +159,16 @@ def _emit_attribute(attr: Attribute, depth: int, locations: bool) -> List[str]:
             [f"{pad}{_INDENT}yasps.yield {result} : {t}", f"{pad}}}{loc}"])
 
 
-def _emit_members(entity: Entity, depth: int, locations: bool) -> List[str]:
+def _emit_members(entity: Entity, depth: int, locations: bool,
+                  extra: Dict[Entity, List[Tuple[str, Attribute]]]) -> List[str]:
     lines: List[str] = []
     pad = _INDENT * depth
-    for symbol in entity._symbols.values():
+    symbols = list(entity._symbols.values())
+    for name, expr in extra.get(entity, []):
+        symbols.append(Attribute(owner=entity, rows=expr.rows, cols=expr.cols,
+                                 kind="computed", op="computed",
+                                 operands=(expr,), name=name))
+    for symbol in symbols:
         if isinstance(symbol, Attribute):
             lines += _emit_attribute(symbol, depth, locations)
         elif isinstance(symbol, Connectivity):
@@ -170,27 +176,30 @@ def _emit_members(entity: Entity, depth: int, locations: bool) -> List[str]:
                          f"{entity_path(symbol.target)} arity {symbol.arity}")
         elif isinstance(symbol, Mesh):
             lines.append(f"{pad}yasps.mesh @{symbol.name} {{")
-            lines += _emit_members(symbol, depth + 1, locations)
+            lines += _emit_members(symbol, depth + 1, locations, extra)
             lines.append(f"{pad}}}")
         elif isinstance(symbol, Primitive):
             dynamic = " dynamic" if symbol.isDynamic else ""
             lines.append(f"{pad}yasps.primitive @{symbol.name}"
                          f"({symbol.numInstances}){dynamic} {{")
-            lines += _emit_members(symbol, depth + 1, locations)
+            lines += _emit_members(symbol, depth + 1, locations, extra)
             lines.append(f"{pad}}}")
         elif isinstance(symbol, PrimitiveUnion):
             members = ", ".join(entity_path(m) for m in symbol.members)
             lines.append(f"{pad}yasps.primitive_union @{symbol.name} "
                          f"[{members}] {{")
-            lines += _emit_members(symbol, depth + 1, locations)
+            lines += _emit_members(symbol, depth + 1, locations, extra)
             lines.append(f"{pad}}}")
     return lines
 
 
-def emit_scene(scene: Scene, locations: bool = False) -> str:
-    """The scene as IR text (one `yasps.scene` op)."""
+def emit_scene(scene: Scene, locations: bool = False,
+               extra: Optional[Dict[Entity, List[Tuple[str, Attribute]]]] = None
+               ) -> str:
+    """The scene as IR text (one `yasps.scene` op). ``extra`` adds computed
+    attributes (name, expression) to entities without changing the scene."""
     lines = [f"yasps.scene @{scene.name} {{"]
-    lines += _emit_members(scene, 1, locations)
+    lines += _emit_members(scene, 1, locations, extra or {})
     for attr, dynamic in scene._energies:
         flag = " dynamic_instances" if dynamic else ""
         lines.append(f"{_INDENT}yasps.energy {symbol_path(attr)}{flag}")

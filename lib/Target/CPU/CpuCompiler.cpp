@@ -46,11 +46,10 @@ using namespace mlir::yasps;
 
 // Bumped whenever generated code changes for the same IR, so that stale
 // objects in an on-disk cache are never reused.
-static constexpr const char *kCodegenVersion = "yasps-cpu-1";
+static constexpr const char *kCodegenVersion = "yasps-cpu-2";
 
 static constexpr const char *kLoweringPipeline =
-    "convert-scf-to-cf,convert-math-to-libm,convert-to-llvm,"
-    "reconcile-unrealized-casts";
+    "convert-scf-to-cf,convert-to-llvm,reconcile-unrealized-casts";
 
 StringRef mlir::yasps::getCpuLoweringPipeline() { return kLoweringPipeline; }
 
@@ -256,9 +255,13 @@ mlir::yasps::compileCpuKernels(ModuleOp module,
   // 2. Caches: this process, then disk.
   st.key = cacheKey(*kernels, options);
   static std::mutex cacheLock;
-  static std::map<std::string, std::weak_ptr<CpuKernelLibrary>> memory;
+  // Libraries stay loaded for the life of the process: kernels are small
+  // and a scene may be evaluated again at any time. The map is never
+  // destroyed: JIT sessions must not be torn down after LLVM's own statics.
+  static auto &memory =
+      *new std::map<std::string, std::shared_ptr<CpuKernelLibrary>>();
   std::lock_guard<std::mutex> guard(cacheLock);
-  if (auto cached = memory[st.key].lock()) {
+  if (auto cached = memory[st.key]) {
     st.fromMemory = true;
     return cached;
   }

@@ -1,0 +1,283 @@
+"""attr.compute().value against NumPy: every expression op, JOINs, UNIONs,
+scene- and mesh-level attributes, dynamic primitives, domain errors and the
+kernel cache."""
+
+import os
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+import yasps
+
+from conftest import REPO, box_mesh
+
+N = 7
+rng = np.random.default_rng(42)
+
+
+@pytest.fixture
+def p():
+    s = yasps.scene("s")
+    m = s.addMesh("m")
+    prim = m.addPrimitive("p", numInstances=N)
+    for name, shape in [("a", (3, 3)), ("b", (3, 3)), ("v", (3, 1)),
+                        ("w", (3, 1)), ("r", (1, 3)), ("s", (1, 1)),
+                        ("t", (1, 1)), ("j", (2, 4)), ("q", (4, 4)),
+                        ("h", (2, 2))]:
+        attr = prim.addAttribute(name, rows=shape[0], cols=shape[1])
+        attr.updateValue(rng.uniform(0.5, 2.0, size=(N,) + shape))
+    return prim
+
+
+def val(attr):
+    return attr.value
+
+
+def check(expr, expected, rtol=1e-13):
+    got = expr.compute().value
+    expected = np.asarray(expected, dtype=float).reshape(got.shape)
+    np.testing.assert_allclose(got, expected, rtol=rtol, atol=1e-14)
+
+
+def cases(p):
+    a, b, v, w, r, s, t, j, q, h = (p[n] for n in "abvwrstjqh")
+    A, B, V, W, R, S, T, J, Q, H = (x.value for x in (a, b, v, w, r, s, t, j, q, h))
+    return [
+        ("add", a + b, A + B),
+        ("sub", v - w, V - W),
+        ("neg", -j, -J),
+        ("matmul", a * v, A @ V),
+        ("matmul rect", j.T * j, np.transpose(J, (0, 2, 1)) @ J),
+        ("scale", v * s, V * S),
+        ("scale number", 2.5 * a, 2.5 * A),
+        ("div", v / s, V / S),
+        ("div number", 1.0 / s, 1.0 / S),
+        ("elementwise", v.cwiseProduct(w), V * W),
+        ("transpose", j.T, np.transpose(J, (0, 2, 1))),
+        ("dot", v.dot(w), np.sum(V * W, axis=(1, 2)).reshape(N, 1, 1)),
+        ("dot rows", r.dot(r), np.sum(R * R, axis=(1, 2)).reshape(N, 1, 1)),
+        ("cross", v.cross(w), np.cross(V[..., 0], W[..., 0])[..., None]),
+        ("cross rows", r.cross(r * 2.0 + 1.0),
+         np.cross(R[:, 0], 2 * R[:, 0] + 1)[:, None, :]),
+        ("row", j.row(1), J[:, 1:2, :]),
+        ("col", a.col(2), A[:, :, 2:3]),
+        ("element", a[1, 2], A[:, 1:2, 2:3]),
+        ("slice", j[0:2, 1:3], J[:, 0:2, 1:3]),
+        ("resize", j.resize(4, 2),
+         np.stack([x.reshape(-1, order="F").reshape(4, 2, order="F") for x in J])),
+        ("vstack", yasps.vstack([v, w]), np.concatenate([V, W], axis=1)),
+        ("hstack", yasps.hstack([a, v]), np.concatenate([A, V], axis=2)),
+        ("det 1", s.resize(1, 1).determinant(), S),
+        ("det 2", h.determinant(), np.linalg.det(H).reshape(N, 1, 1)),
+        ("det 3", a.determinant(), np.linalg.det(A).reshape(N, 1, 1)),
+        ("det 4", q.determinant(), np.linalg.det(Q).reshape(N, 1, 1)),
+        ("inverse 2", h.inverse(), np.linalg.inv(H)),
+        ("inverse 3", a.inverse(), np.linalg.inv(A)),
+        ("inverse 4", q.inverse(), np.linalg.inv(Q)),
+        ("trace", a.trace(), np.trace(A, axis1=1, axis2=2).reshape(N, 1, 1)),
+        ("norm", j.norm(), np.linalg.norm(J, axis=(1, 2)).reshape(N, 1, 1)),
+        ("squaredNorm", v.squaredNorm(), np.sum(V ** 2, axis=(1, 2)).reshape(N, 1, 1)),
+        ("sum", j.sum(), J.sum(axis=(1, 2)).reshape(N, 1, 1)),
+        ("sqrt", v.sqrt(), np.sqrt(V)),
+        ("log", v.log(), np.log(V)),
+        ("exp", v.exp(), np.exp(V)),
+        ("pow scalar", v ** 3, V ** 3),
+        ("pow attr", v.pow(s), V ** S),
+        ("pow entrywise", v.pow(w), V ** W),
+        ("sin", v.sin(), np.sin(V)),
+        ("cos", v.cos(), np.cos(V)),
+        ("atan2", v.atan2(w - 1.0), np.arctan2(V, W - 1.0)),
+        ("abs", abs(v - 1.0), np.abs(V - 1.0)),
+        ("min", v.min(w), np.minimum(V, W)),
+        ("max", v.max(w), np.maximum(V, W)),
+        ("lt", v < w, (V < W).astype(float)),
+        ("ge", v >= w, (V >= W).astype(float)),
+        ("eq", v.eq(v), np.ones_like(V)),
+        ("ne", v.ne(w), (V != W).astype(float)),
+        ("select scalar", (s < t).select(v, w), np.where(S < T, V, W)),
+        ("select entrywise", (v < w).select(v, w), np.where(V < W, V, W)),
+        ("asConstant", v.asConstant(), V),
+        ("constant", v + np.array([1.0, 2.0, 3.0]), V + np.array([1.0, 2.0, 3.0])[:, None]),
+        ("identity", a + yasps.identity(3), A + np.eye(3)),
+    ]
+
+
+def test_every_op_matches_numpy(p):
+    for name, expr, expected in cases(p):
+        rtol = 1e-10 if "inverse" in name or "det" in name else 1e-13
+        try:
+            check(expr, expected, rtol)
+        except AssertionError as err:
+            raise AssertionError(f"op {name}: {err}") from None
+
+
+@pytest.mark.parametrize("shape", [(1, 1), (2, 5), (6, 6)])
+def test_shapes(shape):
+    s = yasps.scene("shapes")
+    prim = s.addMesh("m").addPrimitive("p", numInstances=N)
+    x = prim.addAttribute("x", rows=shape[0], cols=shape[1])
+    X = rng.normal(size=(N,) + shape)
+    x.updateValue(X)
+    check(x * 2.0 - x.cwiseProduct(x), 2 * X - X * X)
+    check(x.T * x, np.transpose(X, (0, 2, 1)) @ X)
+
+
+def test_scene_and_mesh_attributes_broadcast():
+    s = yasps.scene("s")
+    g = s.addConstant("gravity", rows=3, cols=1)
+    g.updateValue([0.0, 0.0, -9.81])
+    m = s.addMesh("m")
+    k = m.addConstant("k", rows=1, cols=1)
+    k.updateValue([[4.0]])
+    v = m.addPrimitive("v", numInstances=N)
+    x = v.addAttribute("x", rows=3, cols=1)
+    X = rng.normal(size=(N, 3, 1))
+    x.updateValue(X)
+    check(k * x.dot(g), 4.0 * (X[:, 2, 0] * -9.81))
+    # Attributes of the mesh itself have one instance.
+    assert (k * 2.0).compute().value.shape == (1, 1, 1)
+
+
+def test_joins_of_arity_4_and_8_and_join_of_join():
+    verts, tets = box_mesh(2)
+    s = yasps.scene("j")
+    m = s.addMesh("m")
+    v = m.addPrimitive("v", numInstances=len(verts))
+    t = m.addPrimitive("t", numInstances=len(tets))
+    x = v.addAttribute("x", rows=3, cols=1)
+    X = verts + rng.normal(scale=0.01, size=verts.shape)
+    x.updateValue(X)
+    t2v = t.addConnectivity("t2v", v, tets, 4)
+    tx = t.addAttribute("x", through=t2v, source=x)
+    check(tx, X[tets])
+    # Deformation gradient-like computation on the gathered rows.
+    Ds = yasps.hstack([(tx.row(i) - tx.row(0)).T for i in (1, 2, 3)])
+    ref = np.stack([np.stack([X[c[i]] - X[c[0]] for i in (1, 2, 3)], axis=1)
+                    for c in tets])
+    check(Ds.determinant(), np.linalg.det(ref))
+
+    # Arity 8: cells gathering 8 tets' volumes, then a JOIN of that JOIN.
+    vol = t.addAttribute("vol", computed_attribute=Ds.determinant() / 6.0)
+    cells = len(tets) // 6
+    c = m.addPrimitive("cells", numInstances=cells)
+    eight = (np.arange(cells)[:, None] * 6 + np.arange(8)[None, :]) % len(tets)
+    c2t = c.addConnectivity("c2t", t, eight, 8)
+    vols = c.addAttribute("vols", through=c2t, source=vol)
+    cidx = c2t.indices
+    tet_vol = np.linalg.det(ref) / 6.0
+    check(vols, tet_vol[cidx][:, :, None])
+    total = c.addAttribute("total", computed_attribute=vols.sum())
+    top = m.addPrimitive("top", numInstances=2)
+    top2c = top.addConnectivity("top2c", c, [[0, 1], [1, 0]], 2)
+    joined = top.addAttribute("totals", through=top2c, source=total)
+    per_cell = tet_vol[cidx].sum(axis=1)
+    check(joined, per_cell[[[0, 1], [1, 0]]][:, :, None])
+
+
+def three_way_union():
+    s = yasps.scene("u")
+    soft = s.addMesh("soft")
+    soft.addPrimitive("v", numInstances=3)
+    xs = soft.v.addAttribute("x", rows=3, cols=1)
+    XS = rng.normal(size=(3, 3))
+    xs.updateValue(XS)
+    rigid = s.addMesh("rigid")
+    rigid.addPrimitive("v", numInstances=2)
+    rigid.addPrimitive("body", numInstances=1)
+    A = rigid.body.addAttribute("A", rows=3, cols=3)
+    AM = rng.normal(size=(3, 3))
+    A.updateValue(AM)
+    rest = rigid.v.addConstant("rest", rows=3, cols=1)
+    RE = rng.normal(size=(2, 3))
+    rest.updateValue(RE)
+    v2b = rigid.v.addConnectivity("v2b", rigid.body, [0, 0], 1)
+    jA = rigid.v.addAttribute("A", through=v2b, source=A)
+    rigid.v.addAttribute("x", computed_attribute=jA.resize(3, 3) * rest)
+    fixed = s.addMesh("fixed")
+    fixed.addPrimitive("v", numInstances=4)
+    xf = fixed.v.addConstant("x", rows=3, cols=1)
+    XF = rng.normal(size=(4, 3))
+    xf.updateValue(XF)
+    world = s.addMesh("world")
+    u = world.addPrimitiveUnion("v", [soft.v, rigid.v, fixed.v])
+    u.addAttribute("x")
+    expected = np.concatenate([XS, RE @ AM.T, XF])
+    return s, u, expected
+
+
+def test_three_way_union():
+    s, u, expected = three_way_union()
+    np.testing.assert_allclose(u["x"].compute().value[:, :, 0], expected,
+                               rtol=1e-14)
+    # Pairs through the union, and a dynamic count between calls.
+    world = s.world
+    pairs = world.addPrimitive("pairs", numInstances=0, isDynamic=True)
+    p2v = pairs.addConnectivity("p2v", u, [], 2)
+    x = pairs.addAttribute("x", through=p2v, source=u["x"])
+    gap = pairs.addAttribute("gap", computed_attribute=(x.row(1) - x.row(0)).norm())
+    assert gap.compute().value.shape == (0, 1, 1)
+    for count in (3, 8, 1):
+        idx = rng.integers(0, u.numInstances, size=(count, 2)).astype(np.int32)
+        pairs.updateNumInstances(count)
+        p2v.updateConnectivity(idx)
+        result = gap.compute()
+        want = np.linalg.norm(expected[idx[:, 1]] - expected[idx[:, 0]], axis=1)
+        np.testing.assert_allclose(result.value[:, 0, 0], want, rtol=1e-13)
+        if count != 3:
+            # Only instance counts changed: the kernel is reused.
+            assert result.stats["from_memory"]
+
+
+def test_domain_errors_give_nan():
+    s = yasps.scene("d")
+    prim = s.addMesh("m").addPrimitive("p", numInstances=3)
+    x = prim.addAttribute("x", rows=1, cols=1)
+    x.updateValue([[-1.0], [0.0], [4.0]])
+    logs = x.log().compute().value[:, 0, 0]
+    roots = x.sqrt().compute().value[:, 0, 0]
+    assert np.isnan(logs[0]) and logs[1] == -np.inf and logs[2] == np.log(4.0)
+    assert np.isnan(roots[0]) and roots[2] == 2.0
+    assert np.isnan((x / 0.0 * 0.0).compute().value[1, 0, 0])
+
+
+def test_missing_values_are_reported():
+    s = yasps.scene("m")
+    prim = s.addMesh("m").addPrimitive("p", numInstances=3)
+    x = prim.addAttribute("x", rows=1, cols=1)
+    with pytest.raises(yasps.ValueUpdateError, match="has no values"):
+        (x * 2.0).compute()
+
+
+def test_threads_give_the_same_result():
+    s = yasps.scene("t")
+    prim = s.addMesh("m").addPrimitive("p", numInstances=10000)
+    x = prim.addAttribute("x", rows=3, cols=1)
+    x.updateValue(rng.normal(size=(10000, 3)))
+    e = (x.dot(x) + 1.0).log()
+    one = e.compute(threads=1).value
+    many = e.compute(threads=4).value
+    np.testing.assert_array_equal(one, many)
+
+
+def test_second_process_compiles_nothing(tmp_path):
+    script = f"""
+import sys, numpy as np
+sys.path.insert(0, {str(REPO / 'python')!r})
+import yasps
+s = yasps.scene("warm")
+p = s.addMesh("m").addPrimitive("p", numInstances=5)
+x = p.addAttribute("x", rows=3, cols=3)
+x.updateValue(np.tile(np.eye(3), (5, 1, 1)) * 2)
+r = x.determinant().compute()
+assert np.allclose(r.value, 8.0)
+print(r.stats["from_disk"], r.stats["from_memory"])
+"""
+    env = dict(os.environ, YASPS_CACHE_DIR=str(tmp_path / "cache"))
+    runs = [subprocess.run([sys.executable, "-c", script], env=env, check=True,
+                           capture_output=True, text=True).stdout.split()
+            for _ in range(2)]
+    assert runs[0] == ["False", "False"]
+    assert runs[1] == ["True", "False"]
+    assert len(list((tmp_path / "cache").glob("*.o"))) == 1
