@@ -15,6 +15,7 @@ Build a scene with the API of the YASPS paper (section 4, appendix F)::
 See docs/python.md for the guide and the API reference.
 """
 
+from . import config
 from .attribute import (Attribute, concat, constant, hstack, identity, select,
                         vstack, zeros)
 from .errors import (IRError, LineageError, SceneError, ShapeError,
@@ -22,7 +23,7 @@ from .errors import (IRError, LineageError, SceneError, ShapeError,
 from .scene import Connectivity, Entity, Mesh, Primitive, PrimitiveUnion, Scene, scene
 
 __all__ = [
-    "Attribute", "Connectivity", "Entity", "IRError", "LineageError", "Mesh",
+    "Attribute", "Connectivity", "config", "Entity", "IRError", "LineageError", "Mesh",
     "Primitive", "PrimitiveUnion", "Scene", "SceneError", "ShapeError",
     "ValueUpdateError", "YaspsError", "concat", "constant", "hstack",
     "identity", "scene", "select", "vstack", "zeros",

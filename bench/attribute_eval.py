@@ -1,0 +1,156 @@
+#!/usr/bin/env python3
+"""Evaluating one attribute on 80k tets: yasps against NumPy and a C++ loop.
+
+The attribute is the deformation gradient F = Ds * Dm^-1 of every tet of
+../shared/data/bunny-19k.msh (79,935 tets), with Ds gathered through a JOIN
+of the vertex positions. Prints cold compile time, warm start time (kernel
+from the on-disk cache in a new process), and evaluation time on one thread
+against the same computation written in NumPy and in C++ (-O3
+-march=native, built here). Ratios are what to compare across machines.
+
+    python3 bench/attribute_eval.py [--repeat 20]
+"""
+
+from __future__ import annotations
+
+import argparse
+import ctypes
+import json
+import os
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+
+HERE = Path(__file__).resolve().parent
+sys.path.insert(0, str(HERE.parent / "python"))
+sys.path.insert(0, str(HERE))
+
+import yasps  # noqa: E402
+from meshes import bunny  # noqa: E402
+
+
+def build_scene():
+    verts, tets = bunny("19k")
+    rng = np.random.default_rng(0)
+    x = verts + rng.normal(scale=1e-3, size=verts.shape)
+    rest = verts[tets]                                   # (M, 4, 3)
+    dm = np.stack([rest[:, k] - rest[:, 0] for k in (1, 2, 3)], axis=2)
+    dm_inv = np.linalg.inv(dm)
+    s = yasps.scene("bench")
+    m = s.addMesh("bunny")
+    v = m.addPrimitive("vertices", numInstances=len(verts))
+    t = m.addPrimitive("tets", numInstances=len(tets))
+    v.addAttribute("x", rows=3, cols=1).updateValue(x)
+    t.addConstant("DmInv", rows=3, cols=3).updateValue(dm_inv)
+    t2v = t.addConnectivity("tet2v", v, tets, 4)
+    p = t.addAttribute("x", through=t2v, source=v["x"])
+    ds = yasps.hstack([(p.row(k) - p.row(0)).T for k in (1, 2, 3)])
+    F = t.addAttribute("F", computed_attribute=ds * t["DmInv"])
+    return s, F, x, tets, dm_inv
+
+
+def first_compute_in_new_process(cache: str) -> dict:
+    """Runs one compute() in a fresh interpreter; returns its timings."""
+    code = f"""
+import json, sys, time
+sys.argv = ['x']
+sys.path.insert(0, {str(HERE)!r})
+import attribute_eval as b
+s, F, *_ = b.build_scene()
+t0 = time.perf_counter()
+r = F.compute(threads=1)
+print(json.dumps(dict(r.stats, first_compute=time.perf_counter() - t0)))
+"""
+    env = dict(os.environ, YASPS_CACHE_DIR=cache)
+    out = subprocess.run([sys.executable, "-c", code], env=env, check=True,
+                         capture_output=True, text=True).stdout
+    return json.loads(out.strip().splitlines()[-1])
+
+
+def build_cpp(workdir: Path) -> ctypes.CDLL:
+    lib = workdir / "deformation_gradient.so"
+    subprocess.run(["g++", "-O3", "-march=native", "-shared", "-fPIC",
+                    str(HERE / "cpp" / "deformation_gradient.cpp"), "-o",
+                    str(lib)], check=True)
+    return ctypes.CDLL(str(lib))
+
+
+def median_time(fn, repeat: int) -> float:
+    times = []
+    for _ in range(repeat):
+        t0 = time.perf_counter()
+        fn()
+        times.append(time.perf_counter() - t0)
+    return float(np.median(times))
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    parser.add_argument("--repeat", type=int, default=20)
+    args = parser.parse_args()
+
+    with tempfile.TemporaryDirectory() as tmp:
+        cache = str(Path(tmp) / "cache")
+        cold = first_compute_in_new_process(cache)
+        warm = first_compute_in_new_process(cache)
+        assert warm["from_disk"], "second process did not use the disk cache"
+
+        yasps.config.cache_dir = cache
+        s, F, x, tets, dm_inv = build_scene()
+        result = F.compute(threads=1).value
+
+        # The kernel alone, as the runtime launches it.
+        from yasps import compiler
+        from yasps.emit import emit_scene
+        from yasps.evaluate import _buffer
+        native = compiler._module()
+        path = "@bunny::@tets::@F"
+        library = native.compile_cpu(emit_scene(s), [path], cache)
+        out = np.empty(len(tets) * 9)
+        buffers = [_buffer(s, k, p, out) for k, p in dict(library.kernels)[path]]
+        kernel = median_time(lambda: library.launch(path, len(tets), buffers, 1),
+                             args.repeat)
+        end_to_end = median_time(lambda: F.compute(threads=1), args.repeat)
+
+        # NumPy: gather, differences, batched 3x3 products.
+        def numpy_f():
+            p = x[tets]
+            ds = np.stack([p[:, k] - p[:, 0] for k in (1, 2, 3)], axis=2)
+            return ds @ dm_inv
+        reference = numpy_f()
+        np.testing.assert_allclose(result, reference, rtol=1e-12, atol=1e-12)
+        numpy_time = median_time(numpy_f, args.repeat)
+
+        cpp = build_cpp(Path(tmp))
+        x_cm = np.ascontiguousarray(x)            # 3x1: row- = column-major
+        dm_cm = np.ascontiguousarray(np.transpose(dm_inv, (0, 2, 1))).reshape(-1)
+        cpp_out = np.empty(len(tets) * 9)
+        ptr = lambda a: a.ctypes.data_as(ctypes.c_void_p)
+        call = lambda: cpp.deformation_gradient(ptr(x_cm), ptr(tets), ptr(dm_cm),
+                                                ptr(cpp_out),
+                                                ctypes.c_int64(len(tets)))
+        call()
+        np.testing.assert_allclose(cpp_out, out, rtol=1e-12, atol=1e-12)
+        cpp_time = median_time(call, args.repeat)
+
+    print(f"deformation gradient of {len(tets)} tets (bunny-19k), one thread, "
+          f"median of {args.repeat}")
+    print(f"  cold compile (new process, empty cache): "
+          f"lower {cold['lower_seconds'] * 1e3:.1f} ms + codegen "
+          f"{cold['codegen_seconds'] * 1e3:.1f} ms; first compute() "
+          f"{cold['first_compute'] * 1e3:.1f} ms")
+    print(f"  warm start (new process, disk cache):    "
+          f"load {warm['codegen_seconds'] * 1e3:.1f} ms; first compute() "
+          f"{warm['first_compute'] * 1e3:.1f} ms")
+    print(f"  {'':24s}{'time':>10s}{'vs C++':>10s}")
+    for name, t in [("yasps kernel", kernel), ("yasps compute()", end_to_end),
+                    ("NumPy", numpy_time), ("C++ loop (-O3)", cpp_time)]:
+        print(f"  {name:24s}{t * 1e3:8.2f} ms{t / cpp_time:9.2f}x")
+
+
+if __name__ == "__main__":
+    main()
