@@ -281,3 +281,30 @@ print(r.stats["from_disk"], r.stats["from_memory"])
     assert runs[0] == ["False", "False"]
     assert runs[1] == ["True", "False"]
     assert len(list((tmp_path / "cache").glob("*.o"))) == 1
+
+
+@pytest.mark.parametrize("n", [1, 2, 3, 6, 12])
+def test_projection_matches_numpy_eigh(n):
+    count = 50
+    s = yasps.scene("proj")
+    prim = s.addMesh("m").addPrimitive("p", numInstances=count)
+    h = prim.addAttribute("h", rows=n, cols=n)
+    M = rng.normal(size=(count, n, n))
+    M = M + np.transpose(M, (0, 2, 1))
+    Q, _ = np.linalg.qr(rng.normal(size=(n, n)))
+    # Repeated, tiny and zero eigenvalues, and a widely scaled diagonal.
+    M[0] = Q @ np.diag(np.resize([2.0, 2.0, -1e-12, 1e-12, 0.0, -3.0], n)) @ Q.T
+    M[1] = np.diag(np.resize([1e-200, 1e200, -1e-200, 3.0], n))
+    M[2] = -np.eye(n)
+    h.updateValue(M)
+    w, V = np.linalg.eigh(M)
+    scale = np.abs(M).max(axis=(1, 2))[:, None, None]
+    for method, f in [("clamp", np.maximum(w, 0)), ("abs", np.abs(w)),
+                      ("none", w)]:
+        got = h.project(method).compute().value
+        ref = np.einsum("nij,nj,nkj->nik", V, f, V)
+        assert (np.abs(got - ref) / scale).max() < 1e-13, method
+        if method == "clamp":
+            smallest = np.linalg.eigvalsh(got).min(axis=1)
+            assert (smallest >= -1e-12 * scale[:, 0, 0]).all()
+            np.testing.assert_array_equal(got[2], 0.0)

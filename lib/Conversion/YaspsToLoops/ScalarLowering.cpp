@@ -261,6 +261,9 @@ mlir::yasps::lowerToScalars(OpBuilder &b, Operation *op,
           return math::AbsFOp::create(b, loc, x);
         });
       })
+      .Case([&](ProjectOp project) -> FailureOr<ScalarMatrix> {
+        return lowerProjection(b, loc, project.getMethod(), lhs());
+      })
       // Derivatives only see through stop_gradient; values pass unchanged.
       .Case([&](StopGradientOp) -> FailureOr<ScalarMatrix> { return lhs(); })
       // Matrix algebra.

@@ -275,21 +275,18 @@ LogicalResult LowerToLoopsPass::lowerAttribute(SceneOp scene,
   KernelEmitter emitter(scene, tables, func);
   Value out = emitter.buffer("out", decl, type.getElementType());
   Value one = arith::ConstantIndexOp::create(b, loc, 1);
-  bool failedToLower = false;
-  scf::ParallelOp::create(
-      b, loc, ValueRange{entry->getArgument(0)},
-      ValueRange{entry->getArgument(1)}, ValueRange{one},
-      [&](OpBuilder &body, Location, ValueRange ivs) {
-        FailureOr<ScalarMatrix> value = emitter.evaluate(body, decl, ivs[0]);
-        if (failed(value)) {
-          failedToLower = true;
-          return;
-        }
-        emitter.store(body, out, *value, ivs[0]);
-      });
+  // The loop is created first and filled afterwards so that code generated
+  // for the body can reach the enclosing function (e.g. for scratch buffers).
+  auto loop = scf::ParallelOp::create(b, loc, ValueRange{entry->getArgument(0)},
+                                      ValueRange{entry->getArgument(1)},
+                                      ValueRange{one});
   func::ReturnOp::create(b, loc);
-  if (failedToLower)
+  OpBuilder body = OpBuilder::atBlockTerminator(loop.getBody());
+  Value instance = loop.getInductionVars()[0];
+  FailureOr<ScalarMatrix> value = emitter.evaluate(body, decl, instance);
+  if (failed(value))
     return failure();
+  emitter.store(body, out, *value, instance);
 
   func.setType(builder.getFunctionType(entry->getArgumentTypes(), {}));
   func->setAttr("yasps.kernel_of", path);

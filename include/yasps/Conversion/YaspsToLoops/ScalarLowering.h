@@ -11,6 +11,8 @@
 #ifndef YASPS_CONVERSION_YASPSTOLOOPS_SCALARLOWERING_H
 #define YASPS_CONVERSION_YASPSTOLOOPS_SCALARLOWERING_H
 
+#include "yasps/Dialect/Yasps/IR/Yasps.h"
+
 #include "mlir/IR/Builders.h"
 #include "mlir/IR/Value.h"
 #include "llvm/ADT/SmallVector.h"
@@ -32,6 +34,12 @@ struct ScalarMatrix {
 /// that kernels do not support.
 FailureOr<ScalarMatrix> lowerToScalars(OpBuilder &b, Operation *op,
                                        ArrayRef<ScalarMatrix> operands);
+
+/// PSD projection of the symmetric matrix `in` (cyclic Jacobi
+/// eigen-decomposition, eigenvalues clamped or made absolute); `none`
+/// returns `in`.
+ScalarMatrix lowerProjection(OpBuilder &b, Location loc,
+                             ProjectionMethod method, const ScalarMatrix &in);
 
 } // namespace mlir::yasps
 
