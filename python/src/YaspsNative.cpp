@@ -142,7 +142,8 @@ struct CpuLibrary {
 CpuLibrary compileCpu(const std::string &ir,
                       const std::vector<std::string> &attributes,
                       const std::string &cacheDir, unsigned optLevel,
-                      const std::string &bufferName) {
+                      const std::string &bufferName,
+                      const std::string &prePipeline) {
   std::lock_guard<std::mutex> guard(getLock());
   llvm::SourceMgr sourceMgr;
   DiagnosticCollector diagnostics(getContext(), sourceMgr);
@@ -153,7 +154,8 @@ CpuLibrary compileCpu(const std::string &ir,
   options.optLevel = optLevel;
   CpuLibrary result;
   auto library =
-      mlir::yasps::compileCpuKernels(*module, attributes, options, &result.stats);
+      mlir::yasps::compileCpuKernels(*module, attributes, options,
+                                     &result.stats, prePipeline);
   if (!library) {
     std::string message = llvm::toString(library.takeError());
     std::string collected = diagnostics.take();
@@ -241,6 +243,18 @@ NB_MODULE(_yasps_native, m) {
             return out;
           },
           "[(attribute path, [(kind, path), ...])] per kernel")
+      .def(
+          "params",
+          [](const CpuLibrary &self, const std::string &attribute) {
+            const mlir::yasps::CpuKernel *kernel =
+                self.library->lookup(attribute);
+            if (!kernel)
+              throw std::invalid_argument("no compiled kernel for " +
+                                          attribute);
+            return kernel->params;
+          },
+          nb::arg("attribute"),
+          "Local parameters of a derivative attribute's kernel")
       .def_prop_ro(
           "stats",
           [](const CpuLibrary &self) {
@@ -260,7 +274,7 @@ NB_MODULE(_yasps_native, m) {
 
   m.def("compile_cpu", &compileCpu, nb::arg("ir"), nb::arg("attributes"),
         nb::arg("cache_dir") = "", nb::arg("opt_level") = 3,
-        nb::arg("name") = "<yasps>",
+        nb::arg("name") = "<yasps>", nb::arg("pre_pipeline") = "",
         "Compiles CPU kernels for the attributes (scene-relative paths) of "
         "the IR's scene, reusing in-memory and on-disk caches.");
   m.def("cpu_lowering_pipeline",

@@ -97,3 +97,111 @@ def compute(attr: Attribute, threads: int = None) -> ComputedValue:
                    config.num_threads if threads is None else threads)
     return ComputedValue(attr, from_column_major(out, target.rows, target.cols),
                          dict(library.stats))
+
+
+#: Passes that turn energies into their local derivatives (docs/passes.md).
+DIFFERENTIATION_PIPELINE = "yasps-inline-reads,canonicalize,cse,yasps-differentiate"
+
+
+class ParamSlot:
+    """A group of an energy's local parameters: the entries of one target
+    value, read directly (``connectivity`` None) or gathered as the
+    ``slot``-th instance of a JOIN."""
+
+    def __init__(self, target: Attribute, connectivity, slot):
+        self.target = target
+        self.connectivity = connectivity
+        self.slot = slot
+
+    @property
+    def size(self) -> int:
+        return self.target.rows * self.target.cols
+
+    def instance(self, i: int) -> int:
+        """The target instance these parameters belong to, for energy
+        instance ``i``."""
+        if self.connectivity is not None:
+            return int(self.connectivity.indices[i, self.slot])
+        owner = self.target.owner
+        return i if owner.numInstances > 1 or owner.kind in ("primitive", "primitive union") else 0
+
+    def __repr__(self) -> str:
+        via = (f" via {self.connectivity.name}[{self.slot}]"
+               if self.connectivity is not None else "")
+        return f"<ParamSlot {self.target.describe()}{via}>"
+
+
+class LocalDerivatives:
+    """Per-instance value, gradient and Hessian of one energy with respect to
+    its local parameters (see :meth:`Scene.energyDerivatives`)."""
+
+    def __init__(self, energy, value, gradient, hessian, params):
+        self.energy = energy
+        #: Energy of every instance, shape (N,).
+        self.value = value
+        #: Gradient of every instance, shape (N, n).
+        self.gradient = gradient
+        #: Hessian of every instance, shape (N, n, n).
+        self.hessian = hessian
+        #: The n local parameters, as groups in order.
+        self.params = params
+
+    def locations(self, i: int):
+        """(target attribute, target instance, entry) of each local parameter
+        of energy instance ``i``; entries are column-major."""
+        out = []
+        for slot in self.params:
+            instance = slot.instance(i)
+            out += [(slot.target, instance, e) for e in range(slot.size)]
+        return out
+
+
+def _param_slots(scene: Scene, owner: Entity, fields) -> list:
+    slots = []
+    for field in fields:
+        if field[0] == "read":
+            slots.append(ParamSlot(_resolve(scene, field[1]), None, None))
+        else:
+            connectivity = owner._symbols[field[1].lstrip("@")]
+            slots.append(ParamSlot(_resolve(scene, field[3]), connectivity,
+                                   int(field[2])))
+    return slots
+
+
+def energy_derivatives(scene: Scene, energy: Attribute,
+                       threads: int = None) -> LocalDerivatives:
+    """Local gradients and Hessians of a registered energy, per instance."""
+    if not any(e is energy for e in scene.energies):
+        raise SceneError(f"{energy.describe()} is not an energy of scene "
+                         f"'{scene.name}' (addEnergy)")
+    if not scene.minimizeTargets:
+        raise SceneError(f"scene '{scene.name}' has no minimisation targets "
+                         "(addMinimizeTarget)")
+    owner = energy.owner
+    base = "::".join("@" + n for n in owner.path + [energy.name])
+    paths = [base + "__grad", base + "__hess"]
+    native = compiler._module()
+    ir = emit_scene(scene, locations=True)
+    try:
+        library = native.compile_cpu(ir, paths, config.cache_dir or "",
+                                     config.opt_level, scene.name,
+                                     DIFFERENTIATION_PIPELINE)
+    except native.IRError as err:
+        if "does not name an attribute" in str(err):
+            raise SceneError(f"{energy.describe()} depends on no "
+                             "minimisation target") from None
+        raise compiler.IRError(str(err)) from None
+    params = _param_slots(scene, owner, library.params(paths[0]))
+    n = sum(p.size for p in params)
+    count = owner.numInstances
+    results = []
+    for path, shape in zip(paths, [(n, 1), (n, n)]):
+        out = np.empty(count * shape[0] * shape[1], dtype=np.float64)
+        arguments = dict(library.kernels)[path]
+        buffers = [_buffer(scene, kind, p, out) for kind, p in arguments]
+        library.launch(path, count, buffers,
+                       config.num_threads if threads is None else threads)
+        results.append(from_column_major(out, *shape))
+    value = compute(energy, threads).value[:, 0, 0]
+    return LocalDerivatives(energy, value, results[0][:, :, 0], results[1],
+                            params)

@@ -301,6 +301,24 @@ class Scene(Entity):
             new.append(target)
         self._targets.extend(new)
 
+    # ---------------------------------------------------------- evaluation
+
+    def evaluateEnergy(self, threads: Optional[int] = None) -> float:
+        """The total energy: every registered energy summed over its
+        instances, evaluated with compiled kernels."""
+        return float(sum(attr.compute(threads).value.sum()
+                         for attr in self.energies))
+
+    def energyDerivatives(self, energy: Attribute,
+                          threads: Optional[int] = None):
+        """Per-instance value, local gradient and local Hessian of a
+        registered energy with respect to its local parameters (entries of
+        the minimisation targets it reads or gathers), for tests and
+        debugging. Returns a :class:`yasps.evaluate.LocalDerivatives`."""
+        from .evaluate import energy_derivatives
+
+        return energy_derivatives(self, energy, threads)
+
     # ------------------------------------------------------------------ IR
 
     def ir(self, verify: bool = True, locations: bool = False) -> str:

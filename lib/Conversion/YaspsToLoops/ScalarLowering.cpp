@@ -12,6 +12,7 @@
 
 #include "mlir/Dialect/Arith/IR/Arith.h"
 #include "mlir/Dialect/Math/IR/Math.h"
+#include "mlir/IR/Matchers.h"
 #include "llvm/ADT/TypeSwitch.h"
 
 using namespace mlir;
@@ -28,11 +29,44 @@ public:
   Value constant(double value) {
     return arith::ConstantOp::create(b, loc, b.getFloatAttr(type, value));
   }
-  Value add(Value x, Value y) { return arith::AddFOp::create(b, loc, x, y); }
-  Value sub(Value x, Value y) { return arith::SubFOp::create(b, loc, x, y); }
-  Value mul(Value x, Value y) { return arith::MulFOp::create(b, loc, x, y); }
-  Value div(Value x, Value y) { return arith::DivFOp::create(b, loc, x, y); }
-  Value neg(Value x) { return arith::NegFOp::create(b, loc, x); }
+  // Literal zeros and ones are folded symbolically: derivative code is full
+  // of products with the 0/1 entries of unit directions, and skipping them is
+  // what keeps it as cheap as hand-written derivatives. Unlike IEEE
+  // arithmetic, 0 * x is 0 even for an infinite or NaN x.
+  static bool isZero(Value v) { return matchPattern(v, m_AnyZeroFloat()); }
+  static bool isOne(Value v) { return matchPattern(v, m_OneFloat()); }
+
+  Value add(Value x, Value y) {
+    if (isZero(y))
+      return x;
+    if (isZero(x))
+      return y;
+    return arith::AddFOp::create(b, loc, x, y);
+  }
+  Value sub(Value x, Value y) {
+    if (isZero(y))
+      return x;
+    if (isZero(x))
+      return neg(y);
+    return arith::SubFOp::create(b, loc, x, y);
+  }
+  Value mul(Value x, Value y) {
+    if (isZero(x) || isOne(y))
+      return x;
+    if (isZero(y) || isOne(x))
+      return y;
+    return arith::MulFOp::create(b, loc, x, y);
+  }
+  Value div(Value x, Value y) {
+    if (isZero(x) || isOne(y))
+      return x;
+    return arith::DivFOp::create(b, loc, x, y);
+  }
+  Value neg(Value x) {
+    if (isZero(x))
+      return constant(0.0);
+    return arith::NegFOp::create(b, loc, x);
+  }
 
   /// Left-to-right sum, the order NumPy's small reductions use as well.
   Value sum(ArrayRef<Value> terms) {

@@ -291,6 +291,10 @@ LogicalResult LowerToLoopsPass::lowerAttribute(SceneOp scene,
   func.setType(builder.getFunctionType(entry->getArgumentTypes(), {}));
   func->setAttr("yasps.kernel_of", path);
   func->setAttr("yasps.kernel_args", emitter.getRoles());
+  // Derivative attributes describe their local parameters; keep that with
+  // the kernel for the runtime.
+  if (Attribute params = decl->getAttr("yasps.params"))
+    func->setAttr("yasps.params", params);
   return success();
 }
 

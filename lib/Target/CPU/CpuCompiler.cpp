@@ -155,6 +155,22 @@ std::vector<CpuKernel> describeKernels(ModuleOp kernels) {
       llvm::raw_string_ostream(arg.path) << role[1];
       kernel.arguments.push_back(arg);
     }
+    if (auto params = func->getAttrOfType<ArrayAttr>("yasps.params")) {
+      for (auto param : params.getAsRange<ArrayAttr>()) {
+        std::vector<std::string> fields;
+        for (Attribute field : param) {
+          std::string text;
+          if (auto str = dyn_cast<StringAttr>(field))
+            text = str.str();
+          else if (auto integer = dyn_cast<IntegerAttr>(field))
+            text = std::to_string(integer.getInt());
+          else
+            llvm::raw_string_ostream(text) << field;
+          fields.push_back(text);
+        }
+        kernel.params.push_back(fields);
+      }
+    }
     result.push_back(std::move(kernel));
   }
   return result;
@@ -230,7 +246,8 @@ llvm::Expected<std::shared_ptr<CpuKernelLibrary>>
 mlir::yasps::compileCpuKernels(ModuleOp module,
                                const std::vector<std::string> &attributes,
                                const CpuCompileOptions &options,
-                               CpuCompileStats *stats) {
+                               CpuCompileStats *stats,
+                               StringRef prePipeline) {
   CpuCompileStats localStats;
   CpuCompileStats &st = stats ? *stats : localStats;
   Clock::time_point start = Clock::now();
@@ -239,6 +256,9 @@ mlir::yasps::compileCpuKernels(ModuleOp module,
   OwningOpRef<ModuleOp> kernels(cast<ModuleOp>(module->clone()));
   if (llvm::Error err = runPasses(
           *kernels, "kernel generation failed", [&](PassManager &pm) {
+            if (!prePipeline.empty() &&
+                failed(parsePassPipeline(prePipeline, pm)))
+              return failure();
             YaspsLowerToLoopsOptions lowerOptions;
             lowerOptions.attributes.assign(attributes.begin(),
                                            attributes.end());

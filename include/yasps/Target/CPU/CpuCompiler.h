@@ -34,6 +34,10 @@ struct CpuKernel {
   std::string attribute; ///< the attribute it evaluates
   std::string symbol;    ///< the kernel function's name
   std::vector<KernelArgument> arguments;
+  /// For derivative attributes, their local parameters (`yasps.params`),
+  /// each as its printed fields, e.g. {"join", "@m::@t::@t2v", "2",
+  /// "@m::@v::@x"}.
+  std::vector<std::vector<std::string>> params;
   void (*packed)(void **) = nullptr;
 };
 
@@ -76,10 +80,14 @@ llvm::StringRef getCpuLoweringPipeline();
 /// Compiles kernels for `attributes` (scene-relative paths; empty: every
 /// energy) of the module's scene. The module is left unchanged. Libraries
 /// are shared between calls with the same kernels.
+/// `prePipeline` (a yasps-opt pipeline string, e.g.
+/// "yasps-inline-reads,cse,yasps-differentiate") runs first, for attributes
+/// that passes create.
 llvm::Expected<std::shared_ptr<CpuKernelLibrary>>
 compileCpuKernels(ModuleOp module, const std::vector<std::string> &attributes,
                   const CpuCompileOptions &options,
-                  CpuCompileStats *stats = nullptr);
+                  CpuCompileStats *stats = nullptr,
+                  llvm::StringRef prePipeline = "");
 
 } // namespace mlir::yasps
 

@@ -11,6 +11,7 @@ using namespace mlir::yasps;
 
 #include "yasps/Dialect/Yasps/IR/YaspsDialect.cpp.inc"
 #include "yasps/Dialect/Yasps/IR/YaspsEnums.cpp.inc"
+#include "yasps/Dialect/Yasps/IR/YaspsInterfaces.cpp.inc"
 
 #define GET_TYPEDEF_CLASSES
 #include "yasps/Dialect/Yasps/IR/YaspsTypes.cpp.inc"

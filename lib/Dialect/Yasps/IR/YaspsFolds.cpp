@@ -207,3 +207,33 @@ OpFoldResult ResizeOp::fold(FoldAdaptor) {
   }
   return {};
 }
+
+/// The block of constant `attr` at (row0, col0) with `type`'s shape.
+static Attribute foldBlock(Attribute attr, MatrixType type, int64_t row0,
+                           int64_t col0) {
+  std::optional<ConstMatrix> m = asConstMatrix(attr);
+  if (!m)
+    return {};
+  SmallVector<APFloat> out;
+  for (int64_t r = 0; r < type.getRows(); ++r)
+    for (int64_t c = 0; c < type.getCols(); ++c)
+      out.push_back(m->at(row0 + r, col0 + c));
+  return toAttr(type, out);
+}
+
+OpFoldResult RowOp::fold(FoldAdaptor adaptor) {
+  return foldBlock(adaptor.getOperand(), getMatrixType(), getIndex(), 0);
+}
+
+OpFoldResult ColOp::fold(FoldAdaptor adaptor) {
+  return foldBlock(adaptor.getOperand(), getMatrixType(), 0, getIndex());
+}
+
+OpFoldResult ElementOp::fold(FoldAdaptor adaptor) {
+  return foldBlock(adaptor.getOperand(), getMatrixType(), getRow(), getCol());
+}
+
+OpFoldResult SliceOp::fold(FoldAdaptor adaptor) {
+  return foldBlock(adaptor.getOperand(), getMatrixType(), getRowOffset(),
+                   getColOffset());
+}

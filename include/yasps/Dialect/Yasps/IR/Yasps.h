@@ -9,6 +9,7 @@
 #define YASPS_DIALECT_YASPS_IR_YASPS_H
 
 #include "mlir/Bytecode/BytecodeOpInterface.h"
+#include "mlir/IR/Builders.h"
 #include "mlir/IR/BuiltinAttributes.h"
 #include "mlir/IR/BuiltinOps.h"
 #include "mlir/IR/BuiltinTypes.h"
@@ -21,6 +22,7 @@
 
 #include "yasps/Dialect/Yasps/IR/YaspsDialect.h.inc"
 #include "yasps/Dialect/Yasps/IR/YaspsEnums.h.inc"
+#include "yasps/Dialect/Yasps/IR/YaspsInterfaces.h.inc"
 
 #define GET_TYPEDEF_CLASSES
 #include "yasps/Dialect/Yasps/IR/YaspsTypes.h.inc"

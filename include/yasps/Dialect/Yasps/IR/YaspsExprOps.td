@@ -13,6 +13,7 @@
 
 include "yasps/Dialect/Yasps/IR/YaspsDialect.td"
 include "yasps/Dialect/Yasps/IR/YaspsEnums.td"
+include "yasps/Dialect/Yasps/IR/YaspsInterfaces.td"
 include "yasps/Dialect/Yasps/IR/YaspsTypes.td"
 include "mlir/IR/SymbolInterfaces.td"
 include "mlir/Interfaces/InferTypeOpInterface.td"
@@ -24,7 +25,8 @@ def Yasps_Mat : Type<CPred<"::llvm::isa<::mlir::yasps::MatrixType>($_self)">,
                      "per-instance matrix">;
 
 class Yasps_ExprOp<string mnemonic, list<Trait> traits = []>
-    : Yasps_Op<mnemonic, !listconcat(traits, [Pure, HasParent<"AttrOp">])> {
+    : Yasps_Op<mnemonic, !listconcat(traits, [Pure, HasParent<"AttrOp">,
+        DeclareOpInterfaceMethods<Yasps_DifferentiableOpInterface>])> {
   code exprClassDecl = [{
     /// The per-instance shape of the result.
     ::mlir::yasps::MatrixType getMatrixType() {
@@ -435,6 +437,7 @@ def Yasps_RowOp : Yasps_ExprOp<"row"> {
   let assemblyFormat = [{
     $operand `[` $index `]` attr-dict `:` type($operand) `->` type($result)
   }];
+  let hasFolder = 1;
   let hasVerifier = 1;
 }
 
@@ -451,6 +454,7 @@ def Yasps_ColOp : Yasps_ExprOp<"col"> {
   let assemblyFormat = [{
     $operand `[` $index `]` attr-dict `:` type($operand) `->` type($result)
   }];
+  let hasFolder = 1;
   let hasVerifier = 1;
 }
 
@@ -469,6 +473,7 @@ def Yasps_ElementOp : Yasps_ExprOp<"element", [
   let assemblyFormat = [{
     $operand `[` $row `,` $col `]` attr-dict `:` type($operand)
   }];
+  let hasFolder = 1;
   let hasVerifier = 1;
 }
 
@@ -490,6 +495,7 @@ def Yasps_SliceOp : Yasps_ExprOp<"slice"> {
     $operand `[` $row_offset `,` $col_offset `]` attr-dict `:`
     type($operand) `->` type($result)
   }];
+  let hasFolder = 1;
   let hasVerifier = 1;
 }
 

@@ -45,4 +45,31 @@ def YaspsStripScenes : Pass<"yasps-strip-scenes", "::mlir::ModuleOp"> {
   }];
 }
 
+def YaspsDifferentiate : Pass<"yasps-differentiate", "::mlir::ModuleOp"> {
+  let summary = "Local gradients and Hessians of every energy";
+  let description = [{
+    For every energy `@E` of a scene with minimisation targets, adds to E's
+    owner the computed attributes
+
+    - `@E__grad : !yasps.mat<n x 1>`: the gradient of one instance of E with
+      respect to its n local parameters, and
+    - `@E__hess : !yasps.mat<n x n>`: its Hessian,
+
+    both as yasps IR built from the ops' derivative rules
+    (`DifferentiableOpInterface`): forward mode, one tangent per local
+    parameter, and the rules applied again to the tangent code for second
+    derivatives, with tangents known to be zero never materialised. Both list
+    their parameters in `yasps.params`, in order: `["read", @attr]` for a
+    target read on the energy's own lineage (its r*c entries, column-major),
+    `["join", @connectivity, l, @attr]` for the l-th instance gathered by a
+    JOIN of a target (r*c entries each).
+
+    Energies must have their reads of computed attributes inlined
+    (`yasps-inline-reads`). Differentiating through a JOIN or UNION of a
+    computed attribute (e.g. affine-body vertices) is not supported yet and
+    is reported as an error on the op.
+  }];
+  let dependentDialects = ["::mlir::yasps::YaspsDialect"];
+}
+
 #endif // YASPS_DIALECT_YASPS_TRANSFORMS_PASSES_TD

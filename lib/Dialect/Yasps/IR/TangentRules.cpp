@@ -1,0 +1,365 @@
+//===- TangentRules.cpp - derivative rules of yasps expressions -----------===//
+//
+// Forward-mode rules: each op emits the tangent of its result from its
+// operands' tangents, in yasps IR and at the matrix level. A null Value is a
+// zero tangent; rules skip the terms it would zero, so derivative code only
+// contains the products that can be non-zero.
+//
+//===----------------------------------------------------------------------===//
+
+#include "yasps/Dialect/Yasps/IR/Yasps.h"
+
+#include "mlir/IR/Builders.h"
+
+using namespace mlir;
+using namespace mlir::yasps;
+
+namespace {
+
+/// Builds tangent expressions, treating null Values as zero.
+class TangentBuilder {
+public:
+  TangentBuilder(OpBuilder &b, Location loc) : b(b), loc(loc) {}
+
+  static MatrixType typeOf(Value v) { return cast<MatrixType>(v.getType()); }
+
+  Value constant(MatrixType type, double value) {
+    auto attr = DenseElementsAttr::get(
+        type.getTensorType(), b.getFloatAttr(type.getElementType(), value));
+    return ConstantOp::create(b, loc, type, attr);
+  }
+  Value scalar(MatrixType like, double value) {
+    return constant(like.getScalarType(), value);
+  }
+  Value orZero(Value tangent, MatrixType type) {
+    return tangent ? tangent : constant(type, 0.0);
+  }
+
+  Value add(Value x, Value y) {
+    if (!x || !y)
+      return x ? x : y;
+    return AddOp::create(b, loc, x, y);
+  }
+  Value sub(Value x, Value y) {
+    if (!y)
+      return x;
+    if (!x)
+      return neg(y);
+    return SubOp::create(b, loc, x, y);
+  }
+  Value neg(Value x) { return x ? NegOp::create(b, loc, x).getResult() : x; }
+  /// m * s for a 1x1 s.
+  Value scale(Value m, Value s) {
+    if (!m || !s)
+      return {};
+    return ScaleOp::create(b, loc, typeOf(m), m, s);
+  }
+  Value scaleBy(Value m, double s) {
+    return m ? scale(m, scalar(typeOf(m), s)) : m;
+  }
+  Value div(Value m, Value s) {
+    return m ? DivOp::create(b, loc, typeOf(m), m, s).getResult() : m;
+  }
+  Value emul(Value x, Value y) {
+    if (!x || !y)
+      return {};
+    return ElementwiseMulOp::create(b, loc, x, y);
+  }
+  Value matmul(Value x, Value y) {
+    if (!x || !y)
+      return {};
+    MatrixType tx = typeOf(x), ty = typeOf(y);
+    return MatmulOp::create(b, loc, tx.withShape(tx.getRows(), ty.getCols()),
+                            x, y);
+  }
+  Value dot(Value x, Value y) {
+    if (!x || !y)
+      return {};
+    return DotOp::create(b, loc, typeOf(x).getScalarType(), x, y);
+  }
+  Value trace(Value m) {
+    return m ? TraceOp::create(b, loc, typeOf(m).getScalarType(), m)
+                   .getResult()
+             : m;
+  }
+  Value pow(Value base, Value exponent) {
+    return PowOp::create(b, loc, typeOf(base), base, exponent);
+  }
+  /// Entrywise 1 / x.
+  Value reciprocal(Value x) { return pow(x, scalar(typeOf(x), -1.0)); }
+
+  OpBuilder &b;
+  Location loc;
+};
+
+/// Product rule for a bilinear op f(a, b): f(da, b) + f(a, db).
+template <typename Fn>
+Value productRule(TangentBuilder &t, Value a, Value b, Value da, Value db,
+                  Fn f) {
+  return t.add(da ? f(da, b) : Value(), db ? f(a, db) : Value());
+}
+
+FailureOr<Value> notDifferentiable(Operation *op, StringRef why) {
+  return op->emitOpError() << "cannot be differentiated: " << why;
+}
+
+} // namespace
+
+#define TANGENT(OP)                                                            \
+  FailureOr<Value> OP::emitTangent(OpBuilder &builder,                         \
+                                   ArrayRef<Value> tangents)
+
+// Leaves of the differentiation pass, which seeds their tangents itself.
+TANGENT(ReadOp) {
+  return notDifferentiable(*this, "reads are seeded by yasps-differentiate");
+}
+TANGENT(JoinOp) {
+  return notDifferentiable(*this, "JOINs are seeded by yasps-differentiate");
+}
+TANGENT(UnionOp) {
+  return notDifferentiable(*this, "UNIONs are seeded by yasps-differentiate");
+}
+TANGENT(ProjectOp) {
+  return notDifferentiable(
+      *this, "PSD projection applies to derivatives, not before them");
+}
+
+// Constants, comparisons and stopped gradients.
+TANGENT(ConstantOp) { return Value(); }
+TANGENT(IdentityOp) { return Value(); }
+TANGENT(CmpOp) { return Value(); }
+TANGENT(StopGradientOp) { return Value(); }
+
+// Linear ops: the same op on the tangents.
+TANGENT(AddOp) { return TangentBuilder(builder, getLoc()).add(tangents[0], tangents[1]); }
+TANGENT(SubOp) { return TangentBuilder(builder, getLoc()).sub(tangents[0], tangents[1]); }
+TANGENT(NegOp) { return TangentBuilder(builder, getLoc()).neg(tangents[0]); }
+TANGENT(TransposeOp) {
+  if (!tangents[0])
+    return Value();
+  return TransposeOp::create(builder, getLoc(), getMatrixType(), tangents[0])
+      .getResult();
+}
+TANGENT(ResizeOp) {
+  if (!tangents[0])
+    return Value();
+  return ResizeOp::create(builder, getLoc(), getMatrixType(), tangents[0])
+      .getResult();
+}
+TANGENT(RowOp) {
+  if (!tangents[0])
+    return Value();
+  return RowOp::create(builder, getLoc(), getMatrixType(), tangents[0],
+                       getIndex())
+      .getResult();
+}
+TANGENT(ColOp) {
+  if (!tangents[0])
+    return Value();
+  return ColOp::create(builder, getLoc(), getMatrixType(), tangents[0],
+                       getIndex())
+      .getResult();
+}
+TANGENT(ElementOp) {
+  if (!tangents[0])
+    return Value();
+  return ElementOp::create(builder, getLoc(), getMatrixType(), tangents[0],
+                           getRow(), getCol())
+      .getResult();
+}
+TANGENT(SliceOp) {
+  if (!tangents[0])
+    return Value();
+  return SliceOp::create(builder, getLoc(), getMatrixType(), tangents[0],
+                         getRowOffset(), getColOffset())
+      .getResult();
+}
+TANGENT(TraceOp) { return TangentBuilder(builder, getLoc()).trace(tangents[0]); }
+TANGENT(SumOp) {
+  if (!tangents[0])
+    return Value();
+  return SumOp::create(builder, getLoc(), getMatrixType(), tangents[0])
+      .getResult();
+}
+TANGENT(ConcatOp) {
+  if (llvm::all_of(tangents, [](Value v) { return !v; }))
+    return Value();
+  TangentBuilder t(builder, getLoc());
+  SmallVector<Value> parts;
+  for (auto [input, tangent] : llvm::zip(getInputs(), tangents))
+    parts.push_back(t.orZero(tangent, TangentBuilder::typeOf(input)));
+  return ConcatOp::create(builder, getLoc(), getMatrixType(), getAxis(), parts)
+      .getResult();
+}
+TANGENT(SelectOp) {
+  if (!tangents[1] && !tangents[2])
+    return Value();
+  TangentBuilder t(builder, getLoc());
+  return SelectOp::create(builder, getLoc(), getMatrixType(), getCondition(),
+                          t.orZero(tangents[1], getMatrixType()),
+                          t.orZero(tangents[2], getMatrixType()))
+      .getResult();
+}
+
+// Products.
+TANGENT(ElementwiseMulOp) {
+  TangentBuilder t(builder, getLoc());
+  return productRule(t, getLhs(), getRhs(), tangents[0], tangents[1],
+                     [&](Value x, Value y) { return t.emul(x, y); });
+}
+TANGENT(ScaleOp) {
+  TangentBuilder t(builder, getLoc());
+  return t.add(t.scale(tangents[0], getRhs()), t.scale(getLhs(), tangents[1]));
+}
+TANGENT(MatmulOp) {
+  TangentBuilder t(builder, getLoc());
+  return productRule(t, getLhs(), getRhs(), tangents[0], tangents[1],
+                     [&](Value x, Value y) { return t.matmul(x, y); });
+}
+TANGENT(DotOp) {
+  TangentBuilder t(builder, getLoc());
+  return productRule(t, getLhs(), getRhs(), tangents[0], tangents[1],
+                     [&](Value x, Value y) { return t.dot(x, y); });
+}
+TANGENT(CrossOp) {
+  TangentBuilder t(builder, getLoc());
+  return productRule(t, getLhs(), getRhs(), tangents[0], tangents[1],
+                     [&](Value x, Value y) -> Value {
+                       return CrossOp::create(builder, getLoc(), x, y);
+                     });
+}
+// (a / s)' = a' / s - (a / s) * (s' / s)
+TANGENT(DivOp) {
+  TangentBuilder t(builder, getLoc());
+  Value first = t.div(tangents[0], getRhs());
+  Value second = tangents[1] ? t.scale(getResult(), t.div(tangents[1], getRhs()))
+                             : Value();
+  return t.sub(first, second);
+}
+
+// Matrix functions, kept at the matrix level.
+// det(A)' = det(A) trace(A^-1 A')
+TANGENT(DetOp) {
+  if (!tangents[0])
+    return Value();
+  TangentBuilder t(builder, getLoc());
+  MatrixType type = TangentBuilder::typeOf(getOperand());
+  Value inv = InverseOp::create(builder, getLoc(), type, getOperand());
+  return t.scale(t.trace(t.matmul(inv, tangents[0])), getResult());
+}
+// (A^-1)' = -A^-1 A' A^-1
+TANGENT(InverseOp) {
+  if (!tangents[0])
+    return Value();
+  TangentBuilder t(builder, getLoc());
+  return t.neg(t.matmul(t.matmul(getResult(), tangents[0]), getResult()));
+}
+// |A|' = <A, A'> / |A|
+TANGENT(NormOp) {
+  if (!tangents[0])
+    return Value();
+  TangentBuilder t(builder, getLoc());
+  return t.div(t.dot(getOperand(), tangents[0]), getResult());
+}
+// (|A|^2)' = 2 <A, A'>
+TANGENT(SquaredNormOp) {
+  TangentBuilder t(builder, getLoc());
+  return t.scaleBy(t.dot(getOperand(), tangents[0]), 2.0);
+}
+
+// Entrywise functions: f'(a) * a', entry by entry.
+TANGENT(SqrtOp) {
+  TangentBuilder t(builder, getLoc());
+  return t.scaleBy(t.emul(tangents[0], t.reciprocal(getResult())), 0.5);
+}
+TANGENT(LogOp) {
+  TangentBuilder t(builder, getLoc());
+  return t.emul(tangents[0], t.reciprocal(getOperand()));
+}
+TANGENT(ExpOp) {
+  TangentBuilder t(builder, getLoc());
+  return t.emul(tangents[0], getResult());
+}
+TANGENT(SinOp) {
+  if (!tangents[0])
+    return Value();
+  TangentBuilder t(builder, getLoc());
+  return t.emul(tangents[0],
+                CosOp::create(builder, getLoc(), getOperand()).getResult());
+}
+TANGENT(CosOp) {
+  if (!tangents[0])
+    return Value();
+  TangentBuilder t(builder, getLoc());
+  return t.neg(t.emul(
+      tangents[0], SinOp::create(builder, getLoc(), getOperand()).getResult()));
+}
+// |a|' = sign(a) a', with sign(0) = 1 (a subgradient).
+TANGENT(AbsOp) {
+  if (!tangents[0])
+    return Value();
+  TangentBuilder t(builder, getLoc());
+  MatrixType type = getMatrixType();
+  Value negative = CmpOp::create(builder, getLoc(), CmpPredicate::lt,
+                                 getOperand(), t.constant(type, 0.0));
+  Value sign = SelectOp::create(builder, getLoc(), type, negative,
+                                t.constant(type, -1.0), t.constant(type, 1.0));
+  return t.emul(tangents[0], sign);
+}
+// atan2(y, x)' = (x y' - y x') / (x^2 + y^2)
+TANGENT(Atan2Op) {
+  if (!tangents[0] && !tangents[1])
+    return Value();
+  TangentBuilder t(builder, getLoc());
+  Value y = getLhs(), x = getRhs();
+  Value numerator = t.sub(t.emul(x, tangents[0]), t.emul(y, tangents[1]));
+  Value denominator = t.add(t.emul(x, x), t.emul(y, y));
+  return t.emul(numerator, t.reciprocal(denominator));
+}
+// min/max pass the tangent of the operand they select (the lhs on ties).
+TANGENT(MinOp) {
+  if (!tangents[0] && !tangents[1])
+    return Value();
+  TangentBuilder t(builder, getLoc());
+  Value lhsWins = CmpOp::create(builder, getLoc(), CmpPredicate::le, getLhs(),
+                                getRhs());
+  return SelectOp::create(builder, getLoc(), getMatrixType(), lhsWins,
+                          t.orZero(tangents[0], getMatrixType()),
+                          t.orZero(tangents[1], getMatrixType()))
+      .getResult();
+}
+TANGENT(MaxOp) {
+  if (!tangents[0] && !tangents[1])
+    return Value();
+  TangentBuilder t(builder, getLoc());
+  Value lhsWins = CmpOp::create(builder, getLoc(), CmpPredicate::ge, getLhs(),
+                                getRhs());
+  return SelectOp::create(builder, getLoc(), getMatrixType(), lhsWins,
+                          t.orZero(tangents[0], getMatrixType()),
+                          t.orZero(tangents[1], getMatrixType()))
+      .getResult();
+}
+// (a^e)' = e a^(e-1) a' + a^e log(a) e'
+TANGENT(PowOp) {
+  TangentBuilder t(builder, getLoc());
+  Value base = getBase(), exponent = getExponent();
+  MatrixType expType = TangentBuilder::typeOf(exponent);
+  Value first;
+  if (tangents[0]) {
+    Value lowered = t.sub(exponent, t.constant(expType, 1.0));
+    Value derivative = t.pow(base, lowered);
+    Value scaled = expType.isScalar() ? t.scale(derivative, exponent)
+                                      : t.emul(derivative, exponent);
+    first = t.emul(scaled, tangents[0]);
+  }
+  Value second;
+  if (tangents[1]) {
+    Value logBase = LogOp::create(builder, getLoc(), base);
+    Value factor = t.emul(getResult(), logBase);
+    second = expType.isScalar() ? t.scale(factor, tangents[1])
+                                : t.emul(factor, tangents[1]);
+  }
+  return t.add(first, second);
+}
+
+#undef TANGENT
