@@ -23,18 +23,22 @@ namespace {
 /// Scalar arithmetic on one element type, at one location.
 class ScalarBuilder {
 public:
-  ScalarBuilder(OpBuilder &b, Location loc, FloatType type)
-      : b(b), loc(loc), type(type) {}
+  ScalarBuilder(OpBuilder &b, Location loc, FloatType type,
+                bool symbolicZeros)
+      : b(b), loc(loc), type(type), symbolicZeros(symbolicZeros) {}
 
   Value constant(double value) {
     return arith::ConstantOp::create(b, loc, b.getFloatAttr(type, value));
   }
-  // Literal zeros and ones are folded symbolically: derivative code is full
-  // of products with the 0/1 entries of unit directions, and skipping them is
-  // what keeps it as cheap as hand-written derivatives. Unlike IEEE
-  // arithmetic, 0 * x is 0 even for an infinite or NaN x.
-  static bool isZero(Value v) { return matchPattern(v, m_AnyZeroFloat()); }
-  static bool isOne(Value v) { return matchPattern(v, m_OneFloat()); }
+  // In derivative kernels literal zeros and ones are folded symbolically:
+  // derivative code is full of products with the 0/1 entries of unit
+  // directions, and skipping them is what keeps it as cheap as hand-written
+  // derivatives. Unlike IEEE arithmetic, 0 * x is then 0 even for an
+  // infinite or NaN x, so value kernels keep IEEE semantics.
+  bool isZero(Value v) {
+    return symbolicZeros && matchPattern(v, m_AnyZeroFloat());
+  }
+  bool isOne(Value v) { return symbolicZeros && matchPattern(v, m_OneFloat()); }
 
   Value add(Value x, Value y) {
     if (isZero(y))
@@ -125,6 +129,7 @@ public:
   OpBuilder &b;
   Location loc;
   FloatType type;
+  bool symbolicZeros;
 };
 
 ScalarMatrix makeMatrix(MatrixType type) {
@@ -172,9 +177,10 @@ arith::CmpFPredicate toArith(CmpPredicate predicate) {
 
 FailureOr<ScalarMatrix>
 mlir::yasps::lowerToScalars(OpBuilder &b, Operation *op,
-                            ArrayRef<ScalarMatrix> operands) {
+                            ArrayRef<ScalarMatrix> operands,
+                            bool symbolicZeros) {
   auto type = cast<MatrixType>(op->getResult(0).getType());
-  ScalarBuilder s(b, op->getLoc(), type.getElementType());
+  ScalarBuilder s(b, op->getLoc(), type.getElementType(), symbolicZeros);
   Location loc = op->getLoc();
   auto lhs = [&]() -> const ScalarMatrix & { return operands[0]; };
   auto rhs = [&]() -> const ScalarMatrix & { return operands[1]; };

@@ -32,8 +32,9 @@ namespace {
 class KernelEmitter {
 public:
   KernelEmitter(SceneOp scene, SymbolTableCollection &tables,
-                func::FuncOp func)
-      : scene(scene), tables(tables), func(func) {}
+                func::FuncOp func, bool symbolicZeros)
+      : scene(scene), tables(tables), func(func),
+        symbolicZeros(symbolicZeros) {}
 
   /// The buffer argument holding `symbol`'s data, created on first use.
   Value buffer(StringRef kind, Operation *symbol, Type elementType) {
@@ -129,7 +130,7 @@ private:
         SmallVector<ScalarMatrix> operands;
         for (Value operand : op.getOperands())
           operands.push_back(values.lookup(operand));
-        result = lowerToScalars(b, &op, operands);
+        result = lowerToScalars(b, &op, operands, symbolicZeros);
       }
       if (failed(result))
         return failure();
@@ -224,6 +225,7 @@ private:
   SceneOp scene;
   SymbolTableCollection &tables;
   func::FuncOp func;
+  bool symbolicZeros;
   std::map<std::pair<StringRef, Operation *>, Value> buffers;
   SmallVector<Attribute> roles;
   /// Values already computed, per region: an inner region may reuse the
@@ -272,7 +274,9 @@ LogicalResult LowerToLoopsPass::lowerAttribute(SceneOp scene,
   Block *entry = func.addEntryBlock();
   OpBuilder b = OpBuilder::atBlockBegin(entry);
 
-  KernelEmitter emitter(scene, tables, func);
+  // Derivative attributes (from yasps-differentiate) get symbolic zeros.
+  KernelEmitter emitter(scene, tables, func,
+                        /*symbolicZeros=*/decl->hasAttr("yasps.params"));
   Value out = emitter.buffer("out", decl, type.getElementType());
   Value one = arith::ConstantIndexOp::create(b, loc, 1);
   // The loop is created first and filled afterwards so that code generated

@@ -31,9 +31,12 @@ struct ScalarMatrix {
 /// Emits the scalar arithmetic of the yasps expression `op` (every op but
 /// `yasps.read`, `yasps.join` and `yasps.union`, which need the kernel's
 /// buffers) given its operands. Reports an error on `op` and fails for ops
-/// that kernels do not support.
+/// that kernels do not support. With `symbolicZeros` (derivative kernels),
+/// products with a literal 0 are 0 and with a literal 1 are the other
+/// factor, without IEEE's special cases for infinities and NaN.
 FailureOr<ScalarMatrix> lowerToScalars(OpBuilder &b, Operation *op,
-                                       ArrayRef<ScalarMatrix> operands);
+                                       ArrayRef<ScalarMatrix> operands,
+                                       bool symbolicZeros = false);
 
 /// PSD projection of the symmetric matrix `in` (cyclic Jacobi
 /// eigen-decomposition, eigenvalues clamped or made absolute); `none`
