@@ -1,0 +1,42 @@
+// RUN: yasps-opt %s -split-input-file -yasps-differentiate -verify-diagnostics
+
+// Energies must be inlined first.
+yasps.scene @s {
+  yasps.mesh @m {
+    yasps.primitive @p(1) {
+      yasps.data_attr @x : !yasps.mat<3x1xf64>
+      yasps.attr @n : !yasps.mat<1x1xf64> {
+        %x = yasps.read @m::@p::@x : !yasps.mat<3x1xf64>
+        %n = yasps.squared_norm %x : !yasps.mat<3x1xf64>
+        yasps.yield %n : !yasps.mat<1x1xf64>
+      }
+      yasps.attr @e : !yasps.mat<1x1xf64> {
+        // expected-error @+1 {{reads computed attribute @m::@p::@n: inline computed attributes (yasps-inline-reads) before yasps-differentiate}}
+        %n = yasps.read @m::@p::@n : !yasps.mat<1x1xf64>
+        yasps.yield %n : !yasps.mat<1x1xf64>
+      }
+    }
+  }
+  yasps.energy @m::@p::@e
+  yasps.minimize [@m::@p::@x]
+}
+
+// -----
+
+// PSD projection is applied to derivatives, not differentiated.
+yasps.scene @s {
+  yasps.mesh @m {
+    yasps.primitive @p(1) {
+      yasps.data_attr @h : !yasps.mat<2x2xf64>
+      yasps.attr @e : !yasps.mat<1x1xf64> {
+        %h = yasps.read @m::@p::@h : !yasps.mat<2x2xf64>
+        // expected-error @+1 {{cannot be differentiated: PSD projection applies to derivatives, not before them}}
+        %p = yasps.project clamp %h : !yasps.mat<2x2xf64>
+        %t = yasps.trace %p : !yasps.mat<2x2xf64>
+        yasps.yield %t : !yasps.mat<1x1xf64>
+      }
+    }
+  }
+  yasps.energy @m::@p::@e
+  yasps.minimize [@m::@p::@h]
+}
