@@ -11,6 +11,7 @@
 #include "mlir/IR/MLIRContext.h"
 #include "mlir/IR/OwningOpRef.h"
 #include "mlir/IR/Verifier.h"
+#include "mlir/AsmParser/AsmParser.h"
 #include "mlir/Parser/Parser.h"
 #include "mlir/Pass/PassManager.h"
 #include "mlir/Pass/PassRegistry.h"
@@ -211,6 +212,57 @@ void launchCpu(const CpuLibrary &self, const std::string &attribute,
                                   poolFor(threads), /*minChunk=*/256);
 }
 
+/// The `yasps.params` of attributes after running `pipeline`: one list of
+/// printed fields per parameter slot.
+std::vector<std::vector<std::vector<std::string>>>
+attributeParams(const std::string &ir, const std::string &pipeline,
+                const std::vector<std::string> &paths,
+                const std::string &bufferName) {
+  std::lock_guard<std::mutex> guard(getLock());
+  MLIRContext &context = getContext();
+  llvm::SourceMgr sourceMgr;
+  DiagnosticCollector diagnostics(context, sourceMgr);
+  OwningOpRef<ModuleOp> module =
+      parseVerified(ir, bufferName, sourceMgr, diagnostics);
+  PassManager pm(&context, ModuleOp::getOperationName(),
+                 OpPassManager::Nesting::Implicit);
+  std::string errors;
+  llvm::raw_string_ostream errorStream(errors);
+  if (failed(parsePassPipeline(pipeline, pm, errorStream)))
+    throw std::invalid_argument("invalid pass pipeline: " + errors);
+  if (failed(pm.run(*module)))
+    throw IRError(diagnostics.take());
+  std::vector<std::vector<std::vector<std::string>>> result;
+  auto scenes = module->getOps<mlir::yasps::SceneOp>();
+  for (const std::string &text : paths) {
+    auto path = dyn_cast_or_null<SymbolRefAttr>(parseAttribute(text, &context));
+    Operation *decl =
+        path && !scenes.empty()
+            ? mlir::yasps::lookupInScene(*scenes.begin(), path)
+            : nullptr;
+    auto params = decl ? decl->getAttrOfType<ArrayAttr>("yasps.params")
+                       : ArrayAttr();
+    std::vector<std::vector<std::string>> slots;
+    for (auto param : params ? params.getAsRange<ArrayAttr>()
+                             : ArrayAttr().getAsRange<ArrayAttr>()) {
+      std::vector<std::string> fields;
+      for (Attribute field : param) {
+        std::string out;
+        if (auto str = dyn_cast<StringAttr>(field))
+          out = str.str();
+        else if (auto integer = dyn_cast<IntegerAttr>(field))
+          out = std::to_string(integer.getInt());
+        else
+          llvm::raw_string_ostream(out) << field;
+        fields.push_back(out);
+      }
+      slots.push_back(fields);
+    }
+    result.push_back(slots);
+  }
+  return result;
+}
+
 } // namespace
 
 NB_MODULE(_yasps_native, m) {
@@ -277,6 +329,10 @@ NB_MODULE(_yasps_native, m) {
         nb::arg("name") = "<yasps>", nb::arg("pre_pipeline") = "",
         "Compiles CPU kernels for the attributes (scene-relative paths) of "
         "the IR's scene, reusing in-memory and on-disk caches.");
+  m.def("attribute_params", &attributeParams, nb::arg("ir"),
+        nb::arg("pipeline"), nb::arg("paths"), nb::arg("name") = "<yasps>",
+        "yasps.params of the attributes (e.g. derivative attributes) after "
+        "running a pass pipeline; empty lists for attributes without them.");
   m.def("cpu_lowering_pipeline",
         [] { return mlir::yasps::getCpuLoweringPipeline().str(); },
         "The pass pipeline from kernel functions to the LLVM dialect.");

@@ -31,15 +31,15 @@ def check_derivatives(scene, energy, rtol=1e-6):
     d = scene.energyDerivatives(energy)
     n = d.gradient.shape[1]
     locations = [d.locations(i) for i in range(len(d.value))]
-    targets = {id(t): t for loc in locations for t, _, _ in loc}
+    targets = {id(l[0]): l[0] for loc in locations for l in loc if l is not None}
     base = {k: t.value.copy() for k, t in targets.items()}
 
     def evaluate(k, delta):
         for key, t in targets.items():
             values = base[key].copy()
-            for loc in locations:
+            for loc, pad in zip(locations, padding):
                 target, inst, entry = loc[k]
-                if target is t:
+                if target is t and not pad[k]:
                     values[inst, entry % t.rows, entry // t.rows] += delta
             t.updateValue(values)
         r = scene.energyDerivatives(energy)
@@ -49,6 +49,12 @@ def check_derivatives(scene, energy, rtol=1e-6):
 
     g_fd = np.zeros_like(d.gradient)
     h_fd = np.zeros_like(d.hessian)
+    # UNION padding: no parameter behind it, derivatives exactly zero.
+    padding = np.array([[loc[k] is None for k in range(n)] for loc in locations])
+    assert (d.gradient[padding] == 0).all()
+    assert (np.transpose(d.hessian, (0, 2, 1))[padding] == 0).all()
+    locations = [[loc[k] if loc[k] is not None else loc[0] for k in range(n)]
+                 for loc in locations]
     for k in range(n):
         scale = max(1.0, max(abs(base[id(loc[k][0])][loc[k][1]].reshape(-1, order="F")[loc[k][2]])
                              for loc in locations))
@@ -56,6 +62,8 @@ def check_derivatives(scene, energy, rtol=1e-6):
         plus, minus = evaluate(k, h), evaluate(k, -h)
         g_fd[:, k] = (plus.value - minus.value) / (2 * h)
         h_fd[:, :, k] = (plus.gradient - minus.gradient) / (2 * h)
+    g_fd[padding] = 0.0
+    h_fd = np.where(padding[:, None, :] | padding[:, :, None], 0.0, h_fd)
     g_scale = np.abs(d.gradient).max() + 1e-300
     h_scale = np.abs(d.hessian).max() + 1e-300
     assert np.abs(d.gradient - g_fd).max() / g_scale < rtol, \
@@ -234,23 +242,44 @@ def test_pendulum_angle_parameterisation():
     check_derivatives(s, energy)
 
 
-def test_unsupported_join_of_computed_attribute_is_reported():
-    s = yasps.scene("abd")
-    m = s.addMesh("m")
-    body = m.addPrimitive("body", numInstances=1)
-    A = body.addAttribute("A", rows=3, cols=3)
-    verts = m.addPrimitive("v", numInstances=2)
+def test_barrier_over_union_of_free_and_affine_vertices():
+    """The paper's mixed parameterisation: one compiled kernel gives the
+    Hessians of soft-soft, soft-affine, affine-soft and affine-affine pairs
+    (6, 15, 15 and 24 parameters; UNION slots padded to 12)."""
+    s = yasps.scene("mixed")
+    soft = s.addMesh("soft").addPrimitive("v", numInstances=4)
+    xs = soft.addAttribute("x", rows=3, cols=1)
+    xs.updateValue(rng.normal(scale=0.05, size=(4, 3)))
+    rigid = s.addMesh("rigid")
+    bodies = rigid.addPrimitive("body", numInstances=4)
+    A = bodies.addAttribute("A", rows=3, cols=3)
+    A.updateValue(np.eye(3) + rng.normal(scale=0.1, size=(4, 3, 3)))
+    t = bodies.addAttribute("t", rows=3, cols=1)
+    t.updateValue(rng.normal(scale=0.05, size=(4, 3)))
+    verts = rigid.addPrimitive("v", numInstances=4)
     rest = verts.addConstant("rest", rows=3)
-    to = verts.addConnectivity("to", body, [0, 0], 1)
-    jA = verts.addAttribute("A", through=to, source=A)
-    verts.addAttribute("x", computed_attribute=jA.resize(3, 3) * rest)
-    pair = m.addPrimitive("pair", numInstances=1)
-    p2v = pair.addConnectivity("p2v", verts, [[0, 1]], 2)
-    xs = pair.addAttribute("xs", through=p2v, source=verts["x"])
-    energy = pair.addAttribute("e", computed_attribute=xs.squaredNorm())
-    s.addEnergy(energy)
-    s.addMinimizeTarget([A])
-    A.updateValue(np.eye(3))
-    rest.updateValue(np.ones((2, 3)))
-    with pytest.raises(yasps.IRError, match="differentiating through a JOIN of a computed attribute is not supported yet"):
-        s.energyDerivatives(energy)
+    rest.updateValue(rng.normal(scale=0.05, size=(4, 3)))
+    v2b = verts.addConnectivity("v2b", bodies, np.arange(4), 1)
+    jA = verts.addAttribute("A", through=v2b, source=A)
+    jt = verts.addAttribute("t", through=v2b, source=t)
+    verts.addAttribute("x", computed_attribute=jA.resize(3, 3) * rest + jt.resize(3, 1))
+    world = s.addMesh("world")
+    u = world.addPrimitiveUnion("v", [soft, verts])
+    u.addAttribute("x")
+    pp = world.addPrimitive("pp", numInstances=4, isDynamic=True)
+    pairs = [[u.indexOf(soft, 0), u.indexOf(soft, 1)],
+             [u.indexOf(soft, 2), u.indexOf(verts, 0)],
+             [u.indexOf(verts, 1), u.indexOf(soft, 3)],
+             [u.indexOf(verts, 2), u.indexOf(verts, 3)]]
+    p2v = pp.addConnectivity("p2v", u, pairs, 2)
+    x = pp.addAttribute("x", through=p2v, source=u["x"])
+    d2 = E.point_point_distance2(x.row(0), x.row(1))
+    dist = pp.addAttribute("d2", computed_attribute=d2)
+    dhat = float(dist.compute().value.max()) * 2.0
+    energy = pp.addAttribute("barrier", computed_attribute=E.ipc_barrier(dist, dhat, 1e3))
+    s.addEnergy(energy, dynamic_instances=True)
+    s.addMinimizeTarget([xs, A, t])
+    d = check_derivatives(s, energy, rtol=1e-5)
+    assert d.gradient.shape == (4, 24)
+    real = [sum(l is not None for l in d.locations(i)) for i in range(4)]
+    assert real == [6, 15, 15, 24]

@@ -68,6 +68,28 @@ def _buffer(scene: Scene, kind: str, path: str, out: np.ndarray) -> np.ndarray:
     raise AssertionError(f"unknown kernel argument kind {kind!r}")
 
 
+#: Compiled libraries by (IR text, attributes, pipeline, settings): a scene
+#: evaluated again with the same structure skips parsing, passes and the
+#: kernel cache lookup. Instance counts are part of the IR text, so a dynamic
+#: primitive that changes size falls through to the compiler's own cache,
+#: which is keyed by the kernels alone.
+_libraries: Dict[tuple, object] = {}
+
+
+def _compile(ir: str, paths: List[str], scene: Scene, pipeline: str = ""):
+    """The compiled library and how it was obtained (its stats)."""
+    key = (ir, tuple(paths), pipeline, config.cache_dir, config.opt_level)
+    library = _libraries.get(key)
+    if library is not None:
+        return library, dict(library.stats, from_memory=True, from_disk=False,
+                             lower_seconds=0.0, codegen_seconds=0.0)
+    native = compiler._module()
+    library = native.compile_cpu(ir, paths, config.cache_dir or "",
+                                 config.opt_level, scene.name, pipeline)
+    _libraries[key] = library
+    return library, dict(library.stats)
+
+
 def compute(attr: Attribute, threads: int = None) -> ComputedValue:
     """Evaluates ``attr`` on every instance of its owner."""
     owner = attr.owner
@@ -85,8 +107,7 @@ def compute(attr: Attribute, threads: int = None) -> ComputedValue:
     ir = emit_scene(scene, locations=True, extra=extra)
     native = compiler._module()
     try:
-        library = native.compile_cpu(ir, [path], config.cache_dir or "",
-                                     config.opt_level, scene.name)
+        library, stats = _compile(ir, [path], scene)
     except native.IRError as err:
         raise compiler.IRError(str(err)) from None
     arguments = dict(library.kernels)[path]
@@ -96,7 +117,7 @@ def compute(attr: Attribute, threads: int = None) -> ComputedValue:
     library.launch(path, count, buffers,
                    config.num_threads if threads is None else threads)
     return ComputedValue(attr, from_column_major(out, target.rows, target.cols),
-                         dict(library.stats))
+                         stats)
 
 
 #: Passes that turn energies into their local derivatives (docs/passes.md).
@@ -104,31 +125,79 @@ DIFFERENTIATION_PIPELINE = "yasps-inline-reads,canonicalize,cse,yasps-differenti
 
 
 class ParamSlot:
-    """A group of an energy's local parameters: the entries of one target
-    value, read directly (``connectivity`` None) or gathered as the
-    ``slot``-th instance of a JOIN."""
+    """A group of an energy's local parameters (one entry of
+    ``yasps.params``): the entries of a target read directly, or, for one
+    instance gathered by a JOIN or decoded from a UNION, the parameters of
+    the attribute found there (recursively, padded to ``width``)."""
 
-    def __init__(self, target: Attribute, connectivity, slot):
-        self.target = target
-        self.connectivity = connectivity
-        self.slot = slot
+    def __init__(self, kind: str, fields: list, owner: Entity,
+                 derivatives: "_ParamResolver"):
+        self.kind = kind
+        self.fields = fields
+        self.owner = owner
+        self._resolver = derivatives
 
     @property
-    def size(self) -> int:
-        return self.target.rows * self.target.cols
+    def width(self) -> int:
+        if self.kind == "read":
+            target = _resolve(self._resolver.scene, self.fields[1])
+            return target.rows * target.cols
+        return int(self.fields[-1])
 
-    def instance(self, i: int) -> int:
-        """The target instance these parameters belong to, for energy
-        instance ``i``."""
-        if self.connectivity is not None:
-            return int(self.connectivity.indices[i, self.slot])
-        owner = self.target.owner
-        return i if owner.numInstances > 1 or owner.kind in ("primitive", "primitive union") else 0
+    def locations(self, i: int) -> list:
+        """(target attribute, instance, entry) of each parameter of this
+        group for energy instance ``i``; None for UNION padding."""
+        scene = self._resolver.scene
+        if self.kind == "read":
+            target = _resolve(scene, self.fields[1])
+            inst = i if target.owner is self.owner else 0
+            return [(target, inst, e) for e in range(target.rows * target.cols)]
+        if self.kind == "join":
+            conn = self.owner._symbols[self.fields[1].lstrip("@")]
+            j = int(conn.indices[i, int(self.fields[2])])
+            base = _resolve(scene, self.fields[3])
+            out = self._resolver.expand(base, j)
+        else:
+            union = _resolve(scene, self.fields[1])
+            offsets = union.offsets
+            m = int(np.searchsorted(offsets, i, side="right") - 1)
+            member = union.members[m]
+            out = self._resolver.expand(member._attributes[self.fields[2]],
+                                        i - int(offsets[m]))
+        return out + [None] * (self.width - len(out))
 
     def __repr__(self) -> str:
-        via = (f" via {self.connectivity.name}[{self.slot}]"
-               if self.connectivity is not None else "")
-        return f"<ParamSlot {self.target.describe()}{via}>"
+        return f"<ParamSlot {' '.join(self.fields)}>"
+
+
+class _ParamResolver:
+    """Finds the parameters of attributes met behind JOINs and UNIONs."""
+
+    def __init__(self, scene: Scene, ir: str):
+        self.scene = scene
+        self.ir = ir
+        self.cache: Dict[str, list] = {}
+
+    def slots(self, attr: Attribute) -> List[ParamSlot]:
+        path = "::".join("@" + n for n in attr.owner.path + [attr.name])
+        if path not in self.cache:
+            native = compiler._module()
+            self.cache[path] = native.attribute_params(
+                self.ir, DIFFERENTIATION_PIPELINE, [path + "__jac"],
+                self.scene.name)[0]
+        return [ParamSlot(f[0], f, attr.owner, self) for f in self.cache[path]]
+
+    def expand(self, attr: Attribute, instance: int) -> list:
+        if attr.kind in ("data", "constant"):
+            if attr.kind == "data" and any(t is attr for t in
+                                           self.scene.minimizeTargets):
+                return [(attr, instance, e)
+                        for e in range(attr.rows * attr.cols)]
+            return []
+        out = []
+        for slot in self.slots(attr):
+            out += slot.locations(instance)
+        return out
 
 
 class LocalDerivatives:
@@ -143,29 +212,17 @@ class LocalDerivatives:
         self.gradient = gradient
         #: Hessian of every instance, shape (N, n, n).
         self.hessian = hessian
-        #: The n local parameters, as groups in order.
+        #: The parameter groups, in order.
         self.params = params
 
     def locations(self, i: int):
         """(target attribute, target instance, entry) of each local parameter
-        of energy instance ``i``; entries are column-major."""
+        of energy instance ``i`` (entries column-major), None for the zero
+        padding of UNION slots."""
         out = []
         for slot in self.params:
-            instance = slot.instance(i)
-            out += [(slot.target, instance, e) for e in range(slot.size)]
+            out += slot.locations(i)
         return out
-
-
-def _param_slots(scene: Scene, owner: Entity, fields) -> list:
-    slots = []
-    for field in fields:
-        if field[0] == "read":
-            slots.append(ParamSlot(_resolve(scene, field[1]), None, None))
-        else:
-            connectivity = owner._symbols[field[1].lstrip("@")]
-            slots.append(ParamSlot(_resolve(scene, field[3]), connectivity,
-                                   int(field[2])))
-    return slots
 
 
 def energy_derivatives(scene: Scene, energy: Attribute,
@@ -183,16 +240,16 @@ def energy_derivatives(scene: Scene, energy: Attribute,
     native = compiler._module()
     ir = emit_scene(scene, locations=True)
     try:
-        library = native.compile_cpu(ir, paths, config.cache_dir or "",
-                                     config.opt_level, scene.name,
-                                     DIFFERENTIATION_PIPELINE)
+        library, _ = _compile(ir, paths, scene, DIFFERENTIATION_PIPELINE)
     except native.IRError as err:
         if "does not name an attribute" in str(err):
             raise SceneError(f"{energy.describe()} depends on no "
                              "minimisation target") from None
         raise compiler.IRError(str(err)) from None
-    params = _param_slots(scene, owner, library.params(paths[0]))
-    n = sum(p.size for p in params)
+    resolver = _ParamResolver(scene, ir)
+    params = [ParamSlot(f[0], f, owner, resolver)
+              for f in library.params(paths[0])]
+    n = sum(p.width for p in params)
     count = owner.numInstances
     results = []
     for path, shape in zip(paths, [(n, 1), (n, n)]):

@@ -1,17 +1,23 @@
 // RUN: yasps-opt %s -split-input-file -yasps-differentiate -canonicalize -cse | FileCheck %s
 
-// A spring through a JOIN of the target positions: 6 local parameters, two
-// per-instance derivative attributes next to the energy, the energy's own
-// computation reused inside them.
+// A spring through a JOIN of the target positions: 6 local parameters (two
+// slots of 3). The Jacobian (1x6) repeats the energy's computation and adds
+// one tangent per parameter; the gradient is its transpose and the Hessian
+// the Jacobian of the Jacobian.
 
 // CHECK-LABEL: yasps.attr @spring : !yasps.mat<1x1xf64>
-// CHECK: yasps.attr @spring__grad : !yasps.mat<6x1xf64> attributes {yasps.params = {{\[\[}}"join", @e2v, 0, @m::@v::@x], ["join", @e2v, 1, @m::@v::@x]]}
+// CHECK: yasps.attr @spring__jac : !yasps.mat<1x6xf64> attributes {yasps.params = {{\[\[}}"join", @e2v, 0, @m::@v::@x, 3], ["join", @e2v, 1, @m::@v::@x, 3]]}
 // CHECK: yasps.join @e2v(@m::@v::@x)
 // CHECK: yasps.norm
-// CHECK: yasps.concat vertical
-// CHECK: yasps.yield %{{.*}} : !yasps.mat<6x1xf64>
-// CHECK: yasps.attr @spring__hess : !yasps.mat<6x6xf64> attributes {yasps.params = {{\[\[}}"join", @e2v, 0, @m::@v::@x], ["join", @e2v, 1, @m::@v::@x]]}
-// CHECK: yasps.yield %{{.*}} : !yasps.mat<6x6xf64>
+// CHECK: yasps.concat horizontal
+// CHECK: yasps.yield %{{.*}} : !yasps.mat<1x6xf64>
+// CHECK: yasps.attr @spring__grad : !yasps.mat<6x1xf64>
+// CHECK-NEXT: %[[J:.*]] = yasps.read @m::@e::@spring__jac
+// CHECK-NEXT: %[[T:.*]] = yasps.transpose %[[J]]
+// CHECK-NEXT: yasps.yield %[[T]]
+// CHECK: yasps.attr @spring__hess : !yasps.mat<6x6xf64>
+// CHECK-NEXT: yasps.read @m::@e::@spring__jac__jac
+// CHECK: yasps.attr @spring__jac__jac : !yasps.mat<6x6xf64>
 yasps.scene @s {
   yasps.mesh @m {
     yasps.primitive @v(3) {
@@ -44,7 +50,7 @@ yasps.scene @s {
 // parameters (column-major entries); the Hessian of det on 2x2 is constant
 // structure around the inverse.
 
-// CHECK-LABEL: yasps.attr @d__grad : !yasps.mat<4x1xf64> attributes {yasps.params = {{\[\[}}"read", @m::@p::@a]]}
+// CHECK-LABEL: yasps.attr @d__jac : !yasps.mat<1x4xf64> attributes {yasps.params = {{\[\[}}"read", @m::@p::@a]]}
 // CHECK: %[[A:.*]] = yasps.read @m::@p::@a
 // CHECK-DAG: yasps.det %[[A]]
 // CHECK-DAG: yasps.inverse %[[A]]
@@ -71,7 +77,8 @@ yasps.scene @s {
 
 // CHECK-LABEL: yasps.attr @c :
 // CHECK-NOT: @c__grad
-// CHECK: yasps.attr @e__grad : !yasps.mat<3x1xf64> attributes {yasps.params = {{\[\[}}"read", @m::@p::@x]]}
+// CHECK: yasps.attr @e__jac : !yasps.mat<1x3xf64> attributes {yasps.params = {{\[\[}}"read", @m::@p::@x]]}
+// CHECK: yasps.attr @e__grad : !yasps.mat<3x1xf64>
 yasps.scene @s {
   yasps.mesh @m {
     yasps.primitive @p(1) {
@@ -93,4 +100,67 @@ yasps.scene @s {
   yasps.energy @m::@p::@c
   yasps.energy @m::@p::@e
   yasps.minimize [@m::@p::@x]
+}
+
+// -----
+
+// JOIN of a computed attribute and UNION (paper 5.1, 5.2): the barrier's
+// parameters are, per gathered vertex, those of the union member it belongs
+// to, padded to the widest (12: an affine body's A and t). The affine
+// vertices' Jacobian is computed once, on the vertices, and gathered; the
+// soft member's is the padded identity.
+
+// CHECK-LABEL: yasps.primitive @v(1)
+// CHECK: yasps.attr @x__jac : !yasps.mat<3x12xf64> attributes {yasps.params = {{\[\[}}"join", @v2b, 0, @r::@b::@A, 9], ["join", @v2b, 0, @r::@b::@t, 3]]}
+// CHECK: yasps.attr @x__ujac12 : !yasps.mat<3x12xf64>
+// CHECK-LABEL: yasps.mesh @s
+// CHECK: yasps.attr @x__ujac12 : !yasps.mat<3x12xf64> {
+// CHECK: yasps.constant dense<{{\[\[}}1.000000e+00, 0.000000e+00
+// CHECK-LABEL: yasps.primitive @pp(2) dynamic
+// CHECK: yasps.attr @e__jac : !yasps.mat<1x24xf64> attributes {yasps.params = {{\[\[}}"join", @p2v, 0, @w::@u::@x, 12], ["join", @p2v, 1, @w::@u::@x, 12]]}
+// CHECK: yasps.join @p2v(@w::@u::@x__jac) : !yasps.mat<2x36xf64>
+yasps.scene @sc {
+  yasps.mesh @r {
+    yasps.primitive @b(1) {
+      yasps.data_attr @A : !yasps.mat<3x3xf64>
+      yasps.data_attr @t : !yasps.mat<3x1xf64>
+    }
+    yasps.primitive @v(1) {
+      yasps.const_attr @rest : !yasps.mat<3x1xf64>
+      yasps.connectivity @v2b -> @r::@b arity 1
+      yasps.attr @x : !yasps.mat<3x1xf64> {
+        %a = yasps.join @v2b(@r::@b::@A) : !yasps.mat<1x9xf64>
+        %t = yasps.join @v2b(@r::@b::@t) : !yasps.mat<1x3xf64>
+        %r = yasps.read @r::@v::@rest : !yasps.mat<3x1xf64>
+        %m = yasps.resize %a : !yasps.mat<1x9xf64> -> !yasps.mat<3x3xf64>
+        %tc = yasps.resize %t : !yasps.mat<1x3xf64> -> !yasps.mat<3x1xf64>
+        %p = yasps.matmul %m, %r : !yasps.mat<3x3xf64>, !yasps.mat<3x1xf64> -> !yasps.mat<3x1xf64>
+        %x = yasps.add %p, %tc : !yasps.mat<3x1xf64>
+        yasps.yield %x : !yasps.mat<3x1xf64>
+      }
+    }
+  }
+  yasps.mesh @s {
+    yasps.primitive @v(1) {
+      yasps.data_attr @x : !yasps.mat<3x1xf64>
+    }
+  }
+  yasps.mesh @w {
+    yasps.primitive_union @u [@r::@v, @s::@v] {
+      yasps.attr @x : !yasps.mat<3x1xf64> {
+        %0 = yasps.union @x : !yasps.mat<3x1xf64>
+        yasps.yield %0 : !yasps.mat<3x1xf64>
+      }
+    }
+    yasps.primitive @pp(2) dynamic {
+      yasps.connectivity @p2v -> @w::@u arity 2
+      yasps.attr @e : !yasps.mat<1x1xf64> {
+        %p = yasps.join @p2v(@w::@u::@x) : !yasps.mat<2x3xf64>
+        %d = yasps.squared_norm %p : !yasps.mat<2x3xf64>
+        yasps.yield %d : !yasps.mat<1x1xf64>
+      }
+    }
+  }
+  yasps.energy @w::@pp::@e dynamic_instances
+  yasps.minimize [@s::@v::@x, @r::@b::@A, @r::@b::@t]
 }

@@ -1,12 +1,24 @@
-//===- Differentiate.cpp - local gradients and Hessians of energies -------===//
+//===- Differentiate.cpp - Jacobians of attributes, energy derivatives ----===//
 //
-// Forward mode over the energy's region: the local parameters are the entries
-// of the minimisation targets the region reads directly or gathers through
-// JOINs. One tangent per parameter gives the gradient; applying the tangent
-// rules again to the code of each gradient entry gives the Hessian (upper
-// triangle, mirrored). Tangents are cached per direction, so a sub-expression
-// shared by several entries is differentiated once per direction, and CSE
-// afterwards merges what the directions have in common.
+// The unit of differentiation is a named attribute X and its local
+// parameters: groups of entries of minimisation targets that X reaches
+// through its region's leaves (paper section 5.3's boundary nodes):
+//
+//   - a read of a target on X's lineage: its r*c entries;
+//   - a JOIN of an attribute whose *base* depends on targets: per gathered
+//     instance, the base's own parameters (r*c entries of a stored target,
+//     or the parameters of a computed source, recursively);
+//   - a UNION: the parameters of the member the instance belongs to, padded
+//     to the widest member (paper 5.2).
+//
+// `X__jac` (rc x d) holds dvec(X)/dparams: forward mode over X's region, one
+// tangent per parameter, seeded at the leaves. Seeds of a JOIN or UNION of a
+// computed attribute come from that attribute's own `__jac`, gathered the
+// same way (paper 5.1/5.2): derivatives are computed once per boundary
+// attribute and reused by every energy that gathers it. A derivative
+// attribute has its base's parameters, so the Jacobian of `E__jac` is the
+// Hessian of E, with the curvature terms of nonlinear parameterisations
+// coming from the sources' second Jacobians.
 //
 //===----------------------------------------------------------------------===//
 
@@ -24,32 +36,74 @@ using namespace mlir::yasps;
 
 namespace {
 
-/// A group of local parameters: the entries of one target value that the
-/// energy reads directly, or of the l-th instance a JOIN gathers.
-struct ParamSlot {
-  Operation *leaf;    ///< the read or join op in the energy's region
-  int64_t joinRow;    ///< row of the JOIN result, -1 for a direct read
-  int64_t size;       ///< number of parameters (r*c of the target)
-  int64_t offset = 0; ///< index of the first parameter
-  Attribute description;
+enum class GroupKind { Read, Join, Union };
+
+/// A group of `count` parameter slots of `width` parameters each.
+struct ParamGroup {
+  GroupKind kind;
+  Operation *key;  ///< target (read), connectivity (join), union entity
+  Operation *base; ///< the attribute whose parameters a slot holds
+  int64_t count;   ///< slots: JOIN arity, else 1
+  int64_t width;   ///< parameters per slot
+  int64_t offset = 0;
+
+  int64_t size() const { return count * width; }
 };
 
-/// Tangents of the values of one region in one direction (one parameter).
-class DirectionalDerivative {
+class Differentiator {
 public:
-  DirectionalDerivative(OpBuilder &builder,
-                        DenseMap<Operation *, const ParamSlot *> &slots,
-                        int64_t param)
-      : builder(builder), slots(slots), param(param) {}
+  Differentiator(SceneOp scene, DenseSet<Operation *> targets,
+                 SymbolTableCollection &tables)
+      : scene(scene), targets(std::move(targets)), tables(tables) {}
 
-  /// The tangent of `value` (null when it is zero).
+  /// `X__jac`, or null when X depends on no target.
+  FailureOr<AttrOp> jacobian(AttrOp attr);
+
+  /// The parameter groups of a computed attribute.
+  FailureOr<SmallVector<ParamGroup>> groupsOf(AttrOp attr);
+
+  /// yasps.params of an attribute: one entry per slot.
+  ArrayAttr describe(ArrayRef<ParamGroup> groups);
+
+  AttrOp createAttr(AttrOp next, StringRef name, MatrixType type,
+                    Operation *derivedFromOp, ArrayAttr params);
+
+private:
+  Operation *baseOf(Operation *decl) {
+    for (auto it = derivedFrom.find(decl); it != derivedFrom.end();
+         it = derivedFrom.find(decl))
+      decl = it->second;
+    return decl;
+  }
+  FailureOr<int64_t> paramCount(Operation *base);
+  FailureOr<Value> seed(OpBuilder &b, Operation *leaf, const ParamGroup &group,
+                        int64_t slot, int64_t local);
+  FailureOr<Operation *> unionJacobian(Operation *member, StringAttr name,
+                                       int64_t width);
+
+  SceneOp scene;
+  DenseSet<Operation *> targets;
+  SymbolTableCollection &tables;
+  DenseMap<Operation *, Operation *> derivedFrom;
+  DenseMap<Operation *, AttrOp> jacobians;
+  DenseMap<Operation *, int64_t> counts;
+  /// Gathers of a source's Jacobian, one per leaf, shared by directions.
+  DenseMap<Operation *, Value> gathered;
+};
+
+/// Tangents of one region's values in one direction.
+class Direction {
+public:
+  using SeedFn = function_ref<FailureOr<Value>(Operation *leaf)>;
+  Direction(OpBuilder &b, SeedFn seedFn) : b(b), seedFn(seedFn) {}
+
   FailureOr<Value> tangent(Value value) {
     if (auto it = cache.find(value); it != cache.end())
       return it->second;
     Operation *op = value.getDefiningOp();
     FailureOr<Value> result = Value();
     if (isa<ReadOp, JoinOp, UnionOp>(op)) {
-      result = seed(op);
+      result = seedFn(op);
     } else {
       SmallVector<Value> operandTangents;
       for (Value operand : op->getOperands()) {
@@ -58,8 +112,8 @@ public:
           return failure();
         operandTangents.push_back(*t);
       }
-      result = cast<DifferentiableOpInterface>(op).emitTangent(
-          builder, operandTangents);
+      result =
+          cast<DifferentiableOpInterface>(op).emitTangent(b, operandTangents);
     }
     if (succeeded(result))
       cache[value] = *result;
@@ -67,257 +121,451 @@ public:
   }
 
 private:
-  /// A unit matrix at this direction's entry of a leaf, or zero.
-  FailureOr<Value> seed(Operation *leaf) {
-    auto it = slots.find(leaf);
-    auto type = cast<MatrixType>(leaf->getResult(0).getType());
-    if (it == slots.end())
-      return Value(); // constants and non-target attributes
-    const ParamSlot &slot = *it->second;
-    int64_t local = param - slot.offset;
-    if (local < 0 || local >= slot.size) {
-      // A JOIN leaf holds several slots; only the one of `param` seeds it.
-      return Value();
-    }
-    // Entry `local` of a read target value is column-major; a JOIN result
-    // holds one flattened target value per row.
-    bool join = isa<JoinOp>(leaf);
-    int64_t row = join ? local / type.getCols() : local % type.getRows();
-    int64_t col = join ? local % type.getCols() : local / type.getRows();
-    SmallVector<double> values(type.getNumElements(), 0.0);
-    values[row * type.getCols() + col] = 1.0; // dense literals are row-major
-    auto attr = DenseElementsAttr::get(type.getTensorType(),
-                                       ArrayRef<double>(values));
-    if (type.getElementType().isF32()) {
-      SmallVector<float> floats(values.begin(), values.end());
-      attr = DenseElementsAttr::get(type.getTensorType(),
-                                    ArrayRef<float>(floats));
-    }
-    return ConstantOp::create(builder, leaf->getLoc(), type, attr).getResult();
-  }
-
-  OpBuilder &builder;
-  DenseMap<Operation *, const ParamSlot *> &slots;
-  int64_t param;
+  OpBuilder &b;
+  SeedFn seedFn;
   DenseMap<Value, Value> cache;
 };
 
-struct DifferentiatePass
-    : public mlir::yasps::impl::YaspsDifferentiateBase<DifferentiatePass> {
-  void runOnOperation() override;
-  LogicalResult differentiate(SceneOp scene, MinimizeOp targets,
-                              EnergyOp energy, SymbolTableCollection &tables);
-};
+Value constantMatrix(OpBuilder &b, Location loc, MatrixType type,
+                     ArrayRef<double> rowMajor) {
+  SmallVector<APFloat> values;
+  for (double v : rowMajor) {
+    APFloat f(v);
+    bool lost;
+    f.convert(type.getElementType().getFloatSemantics(),
+              APFloat::rmNearestTiesToEven, &lost);
+    values.push_back(f);
+  }
+  return ConstantOp::create(
+      b, loc, type, DenseElementsAttr::get(type.getTensorType(), values));
+}
 
-/// Finds the local parameters of `attr`: reads of targets and JOINs of
-/// targets, in the order they appear.
-FailureOr<SmallVector<ParamSlot>>
-collectSlots(AttrOp attr, SceneOp scene, const DenseSet<Operation *> &targets,
-             SymbolTableCollection &tables) {
-  SmallVector<ParamSlot> slots;
-  MLIRContext *ctx = attr.getContext();
-  DenseSet<Operation *> seenReads;
-  for (Operation &op : attr.getBodyBlock()) {
-    if (auto read = dyn_cast<ReadOp>(op)) {
-      Operation *decl = lookupInScene(scene, read.getAttribute(), &tables);
-      if (isa<AttrOp>(decl))
-        return read.emitOpError()
-               << "reads " << describe(decl)
-               << ": inline computed attributes (yasps-inline-reads) before "
-                  "yasps-differentiate",
-               failure();
-      if (!targets.contains(decl))
-        continue;
-      if (!seenReads.insert(decl).second)
-        return read.emitOpError()
-               << "reads " << describe(decl)
-               << " twice; run cse before yasps-differentiate",
-               failure();
-      slots.push_back({read, -1, getAttributeType(decl).getNumElements(), 0,
-                       ArrayAttr::get(ctx, {StringAttr::get(ctx, "read"),
-                                            read.getAttribute()})});
-    } else if (auto join = dyn_cast<JoinOp>(op)) {
-      Operation *source = lookupInScene(scene, join.getSource(), &tables);
-      if (isa<AttrOp>(source))
-        return join.emitOpError()
-               << "gathers " << describe(source)
-               << ": differentiating through a JOIN of a computed attribute "
-                  "is not supported yet",
-               failure();
-      if (!targets.contains(source))
-        continue;
-      int64_t rows = cast<MatrixType>(join.getType()).getRows();
-      int64_t size = getAttributeType(source).getNumElements();
-      for (int64_t l = 0; l < rows; ++l)
-        slots.push_back(
-            {join, l, size, 0,
-             ArrayAttr::get(ctx, {StringAttr::get(ctx, "join"),
-                                  join.getConnectivityAttr(),
-                                  IntegerAttr::get(IntegerType::get(ctx, 64), l),
-                                  join.getSource()})});
-    } else if (auto unionOp = dyn_cast<UnionOp>(op)) {
-      return unionOp.emitOpError()
-             << "differentiating through a UNION is not supported yet",
-             failure();
-    }
-  }
-  int64_t offset = 0;
-  for (ParamSlot &slot : slots) {
-    slot.offset = offset;
-    offset += slot.size;
-  }
-  return slots;
+Value zeros(OpBuilder &b, Location loc, MatrixType type) {
+  return constantMatrix(
+      b, loc, type, SmallVector<double>(type.getNumElements(), 0.0));
+}
+
+/// A k x c matrix that is `row` in row `at` and zero elsewhere.
+Value embedRow(OpBuilder &b, Location loc, Value row, int64_t at, int64_t k) {
+  auto type = cast<MatrixType>(row.getType());
+  if (k == 1)
+    return row;
+  SmallVector<Value> parts;
+  if (at > 0)
+    parts.push_back(zeros(b, loc, type.withShape(at, type.getCols())));
+  parts.push_back(row);
+  if (k - at - 1 > 0)
+    parts.push_back(zeros(b, loc, type.withShape(k - at - 1, type.getCols())));
+  return ConcatOp::create(b, loc, type.withShape(k, type.getCols()),
+                          ConcatAxis::vertical, parts);
 }
 
 } // namespace
 
-LogicalResult DifferentiatePass::differentiate(SceneOp scene,
-                                               MinimizeOp targetsOp,
-                                               EnergyOp energy,
-                                               SymbolTableCollection &tables) {
-  auto attr = dyn_cast_or_null<AttrOp>(
-      lookupInScene(scene, energy.getAttribute(), &tables));
-  if (!attr)
-    return energy.emitOpError()
-           << "energy " << energy.getAttribute()
-           << " is not a computed attribute; nothing to differentiate";
-  DenseSet<Operation *> targets;
-  for (auto ref : targetsOp.getTargets().getAsRange<SymbolRefAttr>())
-    targets.insert(lookupInScene(scene, ref, &tables));
-  FailureOr<SmallVector<ParamSlot>> slots =
-      collectSlots(attr, scene, targets, tables);
-  if (failed(slots))
-    return failure();
-  int64_t n = slots->empty() ? 0 : slots->back().offset + slots->back().size;
-  if (n == 0)
-    return success(); // depends on no target: no derivative to assemble
-  SmallVector<Attribute> descriptions;
-  for (const ParamSlot &slot : *slots)
-    descriptions.push_back(slot.description);
-  // JOIN leaves own several consecutive slots of equal size: widen the first
-  // slot's range to cover them all.
-  SmallVector<ParamSlot> merged;
-  for (const ParamSlot &slot : *slots) {
-    if (!merged.empty() && merged.back().leaf == slot.leaf) {
-      merged.back().size += slot.size;
-      continue;
-    }
-    merged.push_back(slot);
+FailureOr<int64_t> Differentiator::paramCount(Operation *base) {
+  if (auto it = counts.find(base); it != counts.end())
+    return it->second;
+  int64_t count = 0;
+  if (auto attr = dyn_cast<AttrOp>(base)) {
+    FailureOr<SmallVector<ParamGroup>> groups = groupsOf(attr);
+    if (failed(groups))
+      return failure();
+    for (const ParamGroup &g : *groups)
+      count += g.size();
+  } else if (targets.contains(base)) {
+    count = getAttributeType(base).getNumElements();
   }
-  DenseMap<Operation *, const ParamSlot *> leafSlots;
-  for (const ParamSlot &slot : merged)
-    leafSlots[slot.leaf] = &slot;
-
-  MatrixType scalar = attr.getMatrixType();
-  auto paramsAttr = ArrayAttr::get(&getContext(), descriptions);
-  OpBuilder outside(attr->getBlock(), std::next(Block::iterator(attr)));
-  auto makeAttr = [&](StringRef suffix, MatrixType type) {
-    auto result = AttrOp::create(
-        outside, attr.getLoc(),
-        StringAttr::get(&getContext(), attr.getSymName() + suffix),
-        TypeAttr::get(type));
-    result->setAttr("yasps.params", paramsAttr);
-    Block *block = new Block();
-    result.getBody().push_back(block);
-    // The energy's computation, then its derivatives.
-    IRMapping mapping;
-    OpBuilder inside = OpBuilder::atBlockEnd(block);
-    for (Operation &op : attr.getBodyBlock().without_terminator())
-      inside.clone(op, mapping);
-    return std::make_tuple(result, mapping);
-  };
-
-  auto [grad, gradMap] = makeAttr("__grad", scalar.withShape(n, 1));
-  auto [hess, hessMap] = makeAttr("__hess", scalar.withShape(n, n));
-  Value energyValue =
-      cast<YieldOp>(attr.getBodyBlock().getTerminator()).getValue();
-
-  // Gradient and Hessian entries, each built in its attribute's region.
-  auto entries = [&](AttrOp target, IRMapping &mapping,
-                     bool second) -> FailureOr<SmallVector<Value>> {
-    Block &block = target.getBodyBlock();
-    OpBuilder b = OpBuilder::atBlockEnd(&block);
-    DenseMap<Operation *, const ParamSlot *> mappedSlots;
-    for (auto [leaf, slot] : leafSlots)
-      mappedSlots[mapping.lookup(leaf->getResult(0)).getDefiningOp()] = slot;
-    Value root = mapping.lookup(energyValue);
-    SmallVector<DirectionalDerivative> directions;
-    for (int64_t k = 0; k < n; ++k)
-      directions.emplace_back(b, mappedSlots, k);
-    SmallVector<Value> gradient;
-    for (int64_t k = 0; k < n; ++k) {
-      FailureOr<Value> g = directions[k].tangent(root);
-      if (failed(g))
-        return failure();
-      gradient.push_back(*g);
-    }
-    if (!second)
-      return gradient;
-    SmallVector<Value> hessian(n * n);
-    for (int64_t k = 0; k < n; ++k)
-      for (int64_t l = k; l < n && gradient[k]; ++l) {
-        FailureOr<Value> h = directions[l].tangent(gradient[k]);
-        if (failed(h))
-          return failure();
-        hessian[k * n + l] = hessian[l * n + k] = *h;
-      }
-    return hessian;
-  };
-
-  auto finish = [&](AttrOp target, ArrayRef<Value> values, int64_t rows,
-                    int64_t cols) {
-    OpBuilder b = OpBuilder::atBlockEnd(&target.getBodyBlock());
-    Location loc = target.getLoc();
-    Value zero;
-    SmallVector<Value> rowValues;
-    for (int64_t r = 0; r < rows; ++r) {
-      SmallVector<Value> parts;
-      for (int64_t c = 0; c < cols; ++c) {
-        Value v = values[r * cols + c];
-        if (!v) {
-          if (!zero)
-            zero = ConstantOp::create(
-                b, loc, scalar,
-                DenseElementsAttr::get(
-                    scalar.getTensorType(),
-                    b.getFloatAttr(scalar.getElementType(), 0.0)));
-          v = zero;
-        }
-        parts.push_back(v);
-      }
-      rowValues.push_back(
-          cols == 1 ? parts[0]
-                    : ConcatOp::create(b, loc, scalar.withShape(1, cols),
-                                       ConcatAxis::horizontal, parts)
-                          .getResult());
-    }
-    Value result =
-        rows == 1 ? rowValues[0]
-                  : ConcatOp::create(b, loc, scalar.withShape(rows, cols),
-                                     ConcatAxis::vertical, rowValues)
-                        .getResult();
-    YieldOp::create(b, loc, result);
-  };
-
-  FailureOr<SmallVector<Value>> g = entries(grad, gradMap, false);
-  if (failed(g))
-    return failure();
-  finish(grad, *g, n, 1);
-  FailureOr<SmallVector<Value>> h = entries(hess, hessMap, true);
-  if (failed(h))
-    return failure();
-  finish(hess, *h, n, n);
-  return success();
+  counts[base] = count;
+  return count;
 }
+
+FailureOr<SmallVector<ParamGroup>> Differentiator::groupsOf(AttrOp attr) {
+  SmallVector<ParamGroup> groups;
+  auto add = [&](ParamGroup group) {
+    for (const ParamGroup &g : groups)
+      if (g.kind == group.kind && g.key == group.key && g.base == group.base)
+        return;
+    group.offset = groups.empty() ? 0 : groups.back().offset + groups.back().size();
+    groups.push_back(group);
+  };
+  for (Operation &op : attr.getBodyBlock()) {
+    if (auto read = dyn_cast<ReadOp>(op)) {
+      Operation *decl = lookupInScene(scene, read.getAttribute(), &tables);
+      if (isa<AttrOp>(decl) && !derivedFrom.count(decl))
+        return read.emitOpError()
+               << "reads " << ::mlir::yasps::describe(decl)
+               << ": inline computed attributes (yasps-inline-reads) before "
+                  "yasps-differentiate";
+      Operation *base = baseOf(decl);
+      if (!targets.contains(base))
+        continue;
+      add({GroupKind::Read, base, base, 1,
+           getAttributeType(base).getNumElements()});
+    } else if (auto join = dyn_cast<JoinOp>(op)) {
+      Operation *base =
+          baseOf(lookupInScene(scene, join.getSource(), &tables));
+      FailureOr<int64_t> width = paramCount(base);
+      if (failed(width))
+        return failure();
+      if (*width == 0)
+        continue;
+      auto primitive = cast<PrimitiveOp>(getOwningEntity(attr));
+      Operation *conn =
+          tables.lookupSymbolIn(primitive, join.getConnectivityAttr());
+      add({GroupKind::Join, conn, base,
+           cast<MatrixType>(join.getType()).getRows(), *width});
+    } else if (auto unionOp = dyn_cast<UnionOp>(op)) {
+      auto owner = cast<PrimitiveUnionOp>(getOwningEntity(attr));
+      int64_t width = 0;
+      Operation *base = nullptr;
+      for (Operation *member : owner.getMemberOps()) {
+        Operation *memberBase =
+            baseOf(tables.lookupSymbolIn(member, unionOp.getNameAttr()));
+        base = base ? base : memberBase;
+        FailureOr<int64_t> count = paramCount(memberBase);
+        if (failed(count))
+          return failure();
+        width = std::max(width, *count);
+      }
+      if (width == 0)
+        continue;
+      add({GroupKind::Union, owner, base, 1, width});
+    }
+  }
+  return groups;
+}
+
+ArrayAttr Differentiator::describe(ArrayRef<ParamGroup> groups) {
+  MLIRContext *ctx = scene.getContext();
+  SmallVector<Attribute> out;
+  auto i64 = [&](int64_t v) {
+    return IntegerAttr::get(IntegerType::get(ctx, 64), v);
+  };
+  for (const ParamGroup &g : groups) {
+    for (int64_t slot = 0; slot < g.count; ++slot) {
+      switch (g.kind) {
+      case GroupKind::Read:
+        out.push_back(ArrayAttr::get(
+            ctx, {StringAttr::get(ctx, "read"), getScenePath(g.base)}));
+        break;
+      case GroupKind::Join:
+        out.push_back(ArrayAttr::get(
+            ctx, {StringAttr::get(ctx, "join"),
+                  FlatSymbolRefAttr::get(
+                      cast<ConnectivityOp>(g.key).getSymNameAttr()),
+                  i64(slot), getScenePath(g.base), i64(g.width)}));
+        break;
+      case GroupKind::Union:
+        out.push_back(ArrayAttr::get(
+            ctx, {StringAttr::get(ctx, "union"), getScenePath(g.key),
+                  g.base->getAttrOfType<StringAttr>(
+                      SymbolTable::getSymbolAttrName()),
+                  i64(g.width)}));
+        break;
+      }
+    }
+  }
+  return ArrayAttr::get(ctx, out);
+}
+
+AttrOp Differentiator::createAttr(AttrOp next, StringRef name,
+                                  MatrixType type, Operation *derivedFromOp,
+                                  ArrayAttr params) {
+  OpBuilder b(next->getBlock(), std::next(Block::iterator(next)));
+  auto attr = AttrOp::create(b, next.getLoc(), b.getStringAttr(name),
+                             TypeAttr::get(type));
+  attr.getBody().push_back(new Block());
+  if (params)
+    attr->setAttr("yasps.params", params);
+  if (derivedFromOp)
+    derivedFrom[attr] = derivedFromOp;
+  return attr;
+}
+
+FailureOr<Operation *> Differentiator::unionJacobian(Operation *member,
+                                                     StringAttr name,
+                                                     int64_t width) {
+  std::string jacName =
+      (name.getValue() + "__ujac" + std::to_string(width)).str();
+  if (Operation *existing = tables.lookupSymbolIn(member, StringAttr::get(member->getContext(), jacName)))
+    return existing;
+  Operation *attr = tables.lookupSymbolIn(member, name);
+  MatrixType type = getAttributeType(attr);
+  int64_t rc = type.getNumElements();
+  MatrixType jacType = type.withShape(rc, width);
+  // Placed at the end of the member, after every attribute it may copy.
+  OpBuilder anchor = OpBuilder::atBlockEnd(attr->getBlock());
+  auto result = AttrOp::create(anchor, attr->getLoc(),
+                               anchor.getStringAttr(jacName),
+                               TypeAttr::get(jacType));
+  result.getBody().push_back(new Block());
+  derivedFrom[result] = baseOf(attr);
+  tables.invalidateSymbolTable(member);
+  OpBuilder b = OpBuilder::atBlockEnd(&result.getBodyBlock());
+  Location loc = attr->getLoc();
+  Value value;
+  Operation *base = baseOf(attr);
+  // The member's attribute itself is differentiated (for a UNION of a
+  // derivative, its Jacobian is the second derivative of the base).
+  if (auto computed = dyn_cast<AttrOp>(attr)) {
+    FailureOr<AttrOp> jac = jacobian(computed);
+    if (failed(jac))
+      return failure();
+    if (!*jac) {
+      value = zeros(b, loc, jacType);
+    } else {
+      // A copy of the member's Jacobian computation (not a read of it), so
+      // that this attribute has the member's leaves and parameters and can
+      // itself be differentiated.
+      auto inner = (*jac).getMatrixType();
+      IRMapping mapping;
+      for (Operation &op : (*jac).getBodyBlock().without_terminator())
+        b.clone(op, mapping);
+      Value read = mapping.lookup(
+          cast<YieldOp>((*jac).getBodyBlock().getTerminator()).getValue());
+      value = inner.getCols() == width
+                  ? read
+                  : ConcatOp::create(
+                        b, loc, jacType, ConcatAxis::horizontal,
+                        ValueRange{read,
+                                   zeros(b, loc,
+                                         type.withShape(
+                                             rc, width - inner.getCols()))});
+    }
+  } else {
+    SmallVector<double> rowMajor(rc * width, 0.0);
+    if (targets.contains(base))
+      for (int64_t i = 0; i < rc; ++i)
+        rowMajor[i * width + i] = 1.0;
+    value = constantMatrix(b, loc, jacType, rowMajor);
+  }
+  YieldOp::create(b, loc, value);
+  return result.getOperation();
+}
+
+FailureOr<Value> Differentiator::seed(OpBuilder &b, Operation *leaf,
+                                      const ParamGroup &group, int64_t slot,
+                                      int64_t local) {
+  Location loc = leaf->getLoc();
+  auto type = cast<MatrixType>(leaf->getResult(0).getType());
+  if (auto read = dyn_cast<ReadOp>(leaf)) {
+    Operation *decl = lookupInScene(scene, read.getAttribute(), &tables);
+    if (decl != group.base)
+      return Value(); // a derivative of the target: constant in the target
+    SmallVector<double> rowMajor(type.getNumElements(), 0.0);
+    rowMajor[(local % type.getRows()) * type.getCols() +
+             local / type.getRows()] = 1.0;
+    return constantMatrix(b, loc, type, rowMajor);
+  }
+  if (auto join = dyn_cast<JoinOp>(leaf)) {
+    Operation *source = lookupInScene(scene, join.getSource(), &tables);
+    int64_t k = type.getRows(), rc = type.getCols();
+    if (!isa<AttrOp>(source)) {
+      // A stored target: unit entry in row `slot`.
+      SmallVector<double> rowMajor(type.getNumElements(), 0.0);
+      rowMajor[slot * rc + local] = 1.0;
+      return constantMatrix(b, loc, type, rowMajor);
+    }
+    // Column `local` of the source's Jacobian at the gathered instance.
+    Value &jj = gathered[leaf];
+    if (!jj) {
+      FailureOr<AttrOp> jac = jacobian(cast<AttrOp>(source));
+      if (failed(jac))
+        return failure();
+      if (!*jac)
+        return Value();
+      int64_t width = (*jac).getMatrixType().getCols();
+      OpBuilder::InsertionGuard guard(b);
+      b.setInsertionPointAfter(leaf);
+      jj = JoinOp::create(b, loc, type.withShape(k, rc * width),
+                          join.getConnectivityAttr(), getScenePath(*jac));
+    }
+    auto jjType = cast<MatrixType>(jj.getType());
+    if ((local + 1) * rc > jjType.getCols())
+      return Value(); // padding beyond the source's parameters
+    Value row = RowOp::create(b, loc, type.withShape(1, jjType.getCols()), jj,
+                              slot);
+    Value column = SliceOp::create(b, loc, type.withShape(1, rc), row, 0,
+                                   local * rc);
+    return embedRow(b, loc, column, slot, k);
+  }
+  auto unionOp = cast<UnionOp>(leaf);
+  Value &uj = gathered[leaf];
+  if (!uj) {
+    auto owner = cast<PrimitiveUnionOp>(getOwningEntity(leaf));
+    Operation *first = nullptr;
+    for (Operation *member : owner.getMemberOps()) {
+      FailureOr<Operation *> jac =
+          unionJacobian(member, unionOp.getNameAttr().getAttr(), group.width);
+      if (failed(jac))
+        return failure();
+      first = first ? first : *jac;
+    }
+    OpBuilder::InsertionGuard guard(b);
+    b.setInsertionPointAfter(leaf);
+    uj = UnionOp::create(
+        b, loc, getAttributeType(first),
+        FlatSymbolRefAttr::get(first->getAttrOfType<StringAttr>(
+            SymbolTable::getSymbolAttrName())));
+  }
+  auto ujType = cast<MatrixType>(uj.getType());
+  Value column = ColOp::create(b, loc, ujType.withShape(ujType.getRows(), 1),
+                               uj, local);
+  return ResizeOp::create(b, loc, type, column).getResult();
+}
+
+FailureOr<AttrOp> Differentiator::jacobian(AttrOp attr) {
+  if (auto it = jacobians.find(attr); it != jacobians.end())
+    return it->second;
+  FailureOr<SmallVector<ParamGroup>> groups = groupsOf(attr);
+  if (failed(groups))
+    return failure();
+  int64_t d = groups->empty() ? 0 : groups->back().offset + groups->back().size();
+  if (d == 0) {
+    jacobians[attr] = AttrOp();
+    return AttrOp();
+  }
+  MatrixType type = attr.getMatrixType();
+  int64_t rc = type.getNumElements();
+  std::string name = (attr.getSymName() + "__jac").str();
+  Operation *entity = getOwningEntity(attr);
+  if (tables.lookupSymbolIn(entity, StringAttr::get(entity->getContext(), name)))
+    return attr.emitOpError() << "cannot add its Jacobian @" << name
+                              << ": the name is taken";
+  AttrOp jac = createAttr(attr, name, type.withShape(rc, d), attr,
+                          describe(*groups));
+  tables.invalidateSymbolTable(entity);
+  jacobians[attr] = jac;
+
+  // The attribute's own computation, then one tangent per parameter.
+  IRMapping mapping;
+  OpBuilder b = OpBuilder::atBlockEnd(&jac.getBodyBlock());
+  for (Operation &op : attr.getBodyBlock().without_terminator())
+    b.clone(op, mapping);
+  Value root = mapping.lookup(
+      cast<YieldOp>(attr.getBodyBlock().getTerminator()).getValue());
+  // Leaves of the clone, by group.
+  SmallVector<std::pair<Operation *, const ParamGroup *>> leaves;
+  SmallVector<Operation *> cloned;
+  for (Operation &op : jac.getBodyBlock())
+    cloned.push_back(&op);
+  for (Operation *op : cloned) {
+    for (const ParamGroup &g : *groups) {
+      bool belongs = false;
+      if (auto read = dyn_cast<ReadOp>(op))
+        belongs = g.kind == GroupKind::Read &&
+                  baseOf(lookupInScene(scene, read.getAttribute(), &tables)) ==
+                      g.base;
+      else if (auto join = dyn_cast<JoinOp>(op))
+        belongs = g.kind == GroupKind::Join &&
+                  tables.lookupSymbolIn(getOwningEntity(jac),
+                                        join.getConnectivityAttr()) == g.key &&
+                  baseOf(lookupInScene(scene, join.getSource(), &tables)) ==
+                      g.base;
+      else if (isa<UnionOp>(op))
+        belongs = g.kind == GroupKind::Union;
+      if (belongs)
+        leaves.push_back({op, &g});
+    }
+  }
+
+  SmallVector<Value> columns;
+  for (const ParamGroup &g : *groups) {
+    for (int64_t p = 0; p < g.size(); ++p) {
+      int64_t slot = p / g.width, local = p % g.width;
+      bool failedSeed = false;
+      auto seedFn = [&](Operation *leaf) -> FailureOr<Value> {
+        for (auto [op, group] : leaves)
+          if (op == leaf && group == &g) {
+            FailureOr<Value> s = seed(b, leaf, g, slot, local);
+            failedSeed |= failed(s);
+            return s;
+          }
+        return Value();
+      };
+      Direction direction(b, seedFn);
+      FailureOr<Value> t = direction.tangent(root);
+      if (failed(t) || failedSeed)
+        return failure();
+      MatrixType column = type.withShape(rc, 1);
+      columns.push_back(
+          *t ? ResizeOp::create(b, attr.getLoc(), column, *t).getResult()
+             : zeros(b, attr.getLoc(), column));
+    }
+  }
+  Value result =
+      columns.size() == 1
+          ? columns[0]
+          : ConcatOp::create(b, attr.getLoc(), type.withShape(rc, d),
+                             ConcatAxis::horizontal, columns)
+                .getResult();
+  YieldOp::create(b, attr.getLoc(), result);
+  return jac;
+}
+
+namespace {
+struct DifferentiatePass
+    : public mlir::yasps::impl::YaspsDifferentiateBase<DifferentiatePass> {
+  void runOnOperation() override;
+};
+} // namespace
 
 void DifferentiatePass::runOnOperation() {
   SymbolTableCollection tables;
   for (auto scene : getOperation().getOps<SceneOp>()) {
-    auto targets = scene.getBodyBlock().getOps<MinimizeOp>();
-    if (targets.empty())
+    auto minimize = scene.getBodyBlock().getOps<MinimizeOp>();
+    if (minimize.empty())
       continue;
-    for (auto energy : scene.getBodyBlock().getOps<EnergyOp>())
-      if (failed(differentiate(scene, *targets.begin(), energy, tables)))
+    DenseSet<Operation *> targets;
+    for (auto ref : (*minimize.begin()).getTargets().getAsRange<SymbolRefAttr>())
+      targets.insert(lookupInScene(scene, ref, &tables));
+    Differentiator diff(scene, targets, tables);
+    for (auto energy : scene.getBodyBlock().getOps<EnergyOp>()) {
+      auto attr = dyn_cast_or_null<AttrOp>(
+          lookupInScene(scene, energy.getAttribute(), &tables));
+      if (!attr) {
+        energy.emitOpError() << "energy " << energy.getAttribute()
+                             << " is not a computed attribute; nothing to "
+                                "differentiate";
         return signalPassFailure();
+      }
+      // Gradient = Jacobian of E (1 x d), transposed; Hessian = Jacobian of
+      // the gradient's row.
+      FailureOr<AttrOp> jac = diff.jacobian(attr);
+      if (failed(jac))
+        return signalPassFailure();
+      if (!*jac)
+        continue; // depends on no target
+      FailureOr<AttrOp> hess = diff.jacobian(*jac);
+      if (failed(hess))
+        return signalPassFailure();
+      MatrixType row = (*jac).getMatrixType();
+      int64_t d = row.getCols();
+      Attribute params = (*jac)->getAttr("yasps.params");
+      auto alias = [&](StringRef suffix, AttrOp of, MatrixType type,
+                       bool transpose) {
+        AttrOp a = diff.createAttr(*jac, (attr.getSymName() + suffix).str(),
+                                   type, nullptr, cast<ArrayAttr>(params));
+        OpBuilder b = OpBuilder::atBlockEnd(&a.getBodyBlock());
+        Value v = ReadOp::create(b, a.getLoc(), of.getMatrixType(),
+                                 getScenePath(of));
+        if (transpose)
+          v = TransposeOp::create(b, a.getLoc(), type, v);
+        else if (of.getMatrixType() != type)
+          v = ResizeOp::create(b, a.getLoc(), type, v);
+        YieldOp::create(b, a.getLoc(), v);
+      };
+      MatrixType square = row.withShape(d, d);
+      if (*hess)
+        alias("__hess", *hess, square, false);
+      else {
+        AttrOp a = diff.createAttr(*jac, (attr.getSymName() + "__hess").str(),
+                                   square, nullptr, cast<ArrayAttr>(params));
+        OpBuilder b = OpBuilder::atBlockEnd(&a.getBodyBlock());
+        YieldOp::create(b, a.getLoc(), zeros(b, a.getLoc(), square));
+      }
+      alias("__grad", *jac, row.withShape(d, 1), true);
+      tables.invalidateSymbolTable(getOwningEntity(attr));
+    }
   }
 }

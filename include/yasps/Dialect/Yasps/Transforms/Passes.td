@@ -46,28 +46,33 @@ def YaspsStripScenes : Pass<"yasps-strip-scenes", "::mlir::ModuleOp"> {
 }
 
 def YaspsDifferentiate : Pass<"yasps-differentiate", "::mlir::ModuleOp"> {
-  let summary = "Local gradients and Hessians of every energy";
+  let summary = "Jacobians of attributes; local gradients and Hessians of energies";
   let description = [{
-    For every energy `@E` of a scene with minimisation targets, adds to E's
-    owner the computed attributes
+    For every energy `@E` of a scene with minimisation targets, adds next to
+    it `@E__grad : !yasps.mat<n x 1>` and `@E__hess : !yasps.mat<n x n>`, the
+    gradient and Hessian of one instance with respect to its n local
+    parameters, listed in `yasps.params`.
 
-    - `@E__grad : !yasps.mat<n x 1>`: the gradient of one instance of E with
-      respect to its n local parameters, and
-    - `@E__hess : !yasps.mat<n x n>`: its Hessian,
+    The unit is the Jacobian `@X__jac` (rc x d) of an attribute X with
+    respect to its local parameters: groups of target entries that X reaches
+    through its region's leaves. A read of a target gives its r*c entries
+    (`["read", @target]`); a JOIN gives, per gathered instance, the
+    parameters of its source's base attribute (`["join", @conn, slot,
+    @base, width]`): r*c entries of a stored target, or, for a computed
+    source, that source's own parameters; a UNION gives the parameters of
+    the member the instance belongs to, padded to the widest member
+    (`["union", @union, name, width]`, paper 5.2).
 
-    both as yasps IR built from the ops' derivative rules
-    (`DifferentiableOpInterface`): forward mode, one tangent per local
-    parameter, and the rules applied again to the tangent code for second
-    derivatives, with tangents known to be zero never materialised. Both list
-    their parameters in `yasps.params`, in order: `["read", @attr]` for a
-    target read on the energy's own lineage (its r*c entries, column-major),
-    `["join", @connectivity, l, @attr]` for the l-th instance gathered by a
-    JOIN of a target (r*c entries each).
-
-    Energies must have their reads of computed attributes inlined
-    (`yasps-inline-reads`). Differentiating through a JOIN or UNION of a
-    computed attribute (e.g. affine-body vertices) is not supported yet and
-    is reported as an error on the op.
+    Each Jacobian is built in forward mode from the ops' derivative rules
+    (`DifferentiableOpInterface`): one tangent per parameter, seeded with
+    unit matrices at target leaves and, at a JOIN or UNION of a computed
+    attribute, with that attribute's own Jacobian gathered the same way
+    (paper 5.1): a boundary attribute is differentiated once and reused by
+    every energy that gathers it. A derivative attribute has its base's
+    parameters, so `@E__hess` is the Jacobian of `@E__jac`, and the
+    curvature terms of nonlinear parameterisations come from the sources'
+    second Jacobians. Energies must have their reads of computed attributes
+    inlined first (`yasps-inline-reads`).
   }];
   let dependentDialects = ["::mlir::yasps::YaspsDialect"];
 }
