@@ -283,3 +283,29 @@ def test_barrier_over_union_of_free_and_affine_vertices():
     assert d.gradient.shape == (4, 24)
     real = [sum(l is not None for l in d.locations(i)) for i in range(4)]
     assert real == [6, 15, 15, 24]
+
+
+@pytest.mark.parametrize("method", ["clamp", "abs", "none"])
+def test_projected_hessians(method):
+    # Stable Neo-Hookean under compression has indefinite local Hessians.
+    rest, current = regular_tets()
+    current = rest * 0.5 + rng.normal(scale=0.05, size=rest.shape)
+    s, m, v, e, x, corners = elements_scene(4, current)
+    dm = np.stack([rest[:, k] - rest[:, 0] for k in (1, 2, 3)], axis=2)
+    dm_inv = e.addConstant("DmInv", rows=3, cols=3)
+    dm_inv.updateValue(np.linalg.inv(dm))
+    F = E.deformation_gradient(corners, dm_inv)
+    energy = e.addAttribute("snh", computed_attribute=E.stable_neo_hookean(F, 1.0, 20.0, 1.0))
+    s.addEnergy(energy, projection=method)
+    s.addMinimizeTarget([x])
+    d = s.energyDerivatives(energy)
+    w, V = np.linalg.eigh(d.hessian)
+    assert (w.min(axis=1) < 0).any(), "the test needs indefinite Hessians"
+    f = {"clamp": np.maximum(w, 0), "abs": np.abs(w), "none": w}[method]
+    want = np.einsum("nij,nj,nkj->nik", V, f, V)
+    scale = np.abs(d.hessian).max()
+    assert np.abs(d.projectedHessian - want).max() / scale < 1e-12
+    if method != "none":
+        assert np.linalg.eigvalsh(d.projectedHessian).min() >= -1e-10 * scale
+    if method != "clamp":
+        assert f"projection {method}" in s.ir() or method == "clamp"

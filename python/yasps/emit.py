@@ -200,8 +200,10 @@ def emit_scene(scene: Scene, locations: bool = False,
     attributes (name, expression) to entities without changing the scene."""
     lines = [f"yasps.scene @{scene.name} {{"]
     lines += _emit_members(scene, 1, locations, extra or {})
-    for attr, dynamic in scene._energies:
+    for attr, dynamic, projection in scene._energies:
         flag = " dynamic_instances" if dynamic else ""
+        if projection != "clamp":
+            flag += f" projection {projection}"
         lines.append(f"{_INDENT}yasps.energy {symbol_path(attr)}{flag}")
     if scene._targets:
         targets = ", ".join(symbol_path(t) for t in scene._targets)

@@ -204,8 +204,10 @@ class LocalDerivatives:
     """Per-instance value, gradient and Hessian of one energy with respect to
     its local parameters (see :meth:`Scene.energyDerivatives`)."""
 
-    def __init__(self, energy, value, gradient, hessian, params):
+    def __init__(self, energy, value, gradient, hessian, projected, params):
         self.energy = energy
+        #: PSD-projected Hessians by the energy's projection method.
+        self.projectedHessian = projected
         #: Energy of every instance, shape (N,).
         self.value = value
         #: Gradient of every instance, shape (N, n).
@@ -236,7 +238,7 @@ def energy_derivatives(scene: Scene, energy: Attribute,
                          "(addMinimizeTarget)")
     owner = energy.owner
     base = "::".join("@" + n for n in owner.path + [energy.name])
-    paths = [base + "__grad", base + "__hess"]
+    paths = [base + "__grad", base + "__hess", base + "__hess_proj"]
     native = compiler._module()
     ir = emit_scene(scene, locations=True)
     try:
@@ -252,7 +254,7 @@ def energy_derivatives(scene: Scene, energy: Attribute,
     n = sum(p.width for p in params)
     count = owner.numInstances
     results = []
-    for path, shape in zip(paths, [(n, 1), (n, n)]):
+    for path, shape in zip(paths, [(n, 1), (n, n), (n, n)]):
         out = np.empty(count * shape[0] * shape[1], dtype=np.float64)
         arguments = dict(library.kernels)[path]
         buffers = [_buffer(scene, kind, p, out) for kind, p in arguments]
@@ -261,4 +263,4 @@ def energy_derivatives(scene: Scene, energy: Attribute,
         results.append(from_column_major(out, *shape))
     value = compute(energy, threads).value[:, 0, 0]
     return LocalDerivatives(energy, value, results[0][:, :, 0], results[1],
-                            params)
+                            results[2], params)

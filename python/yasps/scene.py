@@ -212,7 +212,7 @@ class Scene(Entity):
     def __init__(self, name: str):
         super().__init__(_check_name(name, "scene"), None)
         self._meshes: Dict[str, Mesh] = {}
-        self._energies: List[tuple] = []  # (attribute, dynamic_instances)
+        self._energies: List[tuple] = []  # (attribute, dynamic, projection)
         self._targets: List[Attribute] = []
         self._energy_counter = 0
 
@@ -238,17 +238,26 @@ class Scene(Entity):
 
     @property
     def energies(self) -> List[Attribute]:
-        return [attr for attr, _ in self._energies]
+        return [energy[0] for energy in self._energies]
 
     @property
     def minimizeTargets(self) -> List[Attribute]:
         return list(self._targets)
 
-    def addEnergy(self, attr: Attribute, dynamic_instances: bool = False) -> Attribute:
+    def addEnergy(self, attr: Attribute, dynamic_instances: bool = False,
+                  projection: str = "clamp") -> Attribute:
         """Registers a 1x1 attribute as an energy term (summed over its
         instances). Energies on dynamic primitives (collision pairs) need
-        ``dynamic_instances=True``. An anonymous expression is named
+        ``dynamic_instances=True``. ``projection`` makes the local Hessians
+        positive semi-definite: ``clamp`` (negative eigenvalues to zero, the
+        default), ``abs`` or ``none``. An anonymous expression is named
         ``energy<k>`` on its owner. Returns the registered attribute."""
+        from .attribute import PROJECTION_METHODS
+
+        if projection not in PROJECTION_METHODS:
+            raise SceneError(f"addEnergy: projection must be one of "
+                             f"{', '.join(PROJECTION_METHODS)}, got "
+                             f"{projection!r}")
         if not isinstance(attr, Attribute):
             raise SceneError(f"addEnergy: expected a yasps attribute, got "
                              f"{type(attr).__name__}")
@@ -267,14 +276,14 @@ class Scene(Entity):
         if dynamic_instances and not owner.isDynamic:
             raise SceneError(f"addEnergy: dynamic_instances=True but "
                              f"{owner.describe()} is not dynamic")
-        if any(a is attr for a, _ in self._energies):
+        if any(energy[0] is attr for energy in self._energies):
             raise SceneError(f"addEnergy: {attr.describe()} is already an energy")
         if not attr.isNamed:
             while f"energy{self._energy_counter}" in owner._symbols:
                 self._energy_counter += 1
             attr = owner.addAttribute(f"energy{self._energy_counter}",
                                       computed_attribute=attr)
-        self._energies.append((attr, bool(dynamic_instances)))
+        self._energies.append((attr, bool(dynamic_instances), projection))
         return attr
 
     def addMinimizeTarget(self, targets: Union[Attribute, Sequence[Attribute]]) -> None:

@@ -164,3 +164,55 @@ yasps.scene @sc {
   yasps.energy @w::@pp::@e dynamic_instances
   yasps.minimize [@s::@v::@x, @r::@b::@A, @r::@b::@t]
 }
+
+// -----
+
+// Derivative reuse (paper 5.3): two energies gather the same computed
+// positions; their Jacobian is built once, on the vertices, and both
+// energies' Jacobians gather it. Linear in its parameters, the positions
+// need no second Jacobian for the Hessians.
+
+// CHECK-LABEL: yasps.primitive @v(2)
+// CHECK: yasps.attr @x__jac :
+// CHECK-NOT: yasps.attr @x__jac
+// CHECK-LABEL: yasps.primitive @e(1)
+// CHECK: yasps.attr @a__jac
+// CHECK: yasps.join @e2v(@m::@v::@x__jac)
+// CHECK: yasps.attr @b__jac
+// CHECK: yasps.join @e2v(@m::@v::@x__jac)
+// CHECK-NOT: x__jac__jac
+yasps.scene @reuse {
+  yasps.mesh @m {
+    yasps.primitive @b(1) {
+      yasps.data_attr @t : !yasps.mat<3x1xf64>
+    }
+    yasps.primitive @v(2) {
+      yasps.const_attr @rest : !yasps.mat<3x1xf64>
+      yasps.connectivity @v2b -> @m::@b arity 1
+      yasps.attr @x : !yasps.mat<3x1xf64> {
+        %t = yasps.join @v2b(@m::@b::@t) : !yasps.mat<1x3xf64>
+        %r = yasps.read @m::@v::@rest : !yasps.mat<3x1xf64>
+        %tc = yasps.resize %t : !yasps.mat<1x3xf64> -> !yasps.mat<3x1xf64>
+        %x = yasps.add %r, %tc : !yasps.mat<3x1xf64>
+        yasps.yield %x : !yasps.mat<3x1xf64>
+      }
+    }
+    yasps.primitive @e(1) {
+      yasps.connectivity @e2v -> @m::@v arity 2
+      yasps.attr @a : !yasps.mat<1x1xf64> {
+        %p = yasps.join @e2v(@m::@v::@x) : !yasps.mat<2x3xf64>
+        %n = yasps.squared_norm %p : !yasps.mat<2x3xf64>
+        yasps.yield %n : !yasps.mat<1x1xf64>
+      }
+      yasps.attr @b : !yasps.mat<1x1xf64> {
+        %p = yasps.join @e2v(@m::@v::@x) : !yasps.mat<2x3xf64>
+        %s = yasps.sum %p : !yasps.mat<2x3xf64>
+        %q = yasps.scale %s, %s : !yasps.mat<1x1xf64>, !yasps.mat<1x1xf64>
+        yasps.yield %q : !yasps.mat<1x1xf64>
+      }
+    }
+  }
+  yasps.energy @m::@e::@a
+  yasps.energy @m::@e::@b
+  yasps.minimize [@m::@b::@t]
+}

@@ -196,3 +196,17 @@ yasps.scene @expressions {
     }
   }
 }
+
+// CHECK-LABEL: yasps.scene @projections
+yasps.scene @projections {
+  yasps.mesh @m {
+    yasps.primitive @p(1) {
+      yasps.data_attr @e : !yasps.mat<1x1xf64>
+      yasps.data_attr @f : !yasps.mat<1x1xf64>
+    }
+  }
+  // CHECK: yasps.energy @m::@p::@e projection abs
+  yasps.energy @m::@p::@e projection abs
+  // CHECK: yasps.energy @m::@p::@f{{$}}
+  yasps.energy @m::@p::@f projection clamp
+}

@@ -470,6 +470,7 @@ FailureOr<AttrOp> Differentiator::jacobian(AttrOp attr) {
   }
 
   SmallVector<Value> columns;
+  bool anyNonZero = false;
   for (const ParamGroup &g : *groups) {
     for (int64_t p = 0; p < g.size(); ++p) {
       int64_t slot = p / g.width, local = p % g.width;
@@ -487,11 +488,21 @@ FailureOr<AttrOp> Differentiator::jacobian(AttrOp attr) {
       FailureOr<Value> t = direction.tangent(root);
       if (failed(t) || failedSeed)
         return failure();
+      anyNonZero |= static_cast<bool>(*t);
       MatrixType column = type.withShape(rc, 1);
       columns.push_back(
           *t ? ResizeOp::create(b, attr.getLoc(), column, *t).getResult()
              : zeros(b, attr.getLoc(), column));
     }
+  }
+  if (!anyNonZero) {
+    // Constant in its parameters (e.g. the Jacobian of a linear map): a
+    // structural zero, so gathers of it and curvature terms disappear.
+    jac.erase();
+    derivedFrom.erase(jac);
+    tables.invalidateSymbolTable(entity);
+    jacobians[attr] = AttrOp();
+    return AttrOp();
   }
   Value result =
       columns.size() == 1
@@ -543,7 +554,7 @@ void DifferentiatePass::runOnOperation() {
       int64_t d = row.getCols();
       Attribute params = (*jac)->getAttr("yasps.params");
       auto alias = [&](StringRef suffix, AttrOp of, MatrixType type,
-                       bool transpose) {
+                       bool transpose) -> AttrOp {
         AttrOp a = diff.createAttr(*jac, (attr.getSymName() + suffix).str(),
                                    type, nullptr, cast<ArrayAttr>(params));
         OpBuilder b = OpBuilder::atBlockEnd(&a.getBodyBlock());
@@ -554,17 +565,31 @@ void DifferentiatePass::runOnOperation() {
         else if (of.getMatrixType() != type)
           v = ResizeOp::create(b, a.getLoc(), type, v);
         YieldOp::create(b, a.getLoc(), v);
+        return a;
       };
       MatrixType square = row.withShape(d, d);
-      if (*hess)
-        alias("__hess", *hess, square, false);
-      else {
-        AttrOp a = diff.createAttr(*jac, (attr.getSymName() + "__hess").str(),
+      AttrOp hessAttr;
+      if (*hess) {
+        hessAttr = alias("__hess", *hess, square, false);
+      } else {
+        hessAttr = diff.createAttr(*jac, (attr.getSymName() + "__hess").str(),
                                    square, nullptr, cast<ArrayAttr>(params));
-        OpBuilder b = OpBuilder::atBlockEnd(&a.getBodyBlock());
-        YieldOp::create(b, a.getLoc(), zeros(b, a.getLoc(), square));
+        OpBuilder b = OpBuilder::atBlockEnd(&hessAttr.getBodyBlock());
+        YieldOp::create(b, hessAttr.getLoc(),
+                        zeros(b, hessAttr.getLoc(), square));
       }
       alias("__grad", *jac, row.withShape(d, 1), true);
+      // The PSD projection of the local Hessian, by the energy's method
+      // (full space: the projection of the assembled local Hessian).
+      AttrOp projected = diff.createAttr(
+          *jac, (attr.getSymName() + "__hess_proj").str(), square, nullptr,
+          cast<ArrayAttr>(params));
+      OpBuilder pb = OpBuilder::atBlockEnd(&projected.getBodyBlock());
+      Value h = ReadOp::create(pb, projected.getLoc(), square,
+                               getScenePath(hessAttr));
+      Value p = ProjectOp::create(pb, projected.getLoc(), energy.getProjection(),
+                                  h);
+      YieldOp::create(pb, projected.getLoc(), p);
       tables.invalidateSymbolTable(getOwningEntity(attr));
     }
   }

@@ -11,6 +11,7 @@
 #define YASPS_DIALECT_YASPS_IR_YASPSSTRUCTUREOPS_TD
 
 include "yasps/Dialect/Yasps/IR/YaspsDialect.td"
+include "yasps/Dialect/Yasps/IR/YaspsEnums.td"
 include "yasps/Dialect/Yasps/IR/YaspsTypes.td"
 include "mlir/IR/SymbolInterfaces.td"
 include "mlir/IR/OpAsmInterface.td"
@@ -255,14 +256,21 @@ def Yasps_EnergyOp : Yasps_Op<"energy", [
     The total energy of the scene is the sum over all instances of every
     registered attribute. `dynamic_instances` marks energies on dynamic
     primitives (collision pairs) whose instance count changes at run time.
+    `projection` says how the energy's local Hessians are made positive
+    semi-definite (`clamp`, the default, sets negative eigenvalues to zero;
+    `abs` flips them; `none` keeps the Hessian).
 
     ```mlir
     yasps.energy @bunnies::@pp::@barrier dynamic_instances
+    yasps.energy @cloth::@hinges::@bending projection abs
     ```
   }];
-  let arguments = (ins SymbolRefAttr:$attribute, UnitAttr:$dynamic_instances);
+  let arguments = (ins SymbolRefAttr:$attribute, UnitAttr:$dynamic_instances,
+                       DefaultValuedAttr<Yasps_ProjectionMethod,
+                                         "::mlir::yasps::ProjectionMethod::clamp">:$projection);
   let assemblyFormat = [{
-    $attribute (`dynamic_instances` $dynamic_instances^)? attr-dict
+    $attribute (`dynamic_instances` $dynamic_instances^)?
+    (`projection` $projection^)? attr-dict
   }];
 }
 
