@@ -121,6 +121,14 @@ def ipc_barrier(d: Attribute, dhat: Number, kappa: Number) -> Attribute:
     return select(d < dhat, kappa * gap * gap * log * log, 0.0)
 
 
+def ipc_standard_barrier(d: Attribute, dhat: Number,
+                         kappa: Number = 1.0) -> Attribute:
+    """The original IPC barrier ``-kappa (d - dhat)^2 log(d / dhat)`` for
+    ``d < dhat``, else 0 (Li et al. 2020; ipctk's ``barrier``)."""
+    gap = d - dhat
+    return select(d < dhat, -(kappa * gap * gap * (d / dhat).log()), 0.0)
+
+
 def abd_orthogonality(A: Attribute, stiffness: Number = 1.0) -> Attribute:
     """Affine-body orthogonality ``k/2 |A^T A - I|_F^2`` of a 3x3 matrix."""
     return 0.5 * stiffness * (A.T * A - identity(3)).squaredNorm()

@@ -1,0 +1,118 @@
+"""Compiled derivatives against independent references: JAX autodiff of the
+same formulas, and ipctk's distance and barrier derivatives."""
+
+import numpy as np
+import pytest
+
+import yasps
+from yasps import energies as E
+
+import ipctk  # noqa: E402  (installed by scripts/setup.sh)
+import jax  # noqa: E402
+
+jax.config.update("jax_enable_x64", True)
+jnp = jax.numpy
+
+rng = np.random.default_rng(11)
+COUNT = 3
+
+
+def elements(arity, values):
+    s = yasps.scene("ref")
+    m = s.addMesh("m")
+    v = m.addPrimitive("v", numInstances=COUNT * arity)
+    e = m.addPrimitive("e", numInstances=COUNT)
+    x = v.addAttribute("x", rows=3, cols=1)
+    x.updateValue(values.reshape(-1, 3))
+    conn = e.addConnectivity("e2v", v, np.arange(COUNT * arity).reshape(COUNT, arity), arity)
+    return s, e, x, e.addAttribute("c", through=conn, source=x)
+
+
+def derivatives(s, e, energy):
+    s.addEnergy(e.addAttribute("energy", computed_attribute=energy))
+    s.addMinimizeTarget([s.m.v["x"]])
+    return s.energyDerivatives(s.m.e["energy"])
+
+
+def assert_close(got, want, rtol=1e-10):
+    scale = np.abs(want).max()
+    assert np.abs(got - want).max() <= rtol * scale, np.abs(got - want).max() / scale
+
+
+def test_stable_neo_hookean_against_jax():
+    base = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]], float)
+    rest = base[None] + rng.normal(scale=0.05, size=(COUNT, 4, 3))
+    cur = rest @ (np.eye(3) + rng.normal(scale=0.3, size=(COUNT, 3, 3)))
+    dm_inv = np.linalg.inv(np.stack([rest[:, k] - rest[:, 0] for k in (1, 2, 3)], axis=2))
+    mu, lam = 1.7, 9.0
+    s, e, x, c = elements(4, cur)
+    inv = e.addConstant("inv", rows=3, cols=3)
+    inv.updateValue(dm_inv)
+    d = derivatives(s, e, E.stable_neo_hookean(E.deformation_gradient(c, inv), mu, lam, 1.0))
+
+    def psi(flat, dinv):
+        p = flat.reshape(4, 3)
+        F = jnp.stack([p[k] - p[0] for k in (1, 2, 3)], axis=1) @ dinv
+        ic = jnp.sum(F * F)
+        J = jnp.linalg.det(F)
+        alpha = 1 + 0.75 * mu / lam
+        return 0.5 * mu * (ic - 3) - 0.5 * mu * jnp.log(ic + 1) + 0.5 * lam * (J - alpha) ** 2
+
+    for i in range(COUNT):
+        args = (jnp.array(cur[i].reshape(-1)), jnp.array(dm_inv[i]))
+        assert_close(d.gradient[i], np.array(jax.grad(psi)(*args)))
+        assert_close(d.hessian[i], np.array(jax.hessian(psi)(*args)))
+
+
+def test_bending_and_cloth_against_jax():
+    hinge = np.array([[0, 0, 0], [1, 0, 0], [0.3, 1, 0], [0.6, -1, 0.4]], float)[None] \
+        + rng.normal(scale=0.05, size=(COUNT, 4, 3))
+    s, e, x, c = elements(4, hinge)
+    d = derivatives(s, e, E.dihedral_bending(c, 0.7, 2.0))
+
+    def bend(flat):
+        x0, x1, x2, x3 = flat.reshape(4, 3)
+        n1 = jnp.cross(x1 - x0, x2 - x0)
+        n2 = jnp.cross(x3 - x0, x1 - x0)
+        diff = n1 / jnp.linalg.norm(n1) - n2 / jnp.linalg.norm(n2)
+        return 2.0 * 0.7 * jnp.sum(diff * diff)
+
+    for i in range(COUNT):
+        assert_close(d.hessian[i], np.array(jax.hessian(bend)(jnp.array(hinge[i].reshape(-1)))))
+
+
+@pytest.mark.parametrize("kind", ["pp", "pe", "pt", "ee"])
+def test_distances_against_ipctk(kind):
+    arity = {"pp": 2, "pe": 3, "pt": 4, "ee": 4}[kind]
+    pts = rng.normal(size=(COUNT, arity, 3))
+    s, e, x, c = elements(arity, pts)
+    rows = [c.row(i).T for i in range(arity)]
+    fn = {"pp": E.point_point_distance2, "pe": E.point_edge_distance2,
+          "pt": E.point_triangle_distance2, "ee": E.edge_edge_distance2}[kind]
+    d = derivatives(s, e, fn(*rows))
+    ref = {"pp": ("point_point_distance", 2), "pe": ("point_line_distance", 3),
+           "pt": ("point_plane_distance", 4), "ee": ("line_line_distance", 4)}[kind][0]
+    for i in range(COUNT):
+        p = [pts[i, k] for k in range(arity)]
+        assert_close(d.value[i:i + 1], np.array([getattr(ipctk, ref)(*p)]), 1e-12)
+        assert_close(d.gradient[i], getattr(ipctk, ref + "_gradient")(*p))
+        assert_close(d.hessian[i], getattr(ipctk, ref + "_hessian")(*p))
+
+
+def test_barrier_chain_rule_against_ipctk():
+    pts = rng.normal(scale=0.01, size=(COUNT, 2, 3))
+    s, e, x, c = elements(2, pts)
+    d2 = E.point_point_distance2(c.row(0), c.row(1))
+    dhat = 2.0 * max(ipctk.point_point_distance(a, b) for a, b in pts)
+    d = derivatives(s, e, E.ipc_standard_barrier(d2, dhat))
+    for i in range(COUNT):
+        a, b = pts[i]
+        dist = ipctk.point_point_distance(a, b)
+        assert dist < dhat
+        g_d = ipctk.point_point_distance_gradient(a, b)
+        h_d = ipctk.point_point_distance_hessian(a, b)
+        b1 = ipctk.barrier_first_derivative(dist, dhat)
+        b2 = ipctk.barrier_second_derivative(dist, dhat)
+        assert_close(d.value[i:i + 1], np.array([ipctk.barrier(dist, dhat)]), 1e-12)
+        assert_close(d.gradient[i], b1 * g_d)
+        assert_close(d.hessian[i], b2 * np.outer(g_d, g_d) + b1 * h_d)
