@@ -309,3 +309,43 @@ def test_projected_hessians(method):
         assert np.linalg.eigvalsh(d.projectedHessian).min() >= -1e-10 * scale
     if method != "clamp":
         assert f"projection {method}" in s.ir() or method == "clamp"
+
+
+def test_reduced_space_projection_of_mixed_barrier():
+    """Over free and affine vertices the barrier's Hessian is J^T H_inner J
+    with a 6x6 H_inner: its reduced projection is PSD, of rank <= 6, and
+    differs from the Hessian by J^T (positive part) J >= 0."""
+    s = yasps.scene("mixed")
+    soft = s.addMesh("soft").addPrimitive("v", numInstances=2)
+    xs = soft.addAttribute("x", rows=3, cols=1)
+    xs.updateValue(rng.normal(scale=0.05, size=(2, 3)))
+    rigid = s.addMesh("rigid")
+    bodies = rigid.addPrimitive("body", numInstances=2)
+    A = bodies.addAttribute("A", rows=3, cols=3)
+    A.updateValue(np.eye(3) + rng.normal(scale=0.1, size=(2, 3, 3)))
+    t = bodies.addAttribute("t", rows=3, cols=1)
+    t.updateValue(rng.normal(scale=0.05, size=(2, 3)))
+    verts = rigid.addPrimitive("v", numInstances=2)
+    verts.addConstant("rest", rows=3).updateValue(rng.normal(scale=0.05, size=(2, 3)))
+    v2b = verts.addConnectivity("v2b", bodies, np.arange(2), 1)
+    jA = verts.addAttribute("A", through=v2b, source=A)
+    jt = verts.addAttribute("t", through=v2b, source=t)
+    verts.addAttribute("x", computed_attribute=jA.resize(3, 3) * verts["rest"] + jt.resize(3, 1))
+    u = s.addMesh("world").addPrimitiveUnion("v", [soft, verts])
+    u.addAttribute("x")
+    pp = s.world.addPrimitive("pp", numInstances=2, isDynamic=True)
+    p2v = pp.addConnectivity("p2v", u, [[u.indexOf(soft, 0), u.indexOf(verts, 0)],
+                                        [u.indexOf(verts, 1), u.indexOf(soft, 1)]], 2)
+    x = pp.addAttribute("x", through=p2v, source=u["x"])
+    d2 = pp.addAttribute("d2", computed_attribute=E.point_point_distance2(x.row(0), x.row(1)))
+    dhat = float(d2.compute().value.max()) * 1.5
+    energy = pp.addAttribute("b", computed_attribute=E.ipc_barrier(d2, dhat, 1e3))
+    s.addEnergy(energy, dynamic_instances=True)
+    s.addMinimizeTarget([xs, A, t])
+    d = s.energyDerivatives(energy)
+    R, H = d.projectedHessian, d.hessian
+    scale = np.abs(H).max()
+    for i in range(2):
+        assert np.linalg.eigvalsh(R[i]).min() >= -1e-9 * scale
+        assert np.linalg.eigvalsh(R[i] - H[i]).min() >= -1e-9 * scale
+        assert np.linalg.matrix_rank(R[i], tol=1e-9 * scale) <= 6

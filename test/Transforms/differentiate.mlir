@@ -119,6 +119,12 @@ yasps.scene @s {
 // CHECK-LABEL: yasps.primitive @pp(2) dynamic
 // CHECK: yasps.attr @e__jac : !yasps.mat<1x24xf64> attributes {yasps.params = {{\[\[}}"join", @p2v, 0, @w::@u::@x, 12], ["join", @p2v, 1, @w::@u::@x, 12]]}
 // CHECK: yasps.join @p2v(@w::@u::@x__jac) : !yasps.mat<2x36xf64>
+// Affine and free vertices are linear in their parameters: the projection
+// happens in reduced space, on the 6x6 Hessian of the two gathered points,
+// then J^T P J brings it to the 24 parameters (paper 5.4).
+// CHECK: yasps.attr @e__hess_proj : !yasps.mat<24x24xf64> attributes {{{.*}}yasps.projection = "reduced"}
+// CHECK: yasps.project clamp %{{.*}} : !yasps.mat<6x6xf64>
+// CHECK: yasps.matmul %{{.*}}, %{{.*}} : !yasps.mat<24x6xf64>, !yasps.mat<6x24xf64> -> !yasps.mat<24x24xf64>
 yasps.scene @sc {
   yasps.mesh @r {
     yasps.primitive @b(1) {
@@ -181,6 +187,7 @@ yasps.scene @sc {
 // CHECK: yasps.attr @b__jac
 // CHECK: yasps.join @e2v(@m::@v::@x__jac)
 // CHECK-NOT: x__jac__jac
+// CHECK: yasps.minimize [@m::@b::@t]
 yasps.scene @reuse {
   yasps.mesh @m {
     yasps.primitive @b(1) {
@@ -215,4 +222,44 @@ yasps.scene @reuse {
   yasps.energy @m::@e::@a
   yasps.energy @m::@e::@b
   yasps.minimize [@m::@b::@t]
+}
+
+// -----
+
+// A double pendulum (three angles, one 2-D position): positions are
+// nonlinear in the angles, so the Hessian has a curvature term and the full
+// 3x3 Hessian is projected, although the position has only 2 entries.
+
+// CHECK-LABEL: yasps.attr @e__hess_proj : !yasps.mat<3x3xf64> attributes {{{.*}}yasps.projection = "full"}
+// CHECK: yasps.project clamp %{{.*}} : !yasps.mat<3x3xf64>
+yasps.scene @pendulum {
+  yasps.mesh @m {
+    yasps.primitive @arm(1) {
+      yasps.data_attr @theta : !yasps.mat<3x1xf64>
+      yasps.attr @x : !yasps.mat<2x1xf64> {
+        %th = yasps.read @m::@arm::@theta : !yasps.mat<3x1xf64>
+        %t0 = yasps.element %th[0, 0] : !yasps.mat<3x1xf64>
+        %t1 = yasps.element %th[1, 0] : !yasps.mat<3x1xf64>
+        %t2 = yasps.element %th[2, 0] : !yasps.mat<3x1xf64>
+        %s0 = yasps.sin %t0 : !yasps.mat<1x1xf64>
+        %s1 = yasps.sin %t1 : !yasps.mat<1x1xf64>
+        %c0 = yasps.cos %t2 : !yasps.mat<1x1xf64>
+        %s = yasps.add %s0, %s1 : !yasps.mat<1x1xf64>
+        %x = yasps.concat vertical %s, %c0 : !yasps.mat<1x1xf64>, !yasps.mat<1x1xf64> -> !yasps.mat<2x1xf64>
+        yasps.yield %x : !yasps.mat<2x1xf64>
+      }
+    }
+    yasps.primitive @bob(1) {
+      yasps.connectivity @b2a -> @m::@arm arity 1
+      yasps.attr @e : !yasps.mat<1x1xf64> {
+        %x = yasps.join @b2a(@m::@arm::@x) : !yasps.mat<1x2xf64>
+        %h = yasps.element %x[0, 1] : !yasps.mat<1x2xf64>
+        %n = yasps.squared_norm %x : !yasps.mat<1x2xf64>
+        %e = yasps.add %h, %n : !yasps.mat<1x1xf64>
+        yasps.yield %e : !yasps.mat<1x1xf64>
+      }
+    }
+  }
+  yasps.energy @m::@bob::@e
+  yasps.minimize [@m::@arm::@theta]
 }

@@ -46,6 +46,7 @@ struct ParamGroup {
   int64_t count;   ///< slots: JOIN arity, else 1
   int64_t width;   ///< parameters per slot
   int64_t offset = 0;
+  int64_t leafEntries = 0; ///< entries of the leaf value (inner variables)
 
   int64_t size() const { return count * width; }
 };
@@ -56,11 +57,23 @@ public:
                  SymbolTableCollection &tables)
       : scene(scene), targets(std::move(targets)), tables(tables) {}
 
-  /// `X__jac`, or null when X depends on no target.
-  FailureOr<AttrOp> jacobian(AttrOp attr);
+  /// `X__jac`, or null when X depends on no target. With `inner`, the
+  /// Jacobian `X__ijac` with respect to the entries of X's leaf values (the
+  /// inner variables of the reduced-space projection) instead.
+  FailureOr<AttrOp> jacobian(AttrOp attr, bool inner = false);
 
-  /// The parameter groups of a computed attribute.
-  FailureOr<SmallVector<ParamGroup>> groupsOf(AttrOp attr);
+  /// The parameter groups of a computed attribute; with `inner`, one group
+  /// per leaf with the leaf's entries as parameters.
+  FailureOr<SmallVector<ParamGroup>> groupsOf(AttrOp attr, bool inner = false);
+
+  /// True if the parameterisations behind E's leaves are linear (their
+  /// second Jacobians are structurally zero): then the Hessian is
+  /// J^T H_inner J exactly, and projecting H_inner suffices (paper 5.4).
+  FailureOr<bool> curvatureFree(AttrOp energy);
+
+  /// `E__ij`: d(leaf entries)/d(parameters), m x n, rows in the order of
+  /// the inner groups.
+  FailureOr<AttrOp> innerMap(AttrOp energy);
 
   /// yasps.params of an attribute: one entry per slot.
   ArrayAttr describe(ArrayRef<ParamGroup> groups);
@@ -80,15 +93,22 @@ private:
                         int64_t slot, int64_t local);
   FailureOr<Operation *> unionJacobian(Operation *member, StringAttr name,
                                        int64_t width);
+  /// A unit matrix at column-major entry `local` of the leaf's value.
+  Value unitSeed(OpBuilder &b, Operation *leaf, int64_t local);
+  /// The leaves of a cloned region that belong to each group.
+  SmallVector<std::pair<Operation *, const ParamGroup *>>
+  leavesOf(AttrOp clone, ArrayRef<ParamGroup> groups);
 
   SceneOp scene;
   DenseSet<Operation *> targets;
   SymbolTableCollection &tables;
   DenseMap<Operation *, Operation *> derivedFrom;
-  DenseMap<Operation *, AttrOp> jacobians;
+  std::map<std::pair<Operation *, bool>, AttrOp> jacobians;
   DenseMap<Operation *, int64_t> counts;
   /// Gathers of a source's Jacobian, one per leaf, shared by directions.
   DenseMap<Operation *, Value> gathered;
+  /// Padded member Jacobians of UNIONs that are structurally zero.
+  DenseSet<Operation *> zeroUnionJacobians;
 };
 
 /// Tangents of one region's values in one direction.
@@ -162,6 +182,113 @@ Value embedRow(OpBuilder &b, Location loc, Value row, int64_t at, int64_t k) {
 
 } // namespace
 
+Value Differentiator::unitSeed(OpBuilder &b, Operation *leaf, int64_t local) {
+  auto type = cast<MatrixType>(leaf->getResult(0).getType());
+  SmallVector<double> rowMajor(type.getNumElements(), 0.0);
+  rowMajor[(local % type.getRows()) * type.getCols() + local / type.getRows()] =
+      1.0;
+  return constantMatrix(b, leaf->getLoc(), type, rowMajor);
+}
+
+FailureOr<bool> Differentiator::curvatureFree(AttrOp energy) {
+  FailureOr<SmallVector<ParamGroup>> groups = groupsOf(energy);
+  if (failed(groups))
+    return failure();
+  // Linear in its parameters: the Jacobian's own Jacobian is zero.
+  auto linear = [&](Operation *decl) -> FailureOr<bool> {
+    auto computed = dyn_cast<AttrOp>(decl);
+    if (!computed)
+      return true;
+    FailureOr<AttrOp> jac = jacobian(computed);
+    if (failed(jac))
+      return failure();
+    if (!*jac)
+      return true;
+    FailureOr<AttrOp> second = jacobian(*jac);
+    if (failed(second))
+      return failure();
+    return !*second;
+  };
+  for (const ParamGroup &g : *groups) {
+    SmallVector<Operation *> sources;
+    if (g.kind == GroupKind::Join)
+      sources.push_back(g.base);
+    if (g.kind == GroupKind::Union)
+      for (Operation *member : cast<PrimitiveUnionOp>(g.key).getMemberOps())
+        sources.push_back(tables.lookupSymbolIn(
+            member, g.base->getAttrOfType<StringAttr>(
+                        SymbolTable::getSymbolAttrName())));
+    for (Operation *source : sources) {
+      FailureOr<bool> isLinear = linear(source);
+      if (failed(isLinear))
+        return failure();
+      if (!*isLinear)
+        return false;
+    }
+  }
+  return true;
+}
+
+FailureOr<AttrOp> Differentiator::innerMap(AttrOp energy) {
+  FailureOr<SmallVector<ParamGroup>> groups = groupsOf(energy);
+  if (failed(groups))
+    return failure();
+  int64_t n = 0, m = 0;
+  for (const ParamGroup &g : *groups) {
+    n += g.size();
+    m += g.leafEntries;
+  }
+  MatrixType scalar = energy.getMatrixType();
+  AttrOp map = createAttr(energy, (energy.getSymName() + "__ij").str(),
+                          scalar.withShape(m, n), nullptr, ArrayAttr());
+  tables.invalidateSymbolTable(getOwningEntity(energy));
+  IRMapping mapping;
+  OpBuilder b = OpBuilder::atBlockEnd(&map.getBodyBlock());
+  Location loc = energy.getLoc();
+  for (Operation &op : energy.getBodyBlock().without_terminator())
+    b.clone(op, mapping);
+  SmallVector<std::pair<Operation *, const ParamGroup *>> leaves =
+      leavesOf(map, *groups);
+  // Column p: the seeds of parameter p at every leaf, flattened and stacked
+  // in the order of the groups (the inner variables' order).
+  SmallVector<Value> columns;
+  for (const ParamGroup &g : *groups) {
+    for (int64_t p = 0; p < g.size(); ++p) {
+      SmallVector<Value> blocks;
+      for (const ParamGroup &h : *groups) {
+        MatrixType block = scalar.withShape(h.leafEntries, 1);
+        Value value;
+        if (&h == &g) {
+          Operation *leaf = nullptr;
+          for (auto [op, group] : leaves)
+            if (group == &h && !leaf)
+              leaf = op;
+          FailureOr<Value> seeded =
+              seed(b, leaf, g, p / g.width, p % g.width);
+          if (failed(seeded))
+            return failure();
+          if (*seeded)
+            value = ResizeOp::create(b, loc, block, *seeded);
+        }
+        blocks.push_back(value ? value : zeros(b, loc, block));
+      }
+      columns.push_back(
+          blocks.size() == 1
+              ? blocks[0]
+              : ConcatOp::create(b, loc, scalar.withShape(m, 1),
+                                 ConcatAxis::vertical, blocks)
+                    .getResult());
+    }
+  }
+  Value result = columns.size() == 1
+                     ? columns[0]
+                     : ConcatOp::create(b, loc, scalar.withShape(m, n),
+                                        ConcatAxis::horizontal, columns)
+                           .getResult();
+  YieldOp::create(b, loc, result);
+  return map;
+}
+
 FailureOr<int64_t> Differentiator::paramCount(Operation *base) {
   if (auto it = counts.find(base); it != counts.end())
     return it->second;
@@ -179,7 +306,8 @@ FailureOr<int64_t> Differentiator::paramCount(Operation *base) {
   return count;
 }
 
-FailureOr<SmallVector<ParamGroup>> Differentiator::groupsOf(AttrOp attr) {
+FailureOr<SmallVector<ParamGroup>> Differentiator::groupsOf(AttrOp attr,
+                                                            bool inner) {
   SmallVector<ParamGroup> groups;
   auto add = [&](ParamGroup group) {
     for (const ParamGroup &g : groups)
@@ -199,8 +327,8 @@ FailureOr<SmallVector<ParamGroup>> Differentiator::groupsOf(AttrOp attr) {
       Operation *base = baseOf(decl);
       if (!targets.contains(base))
         continue;
-      add({GroupKind::Read, base, base, 1,
-           getAttributeType(base).getNumElements()});
+      int64_t rc = getAttributeType(base).getNumElements();
+      add({GroupKind::Read, base, base, 1, rc, 0, rc});
     } else if (auto join = dyn_cast<JoinOp>(op)) {
       Operation *base =
           baseOf(lookupInScene(scene, join.getSource(), &tables));
@@ -212,8 +340,9 @@ FailureOr<SmallVector<ParamGroup>> Differentiator::groupsOf(AttrOp attr) {
       auto primitive = cast<PrimitiveOp>(getOwningEntity(attr));
       Operation *conn =
           tables.lookupSymbolIn(primitive, join.getConnectivityAttr());
-      add({GroupKind::Join, conn, base,
-           cast<MatrixType>(join.getType()).getRows(), *width});
+      auto joinType = cast<MatrixType>(join.getType());
+      add({GroupKind::Join, conn, base, joinType.getRows(), *width, 0,
+           joinType.getNumElements()});
     } else if (auto unionOp = dyn_cast<UnionOp>(op)) {
       auto owner = cast<PrimitiveUnionOp>(getOwningEntity(attr));
       int64_t width = 0;
@@ -229,7 +358,17 @@ FailureOr<SmallVector<ParamGroup>> Differentiator::groupsOf(AttrOp attr) {
       }
       if (width == 0)
         continue;
-      add({GroupKind::Union, owner, base, 1, width});
+      add({GroupKind::Union, owner, base, 1, width, 0,
+           cast<MatrixType>(unionOp.getType()).getNumElements()});
+    }
+  }
+  if (inner) {
+    int64_t offset = 0;
+    for (ParamGroup &g : groups) {
+      g.count = 1;
+      g.width = g.leafEntries;
+      g.offset = offset;
+      offset += g.width;
     }
   }
   return groups;
@@ -313,6 +452,7 @@ FailureOr<Operation *> Differentiator::unionJacobian(Operation *member,
       return failure();
     if (!*jac) {
       value = zeros(b, loc, jacType);
+      zeroUnionJacobians.insert(result);
     } else {
       // A copy of the member's Jacobian computation (not a read of it), so
       // that this attribute has the member's leaves and parameters and can
@@ -337,6 +477,8 @@ FailureOr<Operation *> Differentiator::unionJacobian(Operation *member,
     if (targets.contains(base))
       for (int64_t i = 0; i < rc; ++i)
         rowMajor[i * width + i] = 1.0;
+    else
+      zeroUnionJacobians.insert(result);
     value = constantMatrix(b, loc, jacType, rowMajor);
   }
   YieldOp::create(b, loc, value);
@@ -394,13 +536,17 @@ FailureOr<Value> Differentiator::seed(OpBuilder &b, Operation *leaf,
   if (!uj) {
     auto owner = cast<PrimitiveUnionOp>(getOwningEntity(leaf));
     Operation *first = nullptr;
+    bool allZero = true;
     for (Operation *member : owner.getMemberOps()) {
       FailureOr<Operation *> jac =
           unionJacobian(member, unionOp.getNameAttr().getAttr(), group.width);
       if (failed(jac))
         return failure();
       first = first ? first : *jac;
+      allZero &= zeroUnionJacobians.contains(*jac);
     }
+    if (allZero)
+      return Value(); // every member is constant in the parameters
     OpBuilder::InsertionGuard guard(b);
     b.setInsertionPointAfter(leaf);
     uj = UnionOp::create(
@@ -414,43 +560,12 @@ FailureOr<Value> Differentiator::seed(OpBuilder &b, Operation *leaf,
   return ResizeOp::create(b, loc, type, column).getResult();
 }
 
-FailureOr<AttrOp> Differentiator::jacobian(AttrOp attr) {
-  if (auto it = jacobians.find(attr); it != jacobians.end())
-    return it->second;
-  FailureOr<SmallVector<ParamGroup>> groups = groupsOf(attr);
-  if (failed(groups))
-    return failure();
-  int64_t d = groups->empty() ? 0 : groups->back().offset + groups->back().size();
-  if (d == 0) {
-    jacobians[attr] = AttrOp();
-    return AttrOp();
-  }
-  MatrixType type = attr.getMatrixType();
-  int64_t rc = type.getNumElements();
-  std::string name = (attr.getSymName() + "__jac").str();
-  Operation *entity = getOwningEntity(attr);
-  if (tables.lookupSymbolIn(entity, StringAttr::get(entity->getContext(), name)))
-    return attr.emitOpError() << "cannot add its Jacobian @" << name
-                              << ": the name is taken";
-  AttrOp jac = createAttr(attr, name, type.withShape(rc, d), attr,
-                          describe(*groups));
-  tables.invalidateSymbolTable(entity);
-  jacobians[attr] = jac;
-
-  // The attribute's own computation, then one tangent per parameter.
-  IRMapping mapping;
-  OpBuilder b = OpBuilder::atBlockEnd(&jac.getBodyBlock());
-  for (Operation &op : attr.getBodyBlock().without_terminator())
-    b.clone(op, mapping);
-  Value root = mapping.lookup(
-      cast<YieldOp>(attr.getBodyBlock().getTerminator()).getValue());
-  // Leaves of the clone, by group.
+SmallVector<std::pair<Operation *, const ParamGroup *>>
+Differentiator::leavesOf(AttrOp jac, ArrayRef<ParamGroup> groups) {
   SmallVector<std::pair<Operation *, const ParamGroup *>> leaves;
-  SmallVector<Operation *> cloned;
-  for (Operation &op : jac.getBodyBlock())
-    cloned.push_back(&op);
-  for (Operation *op : cloned) {
-    for (const ParamGroup &g : *groups) {
+  for (Operation &block : jac.getBodyBlock()) {
+    Operation *op = &block;
+    for (const ParamGroup &g : groups) {
       bool belongs = false;
       if (auto read = dyn_cast<ReadOp>(op))
         belongs = g.kind == GroupKind::Read &&
@@ -468,6 +583,42 @@ FailureOr<AttrOp> Differentiator::jacobian(AttrOp attr) {
         leaves.push_back({op, &g});
     }
   }
+  return leaves;
+}
+
+FailureOr<AttrOp> Differentiator::jacobian(AttrOp attr, bool inner) {
+  auto memo = std::make_pair(attr.getOperation(), inner);
+  if (auto it = jacobians.find(memo); it != jacobians.end())
+    return it->second;
+  FailureOr<SmallVector<ParamGroup>> groups = groupsOf(attr, inner);
+  if (failed(groups))
+    return failure();
+  int64_t d = groups->empty() ? 0 : groups->back().offset + groups->back().size();
+  if (d == 0) {
+    jacobians[memo] = AttrOp();
+    return AttrOp();
+  }
+  MatrixType type = attr.getMatrixType();
+  int64_t rc = type.getNumElements();
+  std::string name = (attr.getSymName() + (inner ? "__ijac" : "__jac")).str();
+  Operation *entity = getOwningEntity(attr);
+  if (tables.lookupSymbolIn(entity, StringAttr::get(entity->getContext(), name)))
+    return attr.emitOpError() << "cannot add its Jacobian @" << name
+                              << ": the name is taken";
+  AttrOp jac = createAttr(attr, name, type.withShape(rc, d), attr,
+                          inner ? ArrayAttr() : describe(*groups));
+  tables.invalidateSymbolTable(entity);
+  jacobians[memo] = jac;
+
+  // The attribute's own computation, then one tangent per parameter.
+  IRMapping mapping;
+  OpBuilder b = OpBuilder::atBlockEnd(&jac.getBodyBlock());
+  for (Operation &op : attr.getBodyBlock().without_terminator())
+    b.clone(op, mapping);
+  Value root = mapping.lookup(
+      cast<YieldOp>(attr.getBodyBlock().getTerminator()).getValue());
+  SmallVector<std::pair<Operation *, const ParamGroup *>> leaves =
+      leavesOf(jac, *groups);
 
   SmallVector<Value> columns;
   bool anyNonZero = false;
@@ -478,7 +629,8 @@ FailureOr<AttrOp> Differentiator::jacobian(AttrOp attr) {
       auto seedFn = [&](Operation *leaf) -> FailureOr<Value> {
         for (auto [op, group] : leaves)
           if (op == leaf && group == &g) {
-            FailureOr<Value> s = seed(b, leaf, g, slot, local);
+            FailureOr<Value> s = inner ? unitSeed(b, leaf, local)
+                                       : seed(b, leaf, g, slot, local);
             failedSeed |= failed(s);
             return s;
           }
@@ -501,7 +653,7 @@ FailureOr<AttrOp> Differentiator::jacobian(AttrOp attr) {
     jac.erase();
     derivedFrom.erase(jac);
     tables.invalidateSymbolTable(entity);
-    jacobians[attr] = AttrOp();
+    jacobians[memo] = AttrOp();
     return AttrOp();
   }
   Value result =
@@ -579,17 +731,54 @@ void DifferentiatePass::runOnOperation() {
                         zeros(b, hessAttr.getLoc(), square));
       }
       alias("__grad", *jac, row.withShape(d, 1), true);
-      // The PSD projection of the local Hessian, by the energy's method
-      // (full space: the projection of the assembled local Hessian).
+      // The PSD projection of the local Hessian, by the energy's method. In
+      // reduced space (paper 5.4) when the parameterisations behind the
+      // leaves are linear and the leaves have fewer entries than there are
+      // parameters: J^T Project(H_inner) J, with H_inner the Hessian in the
+      // leaf entries. Otherwise the full local Hessian is projected.
+      FailureOr<bool> reducible = diff.curvatureFree(attr);
+      FailureOr<SmallVector<ParamGroup>> groups = diff.groupsOf(attr);
+      if (failed(reducible) || failed(groups))
+        return signalPassFailure();
+      int64_t m = 0;
+      for (const ParamGroup &g : *groups)
+        m += g.leafEntries;
+      bool reduced = *reducible && m < d;
       AttrOp projected = diff.createAttr(
           *jac, (attr.getSymName() + "__hess_proj").str(), square, nullptr,
           cast<ArrayAttr>(params));
-      OpBuilder pb = OpBuilder::atBlockEnd(&projected.getBodyBlock());
-      Value h = ReadOp::create(pb, projected.getLoc(), square,
-                               getScenePath(hessAttr));
-      Value p = ProjectOp::create(pb, projected.getLoc(), energy.getProjection(),
-                                  h);
-      YieldOp::create(pb, projected.getLoc(), p);
+      projected->setAttr("yasps.projection",
+                         StringAttr::get(&getContext(),
+                                         reduced ? "reduced" : "full"));
+      Location loc = projected.getLoc();
+      if (reduced) {
+        FailureOr<AttrOp> innerGrad = diff.jacobian(attr, /*inner=*/true);
+        FailureOr<AttrOp> innerHess =
+            succeeded(innerGrad) && *innerGrad
+                ? diff.jacobian(*innerGrad, /*inner=*/true)
+                : FailureOr<AttrOp>(AttrOp());
+        FailureOr<AttrOp> map = diff.innerMap(attr);
+        if (failed(innerGrad) || failed(innerHess) || failed(map))
+          return signalPassFailure();
+        OpBuilder pb = OpBuilder::atBlockEnd(&projected.getBodyBlock());
+        MatrixType innerType = row.withShape(m, m);
+        Value hi = *innerHess ? ReadOp::create(pb, loc, innerType,
+                                               getScenePath(*innerHess))
+                                    .getResult()
+                              : zeros(pb, loc, innerType);
+        Value pi = ProjectOp::create(pb, loc, energy.getProjection(), hi);
+        Value j = ReadOp::create(pb, loc, row.withShape(m, d),
+                                 getScenePath(*map));
+        Value jt = TransposeOp::create(pb, loc, row.withShape(d, m), j);
+        Value pj = MatmulOp::create(pb, loc, row.withShape(m, d), pi, j);
+        Value result = MatmulOp::create(pb, loc, square, jt, pj);
+        YieldOp::create(pb, loc, result);
+      } else {
+        OpBuilder pb = OpBuilder::atBlockEnd(&projected.getBodyBlock());
+        Value h = ReadOp::create(pb, loc, square, getScenePath(hessAttr));
+        Value p = ProjectOp::create(pb, loc, energy.getProjection(), h);
+        YieldOp::create(pb, loc, p);
+      }
       tables.invalidateSymbolTable(getOwningEntity(attr));
     }
   }
