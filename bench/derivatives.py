@@ -154,7 +154,7 @@ def main() -> None:
     n = args.count
     print(f"{n} instances, one thread, median of {args.repeat}; times per instance")
     print(f"{'energy':30s}{'compile':>10s}{'yasps g+H':>12s}{'+proj':>10s}"
-          f"{'JAX g+H':>12s}{'JAX/yasps':>11s}")
+          f"{'JAX g+H':>12s}{'JAX/yasps':>11s}{'H mul/add':>12s}")
     for name, make in ENERGIES.items():
         s, owner, target, energy, f, jargs = make(n)
         attr = owner.addAttribute("energy", computed_attribute=energy)
@@ -187,8 +187,10 @@ def main() -> None:
         jax_time = median(lambda: (grad(*jx).block_until_ready(),
                                    hess(*jx).block_until_ready()), args.repeat)
         per = 1e9 / n
+        counts = library.op_counts(paths[1])
         print(f"{name:30s}{compile_time:9.2f}s{gh * per:10.0f}ns{proj * per:8.0f}ns"
-              f"{jax_time * per:10.0f}ns{jax_time / gh:10.1f}x")
+              f"{jax_time * per:10.0f}ns{jax_time / gh:10.1f}x"
+              f"{counts['mul']:7d}/{counts['add']:<5d}")
 
 
 if __name__ == "__main__":

@@ -29,6 +29,7 @@
 
 #include <nanobind/nanobind.h>
 #include <nanobind/ndarray.h>
+#include <nanobind/stl/map.h>
 #include <nanobind/stl/pair.h>
 #include <nanobind/stl/string.h>
 #include <nanobind/stl/vector.h>
@@ -307,6 +308,18 @@ NB_MODULE(_yasps_native, m) {
           },
           nb::arg("attribute"),
           "Local parameters of a derivative attribute's kernel")
+      .def(
+          "op_counts",
+          [](const CpuLibrary &self, const std::string &attribute) {
+            const mlir::yasps::CpuKernel *kernel =
+                self.library->lookup(attribute);
+            if (!kernel)
+              throw std::invalid_argument("no compiled kernel for " +
+                                          attribute);
+            return kernel->opCounts;
+          },
+          nb::arg("attribute"),
+          "Static arithmetic op counts of a kernel (mul, add, div, math)")
       .def_prop_ro(
           "stats",
           [](const CpuLibrary &self) {

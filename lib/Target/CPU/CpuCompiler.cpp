@@ -155,6 +155,10 @@ std::vector<CpuKernel> describeKernels(ModuleOp kernels) {
       llvm::raw_string_ostream(arg.path) << role[1];
       kernel.arguments.push_back(arg);
     }
+    if (auto counts = func->getAttrOfType<DictionaryAttr>("yasps.op_counts"))
+      for (NamedAttribute entry : counts)
+        kernel.opCounts[entry.getName().str()] =
+            cast<IntegerAttr>(entry.getValue()).getInt();
     if (auto params = func->getAttrOfType<ArrayAttr>("yasps.params")) {
       for (auto param : params.getAsRange<ArrayAttr>()) {
         std::vector<std::string> fields;
@@ -266,6 +270,7 @@ mlir::yasps::compileCpuKernels(ModuleOp module,
             pm.addPass(createYaspsStripScenes());
             pm.addPass(createCanonicalizerPass());
             pm.addPass(createCSEPass());
+            pm.addPass(createYaspsCountOps());
             return success();
           }))
     return std::move(err);

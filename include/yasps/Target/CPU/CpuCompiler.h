@@ -16,6 +16,7 @@
 #include "mlir/IR/DialectRegistry.h"
 #include "llvm/Support/Error.h"
 
+#include <map>
 #include <memory>
 #include <string>
 #include <vector>
@@ -38,6 +39,9 @@ struct CpuKernel {
   /// each as its printed fields, e.g. {"join", "@m::@t::@t2v", "2",
   /// "@m::@v::@x"}.
   std::vector<std::vector<std::string>> params;
+  /// Static counts of the kernel's arithmetic (yasps-count-ops): "mul",
+  /// "add", "div", "math".
+  std::map<std::string, int64_t> opCounts;
   void (*packed)(void **) = nullptr;
 };
 
