@@ -116,8 +116,9 @@ def compute(attr: Attribute, threads: int = None) -> ComputedValue:
     buffers = [_buffer(scene, kind, p, out) for kind, p in arguments]
     library.launch(path, count, buffers,
                    config.num_threads if threads is None else threads)
-    return ComputedValue(attr, from_column_major(out, target.rows, target.cols),
-                         stats)
+    # A view of the fresh output buffer: no copy, nobody else holds it.
+    return ComputedValue(attr, from_column_major(out, target.rows, target.cols,
+                                                 copy=False), stats)
 
 
 #: Passes that turn energies into their local derivatives (docs/passes.md).

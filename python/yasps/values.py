@@ -57,9 +57,12 @@ def to_column_major(values: Any, count: int, rows: int, cols: int,
     return np.ascontiguousarray(array.transpose(0, 2, 1)).reshape(-1)
 
 
-def from_column_major(flat: np.ndarray, rows: int, cols: int) -> np.ndarray:
-    """The inverse of :func:`to_column_major`: an ``(N, rows, cols)`` array."""
-    return flat.reshape(-1, cols, rows).transpose(0, 2, 1).copy()
+def from_column_major(flat: np.ndarray, rows: int, cols: int,
+                      copy: bool = True) -> np.ndarray:
+    """The inverse of :func:`to_column_major`: an ``(N, rows, cols)`` array.
+    Without ``copy``, a strided view of ``flat`` (no data movement)."""
+    view = flat.reshape(-1, cols, rows).transpose(0, 2, 1)
+    return view.copy() if copy else view
 
 
 def to_indices(indices: Any, count: int, arity: int, bound: int,
