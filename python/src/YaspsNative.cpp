@@ -7,11 +7,11 @@
 //
 //===----------------------------------------------------------------------===//
 
+#include "mlir/AsmParser/AsmParser.h"
 #include "mlir/IR/Diagnostics.h"
 #include "mlir/IR/MLIRContext.h"
 #include "mlir/IR/OwningOpRef.h"
 #include "mlir/IR/Verifier.h"
-#include "mlir/AsmParser/AsmParser.h"
 #include "mlir/Parser/Parser.h"
 #include "mlir/Pass/PassManager.h"
 #include "mlir/Pass/PassRegistry.h"
@@ -155,9 +155,8 @@ CpuLibrary compileCpu(const std::string &ir,
   options.cacheDir = cacheDir;
   options.optLevel = optLevel;
   CpuLibrary result;
-  auto library =
-      mlir::yasps::compileCpuKernels(*module, attributes, options,
-                                     &result.stats, prePipeline);
+  auto library = mlir::yasps::compileCpuKernels(*module, attributes, options,
+                                                &result.stats, prePipeline);
   if (!library) {
     std::string message = llvm::toString(library.takeError());
     std::string collected = diagnostics.take();
@@ -171,7 +170,8 @@ CpuLibrary compileCpu(const std::string &ir,
   if (threads == 0)
     return ::yasps::runtime::defaultThreadPool();
   static std::mutex lock;
-  static std::map<unsigned, std::unique_ptr<::yasps::runtime::ThreadPool>> pools;
+  static std::map<unsigned, std::unique_ptr<::yasps::runtime::ThreadPool>>
+      pools;
   std::lock_guard<std::mutex> guard(lock);
   auto &pool = pools[threads];
   if (!pool)
@@ -191,26 +191,25 @@ void launchCpu(const CpuLibrary &self, const std::string &attribute,
   if (!kernel)
     throw std::invalid_argument("no compiled kernel for " + attribute);
   if (buffers.size() != kernel->arguments.size())
-    throw std::invalid_argument(
-        "kernel for " + attribute + " takes " +
-        std::to_string(kernel->arguments.size()) + " buffers, got " +
-        std::to_string(buffers.size()));
+    throw std::invalid_argument("kernel for " + attribute + " takes " +
+                                std::to_string(kernel->arguments.size()) +
+                                " buffers, got " +
+                                std::to_string(buffers.size()));
   std::vector<::yasps::runtime::KernelBuffer> args;
   for (size_t i = 0; i < buffers.size(); ++i) {
     const std::string &kind = kernel->arguments[i].kind;
-    nb::dlpack::dtype expected =
-        kind == "conn"      ? nb::dtype<int32_t>()
-        : kind == "offsets" ? nb::dtype<int64_t>()
-                            : nb::dtype<double>();
+    nb::dlpack::dtype expected = kind == "conn"      ? nb::dtype<int32_t>()
+                                 : kind == "offsets" ? nb::dtype<int64_t>()
+                                                     : nb::dtype<double>();
     if (buffers[i].dtype() != expected || buffers[i].ndim() != 1)
-      throw std::invalid_argument("buffer " + std::to_string(i) + " (" +
-                                  kind + " " + kernel->arguments[i].path +
+      throw std::invalid_argument("buffer " + std::to_string(i) + " (" + kind +
+                                  " " + kernel->arguments[i].path +
                                   ") has the wrong dtype or rank");
     args.push_back({buffers[i].data(), (int64_t)buffers[i].shape(0)});
   }
   nb::gil_scoped_release release;
   ::yasps::runtime::launchCpuKernel(kernel->packed, args, numInstances,
-                                  poolFor(threads), /*minChunk=*/256);
+                                    poolFor(threads), /*minChunk=*/256);
 }
 
 /// The `yasps.params` of attributes after running `pipeline`: one list of
@@ -237,12 +236,11 @@ attributeParams(const std::string &ir, const std::string &pipeline,
   auto scenes = module->getOps<mlir::yasps::SceneOp>();
   for (const std::string &text : paths) {
     auto path = dyn_cast_or_null<SymbolRefAttr>(parseAttribute(text, &context));
-    Operation *decl =
-        path && !scenes.empty()
-            ? mlir::yasps::lookupInScene(*scenes.begin(), path)
-            : nullptr;
-    auto params = decl ? decl->getAttrOfType<ArrayAttr>("yasps.params")
-                       : ArrayAttr();
+    Operation *decl = path && !scenes.empty()
+                          ? mlir::yasps::lookupInScene(*scenes.begin(), path)
+                          : nullptr;
+    auto params =
+        decl ? decl->getAttrOfType<ArrayAttr>("yasps.params") : ArrayAttr();
     std::vector<std::vector<std::string>> slots;
     for (auto param : params ? params.getAsRange<ArrayAttr>()
                              : ArrayAttr().getAsRange<ArrayAttr>()) {
@@ -283,9 +281,8 @@ NB_MODULE(_yasps_native, m) {
       .def_prop_ro(
           "kernels",
           [](const CpuLibrary &self) {
-            std::vector<std::pair<std::string,
-                                  std::vector<std::pair<std::string,
-                                                        std::string>>>>
+            std::vector<std::pair<
+                std::string, std::vector<std::pair<std::string, std::string>>>>
                 out;
             for (const auto &kernel : self.library->kernels()) {
               std::vector<std::pair<std::string, std::string>> args;
@@ -332,9 +329,8 @@ NB_MODULE(_yasps_native, m) {
             return d;
           },
           "how the compilation went (cache hits, times, cache key)")
-      .def("launch", &launchCpu, nb::arg("attribute"),
-           nb::arg("num_instances"), nb::arg("buffers"),
-           nb::arg("threads") = 0,
+      .def("launch", &launchCpu, nb::arg("attribute"), nb::arg("num_instances"),
+           nb::arg("buffers"), nb::arg("threads") = 0,
            "Evaluates an attribute's kernel on num_instances instances.");
 
   m.def("compile_cpu", &compileCpu, nb::arg("ir"), nb::arg("attributes"),
@@ -346,9 +342,10 @@ NB_MODULE(_yasps_native, m) {
         nb::arg("pipeline"), nb::arg("paths"), nb::arg("name") = "<yasps>",
         "yasps.params of the attributes (e.g. derivative attributes) after "
         "running a pass pipeline; empty lists for attributes without them.");
-  m.def("cpu_lowering_pipeline",
-        [] { return mlir::yasps::getCpuLoweringPipeline().str(); },
-        "The pass pipeline from kernel functions to the LLVM dialect.");
+  m.def(
+      "cpu_lowering_pipeline",
+      [] { return mlir::yasps::getCpuLoweringPipeline().str(); },
+      "The pass pipeline from kernel functions to the LLVM dialect.");
 
   m.def("run_pipeline", &runPipeline, nb::arg("ir"), nb::arg("pipeline"),
         nb::arg("name") = "<yasps>",

@@ -62,8 +62,7 @@ struct JacobiBuilder {
     scf::ForOp::create(b, loc, idx(0), idx(n), idx(1), ValueRange{},
                        [&](OpBuilder &nested, Location, Value k, ValueRange) {
                          OpBuilder::InsertionGuard guard(b);
-                         b.setInsertionPoint(
-                             scf::YieldOp::create(nested, loc));
+                         b.setInsertionPoint(scf::YieldOp::create(nested, loc));
                          body(k);
                        });
   }
@@ -109,16 +108,16 @@ struct JacobiBuilder {
       Value absTheta = abs(theta);
       // t = sign(theta) / (|theta| + sqrt(theta^2 + 1)); for huge theta the
       // square would overflow and t = 1 / (2 theta) is exact enough.
-      Value root = math::SqrtOp::create(
-          b, loc, add(mul(theta, theta), cst(1.0)));
+      Value root =
+          math::SqrtOp::create(b, loc, add(mul(theta, theta), cst(1.0)));
       Value sign = math::CopySignOp::create(b, loc, cst(1.0), theta);
       Value tSmall = div(sign, add(absTheta, root));
       Value tHuge = div(cst(1.0), mul(cst(2.0), theta));
       Value huge = arith::CmpFOp::create(b, loc, arith::CmpFPredicate::OGT,
                                          absTheta, cst(1e150));
       Value t = arith::SelectOp::create(b, loc, huge, tHuge, tSmall);
-      Value c = div(cst(1.0),
-                    math::SqrtOp::create(b, loc, add(mul(t, t), cst(1.0))));
+      Value c =
+          div(cst(1.0), math::SqrtOp::create(b, loc, add(mul(t, t), cst(1.0))));
       Value s = mul(t, c);
       rotate(a, n, p, q, c, s, /*rows=*/false);
       rotate(a, n, p, q, c, s, /*rows=*/true);
@@ -191,18 +190,17 @@ ScalarMatrix mlir::yasps::lowerProjection(OpBuilder &b, Location loc,
     }
 
   // Sweep until a sweep rotates nothing (or the sweep limit).
-  j.loopCarrying(j.idx(0), j.idx(kMaxSweeps), j.flag(true),
-                 [&](Value, Value active) {
-                   auto ifOp = scf::IfOp::create(b, loc,
-                                                 TypeRange{b.getI1Type()},
-                                                 active, true);
-                   OpBuilder::InsertionGuard guard(b);
-                   b.setInsertionPointToStart(ifOp.thenBlock());
-                   scf::YieldOp::create(b, loc, j.sweep(a, v, n));
-                   b.setInsertionPointToStart(ifOp.elseBlock());
-                   scf::YieldOp::create(b, loc, j.flag(false));
-                   return ifOp.getResult(0);
-                 });
+  j.loopCarrying(
+      j.idx(0), j.idx(kMaxSweeps), j.flag(true), [&](Value, Value active) {
+        auto ifOp =
+            scf::IfOp::create(b, loc, TypeRange{b.getI1Type()}, active, true);
+        OpBuilder::InsertionGuard guard(b);
+        b.setInsertionPointToStart(ifOp.thenBlock());
+        scf::YieldOp::create(b, loc, j.sweep(a, v, n));
+        b.setInsertionPointToStart(ifOp.elseBlock());
+        scf::YieldOp::create(b, loc, j.flag(false));
+        return ifOp.getResult(0);
+      });
 
   // The result is V diag(f(lambda)) V^T with lambda the diagonal of a and
   // f = max(., 0) or |.|; first W = V diag(f(lambda)), overwriting a.

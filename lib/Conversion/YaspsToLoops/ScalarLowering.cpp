@@ -23,8 +23,7 @@ namespace {
 /// Scalar arithmetic on one element type, at one location.
 class ScalarBuilder {
 public:
-  ScalarBuilder(OpBuilder &b, Location loc, FloatType type,
-                bool symbolicZeros)
+  ScalarBuilder(OpBuilder &b, Location loc, FloatType type, bool symbolicZeros)
       : b(b), loc(loc), type(type), symbolicZeros(symbolicZeros) {}
 
   Value constant(double value) {
@@ -259,8 +258,8 @@ mlir::yasps::lowerToScalars(OpBuilder &b, Operation *op,
       .Case([&](SelectOp) -> FailureOr<ScalarMatrix> {
         const ScalarMatrix &cond = operands[0];
         ScalarMatrix out = makeMatrix(type);
-        Value whole = cond.values.size() == 1 ? s.isNonZero(cond.values[0])
-                                              : Value();
+        Value whole =
+            cond.values.size() == 1 ? s.isNonZero(cond.values[0]) : Value();
         for (size_t i = 0; i < operands[1].values.size(); ++i) {
           Value flag = whole ? whole : s.isNonZero(cond.values[i]);
           out.values.push_back(arith::SelectOp::create(
@@ -342,7 +341,8 @@ mlir::yasps::lowerToScalars(OpBuilder &b, Operation *op,
       .Case([&](DetOp) -> FailureOr<ScalarMatrix> {
         if (lhs().rows > 4)
           return matrixTooLarge("determinant");
-        SmallVector<int64_t> all = llvm::to_vector(llvm::seq<int64_t>(0, lhs().rows));
+        SmallVector<int64_t> all =
+            llvm::to_vector(llvm::seq<int64_t>(0, lhs().rows));
         return ScalarMatrix{1, 1, {s.det(lhs(), all, all)}};
       })
       .Case([&](InverseOp) -> FailureOr<ScalarMatrix> {
@@ -399,7 +399,8 @@ mlir::yasps::lowerToScalars(OpBuilder &b, Operation *op,
         return out;
       })
       .Case([&](ElementOp element) -> FailureOr<ScalarMatrix> {
-        return ScalarMatrix{1, 1, {lhs().at(element.getRow(), element.getCol())}};
+        return ScalarMatrix{
+            1, 1, {lhs().at(element.getRow(), element.getCol())}};
       })
       .Case([&](SliceOp slice) -> FailureOr<ScalarMatrix> {
         ScalarMatrix out = makeMatrix(type);

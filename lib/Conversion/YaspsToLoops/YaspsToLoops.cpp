@@ -31,10 +31,10 @@ namespace {
 /// the evaluation meets stored attributes, connectivities and unions.
 class KernelEmitter {
 public:
-  KernelEmitter(SceneOp scene, SymbolTableCollection &tables,
-                func::FuncOp func, bool symbolicZeros)
-      : scene(scene), tables(tables), func(func),
-        symbolicZeros(symbolicZeros) {}
+  KernelEmitter(SceneOp scene, SymbolTableCollection &tables, func::FuncOp func,
+                bool symbolicZeros)
+      : scene(scene), tables(tables), func(func), symbolicZeros(symbolicZeros) {
+  }
 
   /// The buffer argument holding `symbol`'s data, created on first use.
   Value buffer(StringRef kind, Operation *symbol, Type elementType) {
@@ -53,8 +53,7 @@ public:
   }
 
   /// The value of the attribute declared by `decl` at instance `index`.
-  FailureOr<ScalarMatrix> evaluate(OpBuilder &b, Operation *decl,
-                                   Value index) {
+  FailureOr<ScalarMatrix> evaluate(OpBuilder &b, Operation *decl, Value index) {
     for (auto &scope : llvm::reverse(scopes))
       if (auto it = scope.find({decl, index}); it != scope.end())
         return it->second;
@@ -72,8 +71,7 @@ public:
     Location loc = func.getLoc();
     Value base = offset(b, index, value.values.size());
     for (auto [i, scalar] : llvm::enumerate(value.values))
-      memref::StoreOp::create(b, loc, scalar, out,
-                              ValueRange{add(b, base, i)});
+      memref::StoreOp::create(b, loc, scalar, out, ValueRange{add(b, base, i)});
   }
 
   ArrayAttr getRoles() { return ArrayAttr::get(func.getContext(), roles); }
@@ -85,8 +83,7 @@ private:
   Value add(OpBuilder &b, Value base, int64_t value) {
     if (value == 0)
       return base;
-    return arith::AddIOp::create(b, func.getLoc(), base,
-                                 constIndex(b, value));
+    return arith::AddIOp::create(b, func.getLoc(), base, constIndex(b, value));
   }
   Value offset(OpBuilder &b, Value index, int64_t stride) {
     if (stride == 1)
@@ -102,8 +99,8 @@ private:
     Value base = offset(b, index, type.getNumElements());
     ScalarMatrix out{type.getRows(), type.getCols(), {}};
     for (int64_t i = 0; i < type.getNumElements(); ++i)
-      out.values.push_back(memref::LoadOp::create(
-          b, decl->getLoc(), data, ValueRange{add(b, base, i)}));
+      out.values.push_back(memref::LoadOp::create(b, decl->getLoc(), data,
+                                                  ValueRange{add(b, base, i)}));
     return out;
   }
 
@@ -123,9 +120,9 @@ private:
       } else if (auto join = dyn_cast<JoinOp>(op)) {
         result = evaluateJoin(b, join, index);
       } else if (auto unionOp = dyn_cast<UnionOp>(op)) {
-        result = evaluateUnion(
-            b, cast<PrimitiveUnionOp>(owner), unionOp.getNameAttr(),
-            cast<MatrixType>(unionOp.getType()), index);
+        result = evaluateUnion(b, cast<PrimitiveUnionOp>(owner),
+                               unionOp.getNameAttr(),
+                               cast<MatrixType>(unionOp.getType()), index);
       } else {
         SmallVector<ScalarMatrix> operands;
         for (Value operand : op.getOperands())
@@ -140,8 +137,7 @@ private:
   }
 
   /// Row l of the result is the source at the l-th connected instance.
-  FailureOr<ScalarMatrix> evaluateJoin(OpBuilder &b, JoinOp join,
-                                       Value index) {
+  FailureOr<ScalarMatrix> evaluateJoin(OpBuilder &b, JoinOp join, Value index) {
     Location loc = join.getLoc();
     auto primitive = cast<PrimitiveOp>(getOwningEntity(join));
     auto connectivity = cast<ConnectivityOp>(
@@ -154,10 +150,9 @@ private:
     ScalarMatrix out{type.getRows(), type.getCols(), {}};
     out.values.resize(type.getNumElements());
     for (int64_t l = 0; l < arity; ++l) {
-      Value raw = memref::LoadOp::create(b, loc, indices,
-                                         ValueRange{add(b, base, l)});
-      Value target =
-          arith::IndexCastOp::create(b, loc, b.getIndexType(), raw);
+      Value raw =
+          memref::LoadOp::create(b, loc, indices, ValueRange{add(b, base, l)});
+      Value target = arith::IndexCastOp::create(b, loc, b.getIndexType(), raw);
       FailureOr<ScalarMatrix> row = evaluate(b, source, target);
       if (failed(row))
         return failure();
@@ -169,8 +164,8 @@ private:
 
   /// Finds the member that `index` falls in and evaluates its attribute.
   FailureOr<ScalarMatrix> evaluateUnion(OpBuilder &b, PrimitiveUnionOp owner,
-                                        FlatSymbolRefAttr name,
-                                        MatrixType type, Value index) {
+                                        FlatSymbolRefAttr name, MatrixType type,
+                                        Value index) {
     Location loc = owner.getLoc();
     Value offsets = buffer("offsets", owner, b.getI64Type());
     SmallVector<Operation *> members = owner.getMemberOps();
@@ -182,8 +177,7 @@ private:
     auto evaluateMember = [&](OpBuilder &ib,
                               size_t member) -> FailureOr<ScalarMatrix> {
       Operation *decl = tables.lookupSymbolIn(members[member], name);
-      Value local =
-          arith::SubIOp::create(ib, loc, index, offsetOf(ib, member));
+      Value local = arith::SubIOp::create(ib, loc, index, offsetOf(ib, member));
       return evaluate(ib, decl, local);
     };
     return chain(b, loc, type, 0, members.size(), offsetOf, evaluateMember,
@@ -200,8 +194,7 @@ private:
       return evaluateMember(b, member);
     Value inMember = arith::CmpIOp::create(b, loc, arith::CmpIPredicate::ult,
                                            index, offsetOf(b, member + 1));
-    SmallVector<Type> resultTypes(type.getNumElements(),
-                                  type.getElementType());
+    SmallVector<Type> resultTypes(type.getNumElements(), type.getElementType());
     auto ifOp = scf::IfOp::create(b, loc, resultTypes, inMember,
                                   /*withElseRegion=*/true);
     for (int branch = 0; branch < 2; ++branch) {
@@ -230,8 +223,7 @@ private:
   SmallVector<Attribute> roles;
   /// Values already computed, per region: an inner region may reuse the
   /// values of enclosing ones but not those of its siblings.
-  SmallVector<DenseMap<std::pair<Operation *, Value>, ScalarMatrix>> scopes{
-      1};
+  SmallVector<DenseMap<std::pair<Operation *, Value>, ScalarMatrix>> scopes{1};
 };
 
 std::string kernelName(SymbolRefAttr path) {
@@ -258,9 +250,9 @@ LogicalResult LowerToLoopsPass::lowerAttribute(SceneOp scene,
   ModuleOp module = getOperation();
   Operation *decl = lookupInScene(scene, path, &tables);
   if (!isAttributeDecl(decl))
-    return scene.emitError() << "yasps-lower-to-loops: " << path
-                             << " does not name an attribute of scene @"
-                             << scene.getSymName();
+    return scene.emitError()
+           << "yasps-lower-to-loops: " << path
+           << " does not name an attribute of scene @" << scene.getSymName();
   MatrixType type = getAttributeType(decl);
   Location loc = decl->getLoc();
   std::string name = kernelName(path);
@@ -320,8 +312,8 @@ void LowerToLoopsPass::runOnOperation() {
 
   SmallVector<SymbolRefAttr> paths;
   for (const std::string &text : attributes) {
-    auto path = dyn_cast_or_null<SymbolRefAttr>(
-        parseAttribute(text, &getContext()));
+    auto path =
+        dyn_cast_or_null<SymbolRefAttr>(parseAttribute(text, &getContext()));
     if (!path) {
       module.emitError() << "yasps-lower-to-loops: '" << text
                          << "' is not a symbol path like @mesh::@prim::@attr";

@@ -192,11 +192,12 @@ std::string cacheKey(ModuleOp kernels, const CpuCompileOptions &options) {
   std::string text;
   llvm::raw_string_ostream os(text);
   kernels.print(os, OpPrintingFlags().printGenericOpForm());
-  os << "\n" << kLoweringPipeline << "\nO" << options.optLevel << "\n"
-     << kCodegenVersion << "\n" << hostDescription();
-  std::array<uint8_t, 32> hash = llvm::SHA256::hash(
-      llvm::ArrayRef(reinterpret_cast<const uint8_t *>(text.data()),
-                     text.size()));
+  os << "\n"
+     << kLoweringPipeline << "\nO" << options.optLevel << "\n"
+     << kCodegenVersion << "\n"
+     << hostDescription();
+  std::array<uint8_t, 32> hash = llvm::SHA256::hash(llvm::ArrayRef(
+      reinterpret_cast<const uint8_t *>(text.data()), text.size()));
   return llvm::toHex(hash, /*LowerCase=*/true);
 }
 
@@ -250,16 +251,15 @@ llvm::Expected<std::shared_ptr<CpuKernelLibrary>>
 mlir::yasps::compileCpuKernels(ModuleOp module,
                                const std::vector<std::string> &attributes,
                                const CpuCompileOptions &options,
-                               CpuCompileStats *stats,
-                               StringRef prePipeline) {
+                               CpuCompileStats *stats, StringRef prePipeline) {
   CpuCompileStats localStats;
   CpuCompileStats &st = stats ? *stats : localStats;
   Clock::time_point start = Clock::now();
 
   // 1. Kernel functions in upstream dialects.
   OwningOpRef<ModuleOp> kernels(cast<ModuleOp>(module->clone()));
-  if (llvm::Error err = runPasses(
-          *kernels, "kernel generation failed", [&](PassManager &pm) {
+  if (llvm::Error err =
+          runPasses(*kernels, "kernel generation failed", [&](PassManager &pm) {
             if (!prePipeline.empty() &&
                 failed(parsePassPipeline(prePipeline, pm)))
               return failure();
@@ -311,11 +311,11 @@ mlir::yasps::compileCpuKernels(ModuleOp module,
   }
 
   // 3. LLVM dialect, then JIT.
-  if (llvm::Error err = runPasses(
-          *kernels, "lowering to the LLVM dialect failed",
-          [&](PassManager &pm) {
-            return parsePassPipeline(kLoweringPipeline, pm);
-          }))
+  if (llvm::Error err =
+          runPasses(*kernels, "lowering to the LLVM dialect failed",
+                    [&](PassManager &pm) {
+                      return parsePassPipeline(kLoweringPipeline, pm);
+                    }))
     return std::move(err);
   st.lowerSeconds = secondsSince(start);
   Clock::time_point codegenStart = Clock::now();
@@ -337,9 +337,8 @@ mlir::yasps::compileCpuKernels(ModuleOp module,
   }
   if (!objectPath.empty()) {
     llvm::sys::fs::create_directories(options.cacheDir);
-    storeAtomically(objectPath, [&](StringRef tmp) {
-      (*engine)->dumpToObjectFile(tmp);
-    });
+    storeAtomically(objectPath,
+                    [&](StringRef tmp) { (*engine)->dumpToObjectFile(tmp); });
   }
   st.codegenSeconds = secondsSince(codegenStart);
   auto library =

@@ -1,4 +1,5 @@
-//===- ScalarLowering.h - yasps expressions as scalar arithmetic -*- C++ -*-===//
+//===- ScalarLowering.h - yasps expressions as scalar arithmetic -*- C++
+//-*-===//
 //
 // Kernels work on small matrices entry by entry: a per-instance matrix becomes
 // rows*cols SSA scalars (column-major), and every yasps expression op becomes

@@ -55,8 +55,8 @@ SymbolRefAttr mlir::yasps::getScenePath(Operation *symbolOp) {
   SmallVector<StringAttr> names;
   for (Operation *op = symbolOp; op && !isa<SceneOp>(op);
        op = op->getParentOp()) {
-    if (auto name = op->getAttrOfType<StringAttr>(
-            SymbolTable::getSymbolAttrName()))
+    if (auto name =
+            op->getAttrOfType<StringAttr>(SymbolTable::getSymbolAttrName()))
       names.push_back(name);
   }
   if (names.empty())

@@ -69,8 +69,8 @@ public:
     if (!x || !y)
       return {};
     MatrixType tx = typeOf(x), ty = typeOf(y);
-    return MatmulOp::create(b, loc, tx.withShape(tx.getRows(), ty.getCols()),
-                            x, y);
+    return MatmulOp::create(b, loc, tx.withShape(tx.getRows(), ty.getCols()), x,
+                            y);
   }
   Value dot(Value x, Value y) {
     if (!x || !y)
@@ -78,8 +78,7 @@ public:
     return DotOp::create(b, loc, typeOf(x).getScalarType(), x, y);
   }
   Value trace(Value m) {
-    return m ? TraceOp::create(b, loc, typeOf(m).getScalarType(), m)
-                   .getResult()
+    return m ? TraceOp::create(b, loc, typeOf(m).getScalarType(), m).getResult()
              : m;
   }
   Value pow(Value base, Value exponent) {
@@ -106,8 +105,7 @@ FailureOr<Value> notDifferentiable(Operation *op, StringRef why) {
 } // namespace
 
 #define TANGENT(OP)                                                            \
-  FailureOr<Value> OP::emitTangent(OpBuilder &builder,                         \
-                                   ArrayRef<Value> tangents)
+  FailureOr<Value> OP::emitTangent(OpBuilder &builder, ArrayRef<Value> tangents)
 
 // Leaves of the differentiation pass, which seeds their tangents itself.
 TANGENT(ReadOp) {
@@ -131,8 +129,12 @@ TANGENT(CmpOp) { return Value(); }
 TANGENT(StopGradientOp) { return Value(); }
 
 // Linear ops: the same op on the tangents.
-TANGENT(AddOp) { return TangentBuilder(builder, getLoc()).add(tangents[0], tangents[1]); }
-TANGENT(SubOp) { return TangentBuilder(builder, getLoc()).sub(tangents[0], tangents[1]); }
+TANGENT(AddOp) {
+  return TangentBuilder(builder, getLoc()).add(tangents[0], tangents[1]);
+}
+TANGENT(SubOp) {
+  return TangentBuilder(builder, getLoc()).sub(tangents[0], tangents[1]);
+}
 TANGENT(NegOp) { return TangentBuilder(builder, getLoc()).neg(tangents[0]); }
 TANGENT(TransposeOp) {
   if (!tangents[0])
@@ -174,7 +176,9 @@ TANGENT(SliceOp) {
                          getRowOffset(), getColOffset())
       .getResult();
 }
-TANGENT(TraceOp) { return TangentBuilder(builder, getLoc()).trace(tangents[0]); }
+TANGENT(TraceOp) {
+  return TangentBuilder(builder, getLoc()).trace(tangents[0]);
+}
 TANGENT(SumOp) {
   if (!tangents[0])
     return Value();
@@ -232,8 +236,9 @@ TANGENT(CrossOp) {
 TANGENT(DivOp) {
   TangentBuilder t(builder, getLoc());
   Value first = t.div(tangents[0], getRhs());
-  Value second = tangents[1] ? t.scale(getResult(), t.div(tangents[1], getRhs()))
-                             : Value();
+  Value second = tangents[1]
+                     ? t.scale(getResult(), t.div(tangents[1], getRhs()))
+                     : Value();
   return t.sub(first, second);
 }
 
@@ -321,8 +326,8 @@ TANGENT(MinOp) {
   if (!tangents[0] && !tangents[1])
     return Value();
   TangentBuilder t(builder, getLoc());
-  Value lhsWins = CmpOp::create(builder, getLoc(), CmpPredicate::le, getLhs(),
-                                getRhs());
+  Value lhsWins =
+      CmpOp::create(builder, getLoc(), CmpPredicate::le, getLhs(), getRhs());
   return SelectOp::create(builder, getLoc(), getMatrixType(), lhsWins,
                           t.orZero(tangents[0], getMatrixType()),
                           t.orZero(tangents[1], getMatrixType()))
@@ -332,8 +337,8 @@ TANGENT(MaxOp) {
   if (!tangents[0] && !tangents[1])
     return Value();
   TangentBuilder t(builder, getLoc());
-  Value lhsWins = CmpOp::create(builder, getLoc(), CmpPredicate::ge, getLhs(),
-                                getRhs());
+  Value lhsWins =
+      CmpOp::create(builder, getLoc(), CmpPredicate::ge, getLhs(), getRhs());
   return SelectOp::create(builder, getLoc(), getMatrixType(), lhsWins,
                           t.orZero(tangents[0], getMatrixType()),
                           t.orZero(tangents[1], getMatrixType()))

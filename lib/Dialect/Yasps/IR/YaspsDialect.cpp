@@ -35,7 +35,8 @@ Operation *YaspsDialect::materializeConstant(OpBuilder &builder,
                                              Location loc) {
   auto matrixType = dyn_cast<MatrixType>(type);
   auto elements = dyn_cast<DenseFPElementsAttr>(value);
-  if (!matrixType || !elements || elements.getType() != matrixType.getTensorType())
+  if (!matrixType || !elements ||
+      elements.getType() != matrixType.getTensorType())
     return nullptr;
   return ConstantOp::create(builder, loc, matrixType, elements);
 }

@@ -31,16 +31,16 @@ static LogicalResult verifySameElementType(Operation *op, TypeRange types) {
 
 static LogicalResult verifySquare(Operation *op, MatrixType type) {
   if (!type.isSquare())
-    return op->emitOpError() << "needs a square matrix, got " << type
-                             << where(op);
+    return op->emitOpError()
+           << "needs a square matrix, got " << type << where(op);
   return success();
 }
 
 static LogicalResult verifyResultShape(Operation *op, MatrixType expected,
                                        MatrixType actual, StringRef why) {
   if (expected != actual)
-    return op->emitOpError() << why << " gives " << expected << ", not "
-                             << actual << where(op);
+    return op->emitOpError()
+           << why << " gives " << expected << ", not " << actual << where(op);
   return success();
 }
 
@@ -56,8 +56,9 @@ LogicalResult ReadOp::verifySymbolUses(SymbolTableCollection &tables) {
                          << where(*this);
   MatrixType declared = getAttributeType(decl);
   if (declared != getMatrixType())
-    return emitOpError() << "reads " << describe(decl) << " as " << getMatrixType()
-                         << " but it is " << declared << where(*this);
+    return emitOpError() << "reads " << describe(decl) << " as "
+                         << getMatrixType() << " but it is " << declared
+                         << where(*this);
   Operation *owner = getOwningEntity(*this);
   Operation *declOwner = getOwningEntity(decl);
   if (!isOnLineageOf(declOwner, owner))
@@ -73,8 +74,8 @@ LogicalResult JoinOp::verifySymbolUses(SymbolTableCollection &tables) {
   auto primitive = dyn_cast_or_null<PrimitiveOp>(owner);
   if (!primitive)
     return emitOpError() << "JOIN needs a connectivity of a primitive, but "
-                         << describe((*this)->getParentOp())
-                         << " is owned by " << describe(owner);
+                         << describe((*this)->getParentOp()) << " is owned by "
+                         << describe(owner);
   auto connectivity = dyn_cast_or_null<ConnectivityOp>(
       tables.lookupSymbolIn(primitive, getConnectivityAttr()));
   if (!connectivity)
@@ -100,7 +101,8 @@ LogicalResult JoinOp::verifySymbolUses(SymbolTableCollection &tables) {
   if (expected != getMatrixType())
     return emitOpError() << "JOIN of " << sourceType << " through arity-"
                          << arity << " " << describe(connectivity) << " gives "
-                         << expected << ", not " << getMatrixType() << where(*this);
+                         << expected << ", not " << getMatrixType()
+                         << where(*this);
   return success();
 }
 
@@ -147,12 +149,13 @@ LogicalResult ConstantOp::inferReturnTypes(
   auto elementType = cast<FloatType>(tensorType.getElementType());
   if (tensorType.getNumElements() == 0 ||
       !(elementType.isF32() || elementType.isF64()))
-    return emitOptionalError(location, "'yasps.constant' needs a non-empty "
-                                       "f32 or f64 literal, got ",
+    return emitOptionalError(location,
+                             "'yasps.constant' needs a non-empty "
+                             "f32 or f64 literal, got ",
                              tensorType);
-  inferredReturnTypes.push_back(MatrixType::get(
-      context, tensorType.getDimSize(0), tensorType.getDimSize(1),
-      elementType));
+  inferredReturnTypes.push_back(
+      MatrixType::get(context, tensorType.getDimSize(0),
+                      tensorType.getDimSize(1), elementType));
   return success();
 }
 
@@ -244,8 +247,12 @@ LogicalResult DetOp::verify() {
 LogicalResult TraceOp::verify() {
   return verifySquare(*this, matrixOf(getOperand()));
 }
-LogicalResult InverseOp::verify() { return verifySquare(*this, getMatrixType()); }
-LogicalResult ProjectOp::verify() { return verifySquare(*this, getMatrixType()); }
+LogicalResult InverseOp::verify() {
+  return verifySquare(*this, getMatrixType());
+}
+LogicalResult ProjectOp::verify() {
+  return verifySquare(*this, getMatrixType());
+}
 
 //===----------------------------------------------------------------------===//
 // Extracting and rearranging entries
@@ -263,16 +270,16 @@ LogicalResult RowOp::verify() {
   MatrixType in = matrixOf(getOperand());
   if (failed(verifyIndex(*this, "row", getIndex(), in.getRows(), in)))
     return failure();
-  return verifyResultShape(*this, in.withShape(1, in.getCols()), getMatrixType(),
-                           "a row");
+  return verifyResultShape(*this, in.withShape(1, in.getCols()),
+                           getMatrixType(), "a row");
 }
 
 LogicalResult ColOp::verify() {
   MatrixType in = matrixOf(getOperand());
   if (failed(verifyIndex(*this, "column", getIndex(), in.getCols(), in)))
     return failure();
-  return verifyResultShape(*this, in.withShape(in.getRows(), 1), getMatrixType(),
-                           "a column");
+  return verifyResultShape(*this, in.withShape(in.getRows(), 1),
+                           getMatrixType(), "a column");
 }
 
 LogicalResult ElementOp::verify() {
@@ -291,8 +298,8 @@ LogicalResult SliceOp::verify() {
   if (rowOffset + out.getRows() > in.getRows() ||
       colOffset + out.getCols() > in.getCols())
     return emitOpError() << "block of " << out << " at (" << getRowOffset()
-                         << ", " << getColOffset() << ") does not fit in "
-                         << in << where(*this);
+                         << ", " << getColOffset() << ") does not fit in " << in
+                         << where(*this);
   return success();
 }
 

@@ -110,13 +110,15 @@ OpFoldResult AddOp::fold(FoldAdaptor adaptor) {
     return getLhs();
   if (isSplatOf(adaptor.getLhs(), 0.0))
     return getRhs();
-  return foldEntrywise(getMatrixType(), adaptor.getLhs(), adaptor.getRhs(), addFn);
+  return foldEntrywise(getMatrixType(), adaptor.getLhs(), adaptor.getRhs(),
+                       addFn);
 }
 
 OpFoldResult SubOp::fold(FoldAdaptor adaptor) {
   if (isSplatOf(adaptor.getRhs(), 0.0))
     return getLhs();
-  return foldEntrywise(getMatrixType(), adaptor.getLhs(), adaptor.getRhs(), subFn);
+  return foldEntrywise(getMatrixType(), adaptor.getLhs(), adaptor.getRhs(),
+                       subFn);
 }
 
 OpFoldResult ElementwiseMulOp::fold(FoldAdaptor adaptor) {
@@ -124,7 +126,8 @@ OpFoldResult ElementwiseMulOp::fold(FoldAdaptor adaptor) {
     return getLhs();
   if (isSplatOf(adaptor.getLhs(), 1.0))
     return getRhs();
-  return foldEntrywise(getMatrixType(), adaptor.getLhs(), adaptor.getRhs(), mulFn);
+  return foldEntrywise(getMatrixType(), adaptor.getLhs(), adaptor.getRhs(),
+                       mulFn);
 }
 
 OpFoldResult NegOp::fold(FoldAdaptor adaptor) {
@@ -141,14 +144,16 @@ OpFoldResult NegOp::fold(FoldAdaptor adaptor) {
 OpFoldResult ScaleOp::fold(FoldAdaptor adaptor) {
   if (isSplatOf(adaptor.getRhs(), 1.0))
     return getLhs();
-  return foldEntrywise(getMatrixType(), adaptor.getLhs(), adaptor.getRhs(), mulFn,
+  return foldEntrywise(getMatrixType(), adaptor.getLhs(), adaptor.getRhs(),
+                       mulFn,
                        /*rhsIsScalar=*/true);
 }
 
 OpFoldResult DivOp::fold(FoldAdaptor adaptor) {
   if (isSplatOf(adaptor.getRhs(), 1.0))
     return getLhs();
-  return foldEntrywise(getMatrixType(), adaptor.getLhs(), adaptor.getRhs(), divFn,
+  return foldEntrywise(getMatrixType(), adaptor.getLhs(), adaptor.getRhs(),
+                       divFn,
                        /*rhsIsScalar=*/true);
 }
 
@@ -161,7 +166,8 @@ OpFoldResult MatmulOp::fold(FoldAdaptor adaptor) {
   std::optional<ConstMatrix> rhs = asConstMatrix(adaptor.getRhs());
   if (!lhs || !rhs)
     return {};
-  const llvm::fltSemantics &sem = getMatrixType().getElementType().getFloatSemantics();
+  const llvm::fltSemantics &sem =
+      getMatrixType().getElementType().getFloatSemantics();
   SmallVector<APFloat> out;
   for (int64_t r = 0; r < lhs->rows; ++r)
     for (int64_t c = 0; c < rhs->cols; ++c) {

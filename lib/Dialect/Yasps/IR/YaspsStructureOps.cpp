@@ -92,8 +92,8 @@ PrimitiveUnionOp::verifySymbolUses(SymbolTableCollection &tables) {
 //===----------------------------------------------------------------------===//
 
 LogicalResult ConnectivityOp::verifySymbolUses(SymbolTableCollection &tables) {
-  Operation *target = lookupInScene(getEnclosingScene(*this), getTarget(),
-                                    &tables);
+  Operation *target =
+      lookupInScene(getEnclosingScene(*this), getTarget(), &tables);
   if (!isa_and_nonnull<PrimitiveOp, PrimitiveUnionOp>(target))
     return emitOpError() << "target " << getTarget() << " of "
                          << describe(*this)
@@ -118,8 +118,9 @@ LogicalResult AttrOp::verify() {
                          << " must end its region with 'yasps.yield'";
   for (Operation &op : body)
     if (!isa<YaspsDialect>(op.getDialect()))
-      return op.emitOpError() << "is not a yasps expression; " << describe(*this)
-                              << " may only contain yasps ops";
+      return op.emitOpError()
+             << "is not a yasps expression; " << describe(*this)
+             << " may only contain yasps ops";
   return success();
 }
 

@@ -161,8 +161,8 @@ Value constantMatrix(OpBuilder &b, Location loc, MatrixType type,
 }
 
 Value zeros(OpBuilder &b, Location loc, MatrixType type) {
-  return constantMatrix(
-      b, loc, type, SmallVector<double>(type.getNumElements(), 0.0));
+  return constantMatrix(b, loc, type,
+                        SmallVector<double>(type.getNumElements(), 0.0));
 }
 
 /// A k x c matrix that is `row` in row `at` and zero elsewhere.
@@ -263,8 +263,7 @@ FailureOr<AttrOp> Differentiator::innerMap(AttrOp energy) {
           for (auto [op, group] : leaves)
             if (group == &h && !leaf)
               leaf = op;
-          FailureOr<Value> seeded =
-              seed(b, leaf, g, p / g.width, p % g.width);
+          FailureOr<Value> seeded = seed(b, leaf, g, p / g.width, p % g.width);
           if (failed(seeded))
             return failure();
           if (*seeded)
@@ -272,12 +271,11 @@ FailureOr<AttrOp> Differentiator::innerMap(AttrOp energy) {
         }
         blocks.push_back(value ? value : zeros(b, loc, block));
       }
-      columns.push_back(
-          blocks.size() == 1
-              ? blocks[0]
-              : ConcatOp::create(b, loc, scalar.withShape(m, 1),
-                                 ConcatAxis::vertical, blocks)
-                    .getResult());
+      columns.push_back(blocks.size() == 1
+                            ? blocks[0]
+                            : ConcatOp::create(b, loc, scalar.withShape(m, 1),
+                                               ConcatAxis::vertical, blocks)
+                                  .getResult());
     }
   }
   Value result = columns.size() == 1
@@ -313,7 +311,8 @@ FailureOr<SmallVector<ParamGroup>> Differentiator::groupsOf(AttrOp attr,
     for (const ParamGroup &g : groups)
       if (g.kind == group.kind && g.key == group.key && g.base == group.base)
         return;
-    group.offset = groups.empty() ? 0 : groups.back().offset + groups.back().size();
+    group.offset =
+        groups.empty() ? 0 : groups.back().offset + groups.back().size();
     groups.push_back(group);
   };
   for (Operation &op : attr.getBodyBlock()) {
@@ -330,8 +329,7 @@ FailureOr<SmallVector<ParamGroup>> Differentiator::groupsOf(AttrOp attr,
       int64_t rc = getAttributeType(base).getNumElements();
       add({GroupKind::Read, base, base, 1, rc, 0, rc});
     } else if (auto join = dyn_cast<JoinOp>(op)) {
-      Operation *base =
-          baseOf(lookupInScene(scene, join.getSource(), &tables));
+      Operation *base = baseOf(lookupInScene(scene, join.getSource(), &tables));
       FailureOr<int64_t> width = paramCount(base);
       if (failed(width))
         return failure();
@@ -407,9 +405,8 @@ ArrayAttr Differentiator::describe(ArrayRef<ParamGroup> groups) {
   return ArrayAttr::get(ctx, out);
 }
 
-AttrOp Differentiator::createAttr(AttrOp next, StringRef name,
-                                  MatrixType type, Operation *derivedFromOp,
-                                  ArrayAttr params) {
+AttrOp Differentiator::createAttr(AttrOp next, StringRef name, MatrixType type,
+                                  Operation *derivedFromOp, ArrayAttr params) {
   OpBuilder b(next->getBlock(), std::next(Block::iterator(next)));
   auto attr = AttrOp::create(b, next.getLoc(), b.getStringAttr(name),
                              TypeAttr::get(type));
@@ -426,7 +423,8 @@ FailureOr<Operation *> Differentiator::unionJacobian(Operation *member,
                                                      int64_t width) {
   std::string jacName =
       (name.getValue() + "__ujac" + std::to_string(width)).str();
-  if (Operation *existing = tables.lookupSymbolIn(member, StringAttr::get(member->getContext(), jacName)))
+  if (Operation *existing = tables.lookupSymbolIn(
+          member, StringAttr::get(member->getContext(), jacName)))
     return existing;
   Operation *attr = tables.lookupSymbolIn(member, name);
   MatrixType type = getAttributeType(attr);
@@ -434,9 +432,9 @@ FailureOr<Operation *> Differentiator::unionJacobian(Operation *member,
   MatrixType jacType = type.withShape(rc, width);
   // Placed at the end of the member, after every attribute it may copy.
   OpBuilder anchor = OpBuilder::atBlockEnd(attr->getBlock());
-  auto result = AttrOp::create(anchor, attr->getLoc(),
-                               anchor.getStringAttr(jacName),
-                               TypeAttr::get(jacType));
+  auto result =
+      AttrOp::create(anchor, attr->getLoc(), anchor.getStringAttr(jacName),
+                     TypeAttr::get(jacType));
   result.getBody().push_back(new Block());
   derivedFrom[result] = baseOf(attr);
   tables.invalidateSymbolTable(member);
@@ -463,14 +461,14 @@ FailureOr<Operation *> Differentiator::unionJacobian(Operation *member,
         b.clone(op, mapping);
       Value read = mapping.lookup(
           cast<YieldOp>((*jac).getBodyBlock().getTerminator()).getValue());
-      value = inner.getCols() == width
-                  ? read
-                  : ConcatOp::create(
-                        b, loc, jacType, ConcatAxis::horizontal,
-                        ValueRange{read,
-                                   zeros(b, loc,
-                                         type.withShape(
-                                             rc, width - inner.getCols()))});
+      value =
+          inner.getCols() == width
+              ? read
+              : ConcatOp::create(
+                    b, loc, jacType, ConcatAxis::horizontal,
+                    ValueRange{read, zeros(b, loc,
+                                           type.withShape(
+                                               rc, width - inner.getCols()))});
     }
   } else {
     SmallVector<double> rowMajor(rc * width, 0.0);
@@ -525,10 +523,10 @@ FailureOr<Value> Differentiator::seed(OpBuilder &b, Operation *leaf,
     auto jjType = cast<MatrixType>(jj.getType());
     if ((local + 1) * rc > jjType.getCols())
       return Value(); // padding beyond the source's parameters
-    Value row = RowOp::create(b, loc, type.withShape(1, jjType.getCols()), jj,
-                              slot);
-    Value column = SliceOp::create(b, loc, type.withShape(1, rc), row, 0,
-                                   local * rc);
+    Value row =
+        RowOp::create(b, loc, type.withShape(1, jjType.getCols()), jj, slot);
+    Value column =
+        SliceOp::create(b, loc, type.withShape(1, rc), row, 0, local * rc);
     return embedRow(b, loc, column, slot, k);
   }
   auto unionOp = cast<UnionOp>(leaf);
@@ -549,14 +547,14 @@ FailureOr<Value> Differentiator::seed(OpBuilder &b, Operation *leaf,
       return Value(); // every member is constant in the parameters
     OpBuilder::InsertionGuard guard(b);
     b.setInsertionPointAfter(leaf);
-    uj = UnionOp::create(
-        b, loc, getAttributeType(first),
-        FlatSymbolRefAttr::get(first->getAttrOfType<StringAttr>(
-            SymbolTable::getSymbolAttrName())));
+    uj =
+        UnionOp::create(b, loc, getAttributeType(first),
+                        FlatSymbolRefAttr::get(first->getAttrOfType<StringAttr>(
+                            SymbolTable::getSymbolAttrName())));
   }
   auto ujType = cast<MatrixType>(uj.getType());
-  Value column = ColOp::create(b, loc, ujType.withShape(ujType.getRows(), 1),
-                               uj, local);
+  Value column =
+      ColOp::create(b, loc, ujType.withShape(ujType.getRows(), 1), uj, local);
   return ResizeOp::create(b, loc, type, column).getResult();
 }
 
@@ -572,11 +570,11 @@ Differentiator::leavesOf(AttrOp jac, ArrayRef<ParamGroup> groups) {
                   baseOf(lookupInScene(scene, read.getAttribute(), &tables)) ==
                       g.base;
       else if (auto join = dyn_cast<JoinOp>(op))
-        belongs = g.kind == GroupKind::Join &&
-                  tables.lookupSymbolIn(getOwningEntity(jac),
-                                        join.getConnectivityAttr()) == g.key &&
-                  baseOf(lookupInScene(scene, join.getSource(), &tables)) ==
-                      g.base;
+        belongs =
+            g.kind == GroupKind::Join &&
+            tables.lookupSymbolIn(getOwningEntity(jac),
+                                  join.getConnectivityAttr()) == g.key &&
+            baseOf(lookupInScene(scene, join.getSource(), &tables)) == g.base;
       else if (isa<UnionOp>(op))
         belongs = g.kind == GroupKind::Union;
       if (belongs)
@@ -593,7 +591,8 @@ FailureOr<AttrOp> Differentiator::jacobian(AttrOp attr, bool inner) {
   FailureOr<SmallVector<ParamGroup>> groups = groupsOf(attr, inner);
   if (failed(groups))
     return failure();
-  int64_t d = groups->empty() ? 0 : groups->back().offset + groups->back().size();
+  int64_t d =
+      groups->empty() ? 0 : groups->back().offset + groups->back().size();
   if (d == 0) {
     jacobians[memo] = AttrOp();
     return AttrOp();
@@ -602,9 +601,10 @@ FailureOr<AttrOp> Differentiator::jacobian(AttrOp attr, bool inner) {
   int64_t rc = type.getNumElements();
   std::string name = (attr.getSymName() + (inner ? "__ijac" : "__jac")).str();
   Operation *entity = getOwningEntity(attr);
-  if (tables.lookupSymbolIn(entity, StringAttr::get(entity->getContext(), name)))
-    return attr.emitOpError() << "cannot add its Jacobian @" << name
-                              << ": the name is taken";
+  if (tables.lookupSymbolIn(entity,
+                            StringAttr::get(entity->getContext(), name)))
+    return attr.emitOpError()
+           << "cannot add its Jacobian @" << name << ": the name is taken";
   AttrOp jac = createAttr(attr, name, type.withShape(rc, d), attr,
                           inner ? ArrayAttr() : describe(*groups));
   tables.invalidateSymbolTable(entity);
@@ -656,12 +656,11 @@ FailureOr<AttrOp> Differentiator::jacobian(AttrOp attr, bool inner) {
     jacobians[memo] = AttrOp();
     return AttrOp();
   }
-  Value result =
-      columns.size() == 1
-          ? columns[0]
-          : ConcatOp::create(b, attr.getLoc(), type.withShape(rc, d),
-                             ConcatAxis::horizontal, columns)
-                .getResult();
+  Value result = columns.size() == 1
+                     ? columns[0]
+                     : ConcatOp::create(b, attr.getLoc(), type.withShape(rc, d),
+                                        ConcatAxis::horizontal, columns)
+                           .getResult();
   YieldOp::create(b, attr.getLoc(), result);
   return jac;
 }
@@ -680,7 +679,8 @@ void DifferentiatePass::runOnOperation() {
     if (minimize.empty())
       continue;
     DenseSet<Operation *> targets;
-    for (auto ref : (*minimize.begin()).getTargets().getAsRange<SymbolRefAttr>())
+    for (auto ref :
+         (*minimize.begin()).getTargets().getAsRange<SymbolRefAttr>())
       targets.insert(lookupInScene(scene, ref, &tables));
     Differentiator diff(scene, targets, tables);
     for (auto energy : scene.getBodyBlock().getOps<EnergyOp>()) {
@@ -710,8 +710,8 @@ void DifferentiatePass::runOnOperation() {
         AttrOp a = diff.createAttr(*jac, (attr.getSymName() + suffix).str(),
                                    type, nullptr, cast<ArrayAttr>(params));
         OpBuilder b = OpBuilder::atBlockEnd(&a.getBodyBlock());
-        Value v = ReadOp::create(b, a.getLoc(), of.getMatrixType(),
-                                 getScenePath(of));
+        Value v =
+            ReadOp::create(b, a.getLoc(), of.getMatrixType(), getScenePath(of));
         if (transpose)
           v = TransposeOp::create(b, a.getLoc(), type, v);
         else if (of.getMatrixType() != type)
@@ -744,12 +744,12 @@ void DifferentiatePass::runOnOperation() {
       for (const ParamGroup &g : *groups)
         m += g.leafEntries;
       bool reduced = *reducible && m < d;
-      AttrOp projected = diff.createAttr(
-          *jac, (attr.getSymName() + "__hess_proj").str(), square, nullptr,
-          cast<ArrayAttr>(params));
-      projected->setAttr("yasps.projection",
-                         StringAttr::get(&getContext(),
-                                         reduced ? "reduced" : "full"));
+      AttrOp projected =
+          diff.createAttr(*jac, (attr.getSymName() + "__hess_proj").str(),
+                          square, nullptr, cast<ArrayAttr>(params));
+      projected->setAttr(
+          "yasps.projection",
+          StringAttr::get(&getContext(), reduced ? "reduced" : "full"));
       Location loc = projected.getLoc();
       if (reduced) {
         FailureOr<AttrOp> innerGrad = diff.jacobian(attr, /*inner=*/true);
@@ -767,8 +767,8 @@ void DifferentiatePass::runOnOperation() {
                                     .getResult()
                               : zeros(pb, loc, innerType);
         Value pi = ProjectOp::create(pb, loc, energy.getProjection(), hi);
-        Value j = ReadOp::create(pb, loc, row.withShape(m, d),
-                                 getScenePath(*map));
+        Value j =
+            ReadOp::create(pb, loc, row.withShape(m, d), getScenePath(*map));
         Value jt = TransposeOp::create(pb, loc, row.withShape(d, m), j);
         Value pj = MatmulOp::create(pb, loc, row.withShape(m, d), pi, j);
         Value result = MatmulOp::create(pb, loc, square, jt, pj);

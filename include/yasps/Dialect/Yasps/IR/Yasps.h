@@ -62,8 +62,8 @@ std::string describe(Operation *symbolOp);
 /// The attribute declarations that `attr`'s region reads directly: targets of
 /// `yasps.read`, sources of `yasps.join` and, for `yasps.union`, the
 /// same-named attribute of every member. Unresolved symbols are skipped.
-SmallVector<Operation *> getAttributeDependencies(AttrOp attr,
-                                                  SymbolTableCollection &tables);
+SmallVector<Operation *>
+getAttributeDependencies(AttrOp attr, SymbolTableCollection &tables);
 
 /// True for a dynamic primitive and for a primitive union with a dynamic
 /// member: entities whose instance count changes at run time.
