@@ -113,7 +113,7 @@ def test_pure_constants_fold_in_the_compiler(p):
 
 def test_literal_precision_survives_emission(p):
     tiny = 1e-300 / 3
-    e = p.addAttribute("t", computed_attribute=p["s"] * tiny)
+    p.addAttribute("t", computed_attribute=p["s"] * tiny)
     out = compiler.run_pipeline(p.scene.ir(), "")
     assert "yasps.scale" in out
     text = p.scene.ir(verify=False)

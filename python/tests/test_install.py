@@ -2,7 +2,6 @@
 package whose extension works without the source tree."""
 
 import subprocess
-import sys
 import venv
 
 from conftest import REPO

@@ -7,7 +7,7 @@ import pytest
 
 from yasps import compiler
 
-from conftest import running_example, yasps_opt
+from conftest import yasps_opt
 
 
 def test_ir_verifies_and_round_trips(example_scene):

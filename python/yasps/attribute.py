@@ -20,7 +20,7 @@ from .errors import LineageError, ShapeError, ValueUpdateError
 from . import values as _values
 
 if TYPE_CHECKING:  # pragma: no cover
-    from .scene import Connectivity, Entity
+    from .scene import Entity
 
 #: Kinds of attribute. Stored kinds hold values; named kinds live on an entity.
 STORED_KINDS = ("data", "constant")
