@@ -116,3 +116,127 @@ def test_barrier_chain_rule_against_ipctk():
         assert_close(d.value[i:i + 1], np.array([ipctk.barrier(dist, dhat)]), 1e-12)
         assert_close(d.gradient[i], b1 * g_d)
         assert_close(d.hessian[i], b2 * np.outer(g_d, g_d) + b1 * h_d)
+
+
+def jax_check(d, f, inputs, rtol=1e-10):
+    """Gradient and Hessian of every instance against jax.grad / hessian."""
+    for i in range(len(d.value)):
+        args = [jnp.array(a[i]) for a in inputs]
+        assert_close(d.value[i:i + 1], np.array([f(*args)]), 1e-12)
+        assert_close(d.gradient[i], np.array(jax.grad(f)(*args)), rtol)
+        assert_close(d.hessian[i], np.array(jax.hessian(f)(*args)), rtol)
+
+
+def test_inertia_gravity_and_spring_against_jax():
+    s = yasps.scene("v")
+    v = s.addMesh("m").addPrimitive("v", numInstances=COUNT)
+    x = v.addAttribute("x", rows=3)
+    X = rng.normal(size=(COUNT, 3))
+    x.updateValue(X)
+    xh = v.addConstant("xh", rows=3)
+    XH = rng.normal(size=(COUNT, 3))
+    xh.updateValue(XH)
+    g = np.array([0.0, -9.81, 0.0])
+    e = v.addAttribute("e", computed_attribute=E.inertia(x, xh, 2.0) + E.gravity(x, 2.0, g))
+    s.addEnergy(e)
+    s.addMinimizeTarget([x])
+    jax_check(s.energyDerivatives(e),
+              lambda p, q: 1.0 * jnp.sum((p - q) ** 2) - 2.0 * jnp.dot(g, p), [X, XH])
+
+    ends = rng.normal(size=(COUNT, 2, 3))
+    s2, e2, x2, c2 = elements(2, ends)
+    d = derivatives(s2, e2, E.mass_spring(c2, 0.8, 5.0))
+    jax_check(d, lambda p: 2.5 * (jnp.linalg.norm(p[3:] - p[:3]) - 0.8) ** 2,
+              [ends.reshape(COUNT, 6)])
+
+
+def test_cloth_abd_and_deformation_gradient_energy_against_jax():
+    rest = np.array([[0, 0], [1, 0], [0, 1]], float)[None] + rng.normal(scale=0.05, size=(COUNT, 3, 2))
+    cur = np.concatenate([rest, np.zeros((COUNT, 3, 1))], axis=2) @ (np.eye(3) + rng.normal(scale=0.2, size=(COUNT, 3, 3)))
+    inv = np.linalg.inv(np.stack([rest[:, k] - rest[:, 0] for k in (1, 2)], axis=2))
+    s, e, x, c = elements(3, cur)
+    duv = e.addConstant("inv", rows=2, cols=2)
+    duv.updateValue(inv)
+    d = derivatives(s, e, E.baraff_witkin(c, duv, 0.5, 30.0, 10.0))
+
+    def bw(p, dinv):
+        q = p.reshape(3, 3)
+        W = jnp.stack([q[1] - q[0], q[2] - q[0]], axis=1) @ dinv
+        su, sv = jnp.linalg.norm(W[:, 0]) - 1, jnp.linalg.norm(W[:, 1]) - 1
+        return 0.5 * (15.0 * (su ** 2 + sv ** 2) + 5.0 * jnp.dot(W[:, 0], W[:, 1]) ** 2)
+    jax_check(d, bw, [cur.reshape(COUNT, 9), inv])
+
+    s3 = yasps.scene("abd")
+    b = s3.addMesh("m").addPrimitive("b", numInstances=COUNT)
+    A = b.addAttribute("A", rows=3, cols=3)
+    AV = np.eye(3) + rng.normal(scale=0.2, size=(COUNT, 3, 3))
+    A.updateValue(AV)
+    orth = b.addAttribute("orth", computed_attribute=E.abd_orthogonality(A, 3.0))
+    F = b.addAttribute("F", rows=3, cols=3)
+    F.updateValue(AV + 0.1)
+    snh = b.addAttribute("snh", computed_attribute=E.stable_neo_hookean(F, 1.0, 7.0, 2.0))
+    s3.addEnergy(orth)
+    s3.addEnergy(snh)
+    s3.addMinimizeTarget([A, F])
+    colmajor = np.transpose(AV, (0, 2, 1)).reshape(COUNT, 9)
+
+    def orth_f(p):
+        M = p.reshape(3, 3).T
+        return 1.5 * jnp.sum((M.T @ M - jnp.eye(3)) ** 2)
+
+    def snh_f(p):
+        M = p.reshape(3, 3).T
+        ic, J = jnp.sum(M * M), jnp.linalg.det(M)
+        return 2.0 * (0.5 * (ic - 3) - 0.5 * jnp.log(ic + 1) + 3.5 * (J - 1 - 0.75 / 7.0) ** 2)
+    jax_check(s3.energyDerivatives(orth), orth_f, [colmajor])
+    jax_check(s3.energyDerivatives(snh), snh_f,
+              [np.transpose(AV + 0.1, (0, 2, 1)).reshape(COUNT, 9)])
+
+
+@pytest.mark.parametrize("kind", ["pp", "pe", "pt", "ee"])
+def test_paper_barrier_against_jax(kind):
+    arity = {"pp": 2, "pe": 3, "pt": 4, "ee": 4}[kind]
+    pts = rng.normal(scale=0.3, size=(COUNT, arity, 3))
+    s, e, x, c = elements(arity, pts)
+    rows = [c.row(i).T for i in range(arity)]
+    fn = {"pp": E.point_point_distance2, "pe": E.point_edge_distance2,
+          "pt": E.point_triangle_distance2, "ee": E.edge_edge_distance2}[kind]
+    dist = e.addAttribute("d2", computed_attribute=fn(*rows))
+    dhat = float(dist.compute().value.max()) * 1.5
+    d = derivatives(s, e, E.ipc_barrier(dist, dhat, 100.0))
+
+    def distance(p):
+        q = p.reshape(arity, 3)
+        if kind == "pp":
+            return jnp.sum((q[1] - q[0]) ** 2)
+        if kind == "pe":
+            u = q[2] - q[1]
+            return jnp.sum(jnp.cross(u, q[0] - q[1]) ** 2) / jnp.sum(u * u)
+        n = jnp.cross(q[2] - q[1], q[3] - q[1]) if kind == "pt" else \
+            jnp.cross(q[1] - q[0], q[3] - q[2])
+        r = (q[0] - q[1]) if kind == "pt" else (q[2] - q[0])
+        return jnp.dot(r, n) ** 2 / jnp.sum(n * n)
+
+    def barrier(p):
+        dd = distance(p)
+        return 100.0 * (dd - dhat) ** 2 * jnp.log(dd / dhat) ** 2
+    jax_check(d, barrier, [pts.reshape(COUNT, -1)], rtol=1e-9)
+
+
+def test_pendulum_against_jax():
+    s = yasps.scene("pendulum")
+    p = s.addMesh("m").addPrimitive("bob", numInstances=COUNT)
+    theta = p.addAttribute("theta", rows=2, cols=1)
+    TH = rng.uniform(-1, 1, size=(COUNT, 2))
+    theta.updateValue(TH)
+    a, b = theta[0], theta[1]
+    pos = p.addAttribute("position", computed_attribute=yasps.vstack(
+        [a.sin() + b.sin(), -(a.cos() + b.cos())]))
+    energy = p.addAttribute("e", computed_attribute=9.81 * pos[1] + (pos - np.array([0.3, -1.0])).squaredNorm())
+    s.addEnergy(energy)
+    s.addMinimizeTarget([theta])
+
+    def f(t):
+        x = jnp.array([jnp.sin(t[0]) + jnp.sin(t[1]), -(jnp.cos(t[0]) + jnp.cos(t[1]))])
+        return 9.81 * x[1] + jnp.sum((x - jnp.array([0.3, -1.0])) ** 2)
+    jax_check(s.energyDerivatives(energy), f, [TH])
