@@ -1,7 +1,8 @@
 //===- ProjectLowering.cpp - PSD projection in kernel code ----------------===//
 //
-// `yasps.project` eigen-decomposes a small symmetric matrix with the cyclic
-// Jacobi method and rebuilds it with its eigenvalues clamped at zero (or made
+// `yasps.project` first tests the symmetric matrix for positive
+// definiteness (LDL^T pivots, unrolled) and returns it unchanged when it
+// passes. Otherwise it eigen-decomposes it with the cyclic Jacobi method and rebuilds it with its eigenvalues clamped at zero (or made
 // absolute). Jacobi is slow for large matrices but local Hessians are at most
 // a few dozen rows, and it is accurate where projection needs it: repeated
 // eigenvalues, and tiny ones relative to the largest (Demmel & Veselic).
@@ -159,13 +160,13 @@ struct JacobiBuilder {
 };
 } // namespace
 
-ScalarMatrix mlir::yasps::lowerProjection(OpBuilder &b, Location loc,
-                                          ProjectionMethod method,
-                                          const ScalarMatrix &in) {
-  if (method == ProjectionMethod::none)
-    return in;
-  int64_t n = in.rows;
-  auto type = cast<FloatType>(in.values.front().getType());
+/// The Jacobi projection of the symmetric matrix `sym` (row-major scalars),
+/// emitted at the builder's insertion point; returns the column-major
+/// entries of the result.
+static SmallVector<Value> jacobiProjection(OpBuilder &b, Location loc,
+                                           ProjectionMethod method,
+                                           ArrayRef<Value> sym, int64_t n,
+                                           FloatType type) {
   JacobiBuilder j{b, loc, type};
 
   auto squareType = MemRefType::get({n, n}, type);
@@ -179,13 +180,10 @@ ScalarMatrix mlir::yasps::lowerProjection(OpBuilder &b, Location loc,
     a = memref::AllocaOp::create(b, loc, squareType);
     v = memref::AllocaOp::create(b, loc, squareType);
   }
-  // The symmetric part of the input (Hessians are symmetric up to rounding)
-  // and the identity.
+  // The matrix and the identity.
   for (int64_t r = 0; r < n; ++r)
     for (int64_t c = 0; c < n; ++c) {
-      Value sym = r == c ? in.at(r, c)
-                         : j.mul(j.cst(0.5), j.add(in.at(r, c), in.at(c, r)));
-      j.store(sym, a, j.idx(r), j.idx(c));
+      j.store(sym[r * n + c], a, j.idx(r), j.idx(c));
       j.store(j.cst(r == c ? 1.0 : 0.0), v, j.idx(r), j.idx(c));
     }
 
@@ -226,5 +224,70 @@ ScalarMatrix mlir::yasps::lowerProjection(OpBuilder &b, Location loc,
           });
       out.push_back(sum.getResult(0));
     }
-  return ScalarMatrix{n, n, out};
+  return out;
+}
+
+/// True (i1) if the symmetric matrix `sym` (row-major) is positive definite:
+/// every pivot of its LDL^T factorisation is positive (NaN is not).
+static Value isPositiveDefinite(OpBuilder &b, Location loc,
+                                ArrayRef<Value> sym, int64_t n,
+                                FloatType type) {
+  JacobiBuilder j{b, loc, type};
+  SmallVector<Value> d(n), l(n * n);
+  Value all;
+  for (int64_t c = 0; c < n; ++c) {
+    Value dc = sym[c * n + c];
+    for (int64_t k = 0; k < c; ++k)
+      dc = j.sub(dc, j.mul(j.mul(l[c * n + k], l[c * n + k]), d[k]));
+    d[c] = dc;
+    Value positive = arith::CmpFOp::create(b, loc, arith::CmpFPredicate::OGT,
+                                           dc, j.cst(0.0));
+    all = all ? arith::AndIOp::create(b, loc, all, positive).getResult()
+              : positive;
+    for (int64_t r = c + 1; r < n; ++r) {
+      Value lrc = sym[r * n + c];
+      for (int64_t k = 0; k < c; ++k)
+        lrc = j.sub(lrc, j.mul(j.mul(l[r * n + k], l[c * n + k]), d[k]));
+      l[r * n + c] = j.div(lrc, dc);
+    }
+  }
+  return all;
+}
+
+ScalarMatrix mlir::yasps::lowerProjection(OpBuilder &b, Location loc,
+                                          ProjectionMethod method,
+                                          const ScalarMatrix &in) {
+  if (method == ProjectionMethod::none)
+    return in;
+  int64_t n = in.rows;
+  auto type = cast<FloatType>(in.values.front().getType());
+  JacobiBuilder j{b, loc, type};
+  // The symmetric part of the input (Hessians are symmetric up to rounding).
+  SmallVector<Value> sym(n * n);
+  for (int64_t r = 0; r < n; ++r)
+    for (int64_t c = 0; c < n; ++c)
+      sym[r * n + c] =
+          r == c ? in.at(r, c)
+                 : j.mul(j.cst(0.5), j.add(in.at(r, c), in.at(c, r)));
+  // Most local Hessians are already positive definite: an LDL^T test (n^3/3
+  // operations) skips the eigen-decomposition for them.
+  Value definite = isPositiveDefinite(b, loc, sym, n, type);
+  SmallVector<Type> resultTypes(n * n, type);
+  auto ifOp = scf::IfOp::create(b, loc, resultTypes, definite,
+                                /*withElseRegion=*/true);
+  {
+    OpBuilder::InsertionGuard guard(b);
+    b.setInsertionPointToStart(ifOp.thenBlock());
+    SmallVector<Value> same;
+    for (int64_t c = 0; c < n; ++c)
+      for (int64_t r = 0; r < n; ++r)
+        same.push_back(sym[r * n + c]);
+    scf::YieldOp::create(b, loc, same);
+    b.setInsertionPointToStart(ifOp.elseBlock());
+    scf::YieldOp::create(b, loc,
+                         jacobiProjection(b, loc, method, sym, n, type));
+  }
+  ScalarMatrix result{n, n, {}};
+  result.values.append(ifOp.getResults().begin(), ifOp.getResults().end());
+  return result;
 }
