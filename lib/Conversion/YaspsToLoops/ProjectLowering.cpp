@@ -3,8 +3,9 @@
 // `yasps.project` first tests the symmetric matrix for positive
 // definiteness (LDL^T pivots, unrolled) and returns it unchanged when it
 // passes. Otherwise it eigen-decomposes it with the cyclic Jacobi method and
-// rebuilds it with its eigenvalues clamped at zero (or made absolute). Jacobi is slow for large matrices but local Hessians are at most
-// a few dozen rows, and it is accurate where projection needs it: repeated
+// rebuilds it with its eigenvalues clamped at zero (or made absolute).
+// Jacobi is slow for large matrices but local Hessians are at most a few
+// dozen rows, and it is accurate where projection needs it: repeated
 // eigenvalues, and tiny ones relative to the largest (Demmel & Veselic).
 //
 // The matrix lives in two stack buffers (the matrix being diagonalised and
