@@ -77,6 +77,16 @@ def main() -> None:
           f"{result.value.sum():.6g} (kernel from "
           f"{'memory' if result.stats['from_memory'] else 'disk' if result.stats['from_disk'] else 'a fresh compile'})")
 
+    # Symbolic derivatives through JOIN and UNION: each pair has 24 local
+    # parameters (two UNION slots of 12: an affine body's A and t, or a soft
+    # vertex's 3 entries padded), projected to PSD in reduced (6x6) space.
+    d = s.energyDerivatives(energy)
+    real = sum(loc is not None for loc in d.locations(0))
+    smallest = np.linalg.eigvalsh(d.projectedHessian).min()
+    print(f"local gradients {d.gradient.shape}, Hessians {d.hessian.shape}; "
+          f"pair 0 (affine-soft) has {real} real parameters; smallest "
+          f"eigenvalue of the projected Hessians {smallest:.3g}")
+
 
 if __name__ == "__main__":
     main()
