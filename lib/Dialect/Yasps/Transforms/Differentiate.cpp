@@ -60,7 +60,8 @@ public:
   /// `X__jac`, or null when X depends on no target. With `inner`, the
   /// Jacobian `X__ijac` with respect to the entries of X's leaf values (the
   /// inner variables of the reduced-space projection) instead.
-  FailureOr<AttrOp> jacobian(AttrOp attr, bool inner = false);
+  FailureOr<AttrOp> jacobian(AttrOp attr, bool inner = false,
+                             bool symmetric = false);
 
   /// The parameter groups of a computed attribute; with `inner`, one group
   /// per leaf with the leaf's entries as parameters.
@@ -584,7 +585,8 @@ Differentiator::leavesOf(AttrOp jac, ArrayRef<ParamGroup> groups) {
   return leaves;
 }
 
-FailureOr<AttrOp> Differentiator::jacobian(AttrOp attr, bool inner) {
+FailureOr<AttrOp> Differentiator::jacobian(AttrOp attr, bool inner,
+                                           bool symmetric) {
   auto memo = std::make_pair(attr.getOperation(), inner);
   if (auto it = jacobians.find(memo); it != jacobians.end())
     return it->second;
@@ -620,10 +622,21 @@ FailureOr<AttrOp> Differentiator::jacobian(AttrOp attr, bool inner) {
   SmallVector<std::pair<Operation *, const ParamGroup *>> leaves =
       leavesOf(jac, *groups);
 
+  // A symmetric Jacobian (the Hessian: Jacobian of a gradient row whose
+  // entries are separate values) needs entry i in direction p only for
+  // i <= p; the rest is mirrored.
+  SmallVector<Value> entries;
+  if (auto concat = root.getDefiningOp<ConcatOp>();
+      symmetric && concat && concat.getAxis() == ConcatAxis::horizontal &&
+      rc == d && static_cast<int64_t>(concat.getInputs().size()) == d)
+    entries.assign(concat.getInputs().begin(), concat.getInputs().end());
+  SmallVector<Value> upper(d * d); // upper[i * d + p] = d(entry i)/d(p)
   SmallVector<Value> columns;
   bool anyNonZero = false;
+  int64_t param = -1;
   for (const ParamGroup &g : *groups) {
     for (int64_t p = 0; p < g.size(); ++p) {
+      ++param;
       int64_t slot = p / g.width, local = p % g.width;
       bool failedSeed = false;
       auto seedFn = [&](Operation *leaf) -> FailureOr<Value> {
@@ -637,6 +650,16 @@ FailureOr<AttrOp> Differentiator::jacobian(AttrOp attr, bool inner) {
         return Value();
       };
       Direction direction(b, seedFn);
+      if (!entries.empty()) {
+        for (int64_t i = 0; i <= param; ++i) {
+          FailureOr<Value> t = direction.tangent(entries[i]);
+          if (failed(t) || failedSeed)
+            return failure();
+          anyNonZero |= static_cast<bool>(*t);
+          upper[i * d + param] = *t;
+        }
+        continue;
+      }
       FailureOr<Value> t = direction.tangent(root);
       if (failed(t) || failedSeed)
         return failure();
@@ -655,6 +678,19 @@ FailureOr<AttrOp> Differentiator::jacobian(AttrOp attr, bool inner) {
     tables.invalidateSymbolTable(entity);
     jacobians[memo] = AttrOp();
     return AttrOp();
+  }
+  if (!entries.empty()) {
+    MatrixType scalarType = type.withShape(1, 1);
+    for (int64_t p = 0; p < d; ++p) {
+      SmallVector<Value> column;
+      for (int64_t i = 0; i < d; ++i) {
+        Value v = upper[std::min(i, p) * d + std::max(i, p)];
+        column.push_back(v ? v : zeros(b, attr.getLoc(), scalarType));
+      }
+      columns.push_back(ConcatOp::create(b, attr.getLoc(),
+                                         type.withShape(d, 1),
+                                         ConcatAxis::vertical, column));
+    }
   }
   Value result = columns.size() == 1
                      ? columns[0]
@@ -699,7 +735,8 @@ void DifferentiatePass::runOnOperation() {
         return signalPassFailure();
       if (!*jac)
         continue; // depends on no target
-      FailureOr<AttrOp> hess = diff.jacobian(*jac);
+      FailureOr<AttrOp> hess =
+          diff.jacobian(*jac, /*inner=*/false, /*symmetric=*/true);
       if (failed(hess))
         return signalPassFailure();
       MatrixType row = (*jac).getMatrixType();
@@ -755,7 +792,8 @@ void DifferentiatePass::runOnOperation() {
         FailureOr<AttrOp> innerGrad = diff.jacobian(attr, /*inner=*/true);
         FailureOr<AttrOp> innerHess =
             succeeded(innerGrad) && *innerGrad
-                ? diff.jacobian(*innerGrad, /*inner=*/true)
+                ? diff.jacobian(*innerGrad, /*inner=*/true,
+                                /*symmetric=*/true)
                 : FailureOr<AttrOp>(AttrOp());
         FailureOr<AttrOp> map = diff.innerMap(attr);
         if (failed(innerGrad) || failed(innerHess) || failed(map))
