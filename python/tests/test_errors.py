@@ -209,3 +209,14 @@ def test_dynamic_primitive_updates():
     with pytest.raises(SceneError, match="not dynamic"):
         s.bunny_soft.vertices.updateNumInstances(3)
     assert "yasps.primitive @pp(1) dynamic" in s.ir()
+
+
+def test_add_minimize_target_differentiates_and_reports():
+    s = yasps.scene("p")
+    prim = s.addMesh("m").addPrimitive("p", numInstances=1)
+    h = prim.addAttribute("h", rows=2, cols=2)
+    e = prim.addAttribute("e", computed_attribute=h.project().trace())
+    s.addEnergy(e)
+    with pytest.raises(yasps.IRError, match="PSD projection applies to derivatives"):
+        s.addMinimizeTarget([h])
+    assert s.minimizeTargets == []

@@ -288,7 +288,9 @@ class Scene(Entity):
 
     def addMinimizeTarget(self, targets: Union[Attribute, Sequence[Attribute]]) -> None:
         """Declares the data attributes the energy is minimised over, in the
-        order ``minimizeEnergy`` returns their solutions. Further calls
+        order ``minimizeEnergy`` returns their solutions, and differentiates
+        the registered energies with respect to them (raising
+        :class:`~yasps.errors.IRError` if one cannot be). Further calls
         append."""
         if isinstance(targets, Attribute):
             targets = [targets]
@@ -309,6 +311,18 @@ class Scene(Entity):
                                  "listed twice")
             new.append(target)
         self._targets.extend(new)
+        if self._energies:
+            # Differentiate now (paper 4.7), so that an energy the compiler
+            # cannot differentiate is reported here; kernels come later.
+            from .emit import emit_scene
+            from .evaluate import DIFFERENTIATION_PIPELINE
+
+            try:
+                compiler.run_pipeline(emit_scene(self, locations=True),
+                                      DIFFERENTIATION_PIPELINE, self._name)
+            except Exception:
+                self._targets = self._targets[:len(self._targets) - len(new)]
+                raise
 
     # ---------------------------------------------------------- evaluation
 
