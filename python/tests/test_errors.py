@@ -220,3 +220,19 @@ def test_add_minimize_target_differentiates_and_reports():
     with pytest.raises(yasps.IRError, match="PSD projection applies to derivatives"):
         s.addMinimizeTarget([h])
     assert s.minimizeTargets == []
+
+
+def test_stale_connectivity_into_a_shrunk_dynamic_primitive():
+    s = yasps.scene("stale")
+    m = s.addMesh("m")
+    pts = m.addPrimitive("pts", numInstances=3, isDynamic=True)
+    x = pts.addAttribute("x", rows=1)
+    x.updateValue([[1.0], [2.0], [3.0]])
+    pairs = m.addPrimitive("pairs", numInstances=1)
+    conn = pairs.addConnectivity("p2p", pts, [[0, 2]], 2)
+    joined = pairs.addAttribute("x", through=conn, source=x)
+    assert joined.compute().value.tolist() == [[[1.0], [3.0]]]
+    pts.updateNumInstances(2)
+    x.updateValue([[1.0], [2.0]])
+    with pytest.raises(SceneError, match="refers to instance 2 .* which now has 2"):
+        joined.compute()

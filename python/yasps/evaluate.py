@@ -61,6 +61,14 @@ def _buffer(scene: Scene, kind: str, path: str, out: np.ndarray) -> np.ndarray:
             raise SceneError(f"{target.describe()} has no indices for the "
                              f"current {target.source.numInstances} instances; "
                              "call updateConnectivity")
+        # The kernel trusts these indices: a target that shrank since they
+        # were set (a dynamic primitive) must not be read out of bounds.
+        bound = target.target.numInstances
+        if target._indices.size and int(target._indices.max()) >= bound:
+            raise SceneError(f"{target.describe()} refers to instance "
+                             f"{int(target._indices.max())} of "
+                             f"{target.target.describe()}, which now has "
+                             f"{bound}; call updateConnectivity")
         return target._indices
     if kind == "offsets":
         assert isinstance(target, PrimitiveUnion)
