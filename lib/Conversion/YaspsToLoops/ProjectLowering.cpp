@@ -88,6 +88,24 @@ struct JacobiBuilder {
     });
   }
 
+  /// For j in [lb, ub): rotates the entries at(j) = ((r1, c1), (r2, c2)) of
+  /// m: x' = c x - s y, y' = s x + c y.
+  template <typename At>
+  void rotateRange(Value m, Value lb, Value ub, Value c, Value s, At at) {
+    scf::ForOp::create(b, loc, lb, ub, idx(1), ValueRange{},
+                       [&](OpBuilder &nested, Location, Value j, ValueRange) {
+                         OpBuilder::InsertionGuard guard(b);
+                         b.setInsertionPoint(scf::YieldOp::create(nested, loc));
+                         auto [first, second] = at(j);
+                         Value x = load(m, first.first, first.second);
+                         Value y = load(m, second.first, second.second);
+                         store(sub(mul(c, x), mul(s, y)), m, first.first,
+                               first.second);
+                         store(add(mul(s, x), mul(c, y)), m, second.first,
+                               second.second);
+                       });
+  }
+
   /// One Jacobi rotation annihilating entry (p, q) of `a`, accumulated in v.
   /// Returns an i1 that is true if a rotation was needed.
   Value annihilate(Value a, Value v, int64_t n, Value p, Value q) {
@@ -121,8 +139,24 @@ struct JacobiBuilder {
       Value c =
           div(cst(1.0), math::SqrtOp::create(b, loc, add(mul(t, t), cst(1.0))));
       Value s = mul(t, c);
-      rotate(a, n, p, q, c, s, /*rows=*/false);
-      rotate(a, n, p, q, c, s, /*rows=*/true);
+      // Only the upper triangle of a is kept (p < q everywhere): the
+      // diagonal moves by t * apq, entry (p, q) vanishes, and the other
+      // entries of rows/columns p and q rotate in three ranges.
+      Value h = mul(t, apq);
+      store(sub(app, h), a, p, p);
+      store(add(aqq, h), a, q, q);
+      store(cst(0.0), a, p, q);
+      Value p1 = arith::AddIOp::create(b, loc, p, idx(1));
+      Value q1 = arith::AddIOp::create(b, loc, q, idx(1));
+      rotateRange(a, idx(0), p, c, s, [&](Value j) {
+        return std::make_pair(std::make_pair(j, p), std::make_pair(j, q));
+      });
+      rotateRange(a, p1, q, c, s, [&](Value j) {
+        return std::make_pair(std::make_pair(p, j), std::make_pair(j, q));
+      });
+      rotateRange(a, q1, idx(n), c, s, [&](Value j) {
+        return std::make_pair(std::make_pair(p, j), std::make_pair(q, j));
+      });
       rotate(v, n, p, q, c, s, /*rows=*/false);
       scf::YieldOp::create(b, loc, flag(true));
     }
