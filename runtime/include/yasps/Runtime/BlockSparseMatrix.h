@@ -1,0 +1,166 @@
+//===- BlockSparseMatrix.h - symmetric block-sparse Hessian -----*- C++ -*-===//
+//
+// The global Hessian of a Newton step (the paper's appendices B-D) is
+// symmetric and block-sparse: every energy instance contributes dense
+// sub-blocks at block coordinates given by the DoF groups it reads. Only the
+// upper triangle (block row <= block column) is stored, so an off-diagonal
+// block (i, j) also stands for its transpose at (j, i). Stored blocks are
+// grouped by shape (rows, cols) so that kernels of one shape can run over
+// one group; within a group they are sorted by (row, col) and unique.
+//
+// The structure is built once from the list of coordinates that the energy
+// instances contribute; the builder returns, per input coordinate, the block
+// it lands in (the paper's PositionInData), so that assembling a step only
+// accumulates into known places.
+//
+//===----------------------------------------------------------------------===//
+
+#ifndef YASPS_RUNTIME_BLOCKSPARSEMATRIX_H
+#define YASPS_RUNTIME_BLOCKSPARSEMATRIX_H
+
+#include <cstddef>
+#include <cstdint>
+#include <memory>
+#include <mutex>
+#include <utility>
+#include <vector>
+
+namespace yasps::runtime {
+
+class ThreadPool;
+
+/// A partition of the scalar DoFs into consecutive blocks: block i covers
+/// scalar DoFs [blockOffset[i], blockOffset[i+1]). Blocks may be empty.
+struct BlockLayout {
+  std::vector<std::int64_t> blockOffset;
+
+  std::int64_t numBlocks() const {
+    return static_cast<std::int64_t>(blockOffset.size()) - 1;
+  }
+  std::int64_t blockSize(std::int64_t block) const {
+    return blockOffset[block + 1] - blockOffset[block];
+  }
+};
+
+/// Where one contributed coordinate is stored: the index of its stored block
+/// and whether the contribution lies in the lower triangle, so that it is
+/// stored transposed (at (col, row)).
+struct BlockSlot {
+  std::size_t block;
+  bool transposed;
+
+  bool operator==(const BlockSlot &other) const {
+    return block == other.block && transposed == other.transposed;
+  }
+};
+
+/// The stored blocks of one shape: blocks [firstBlock, firstBlock + size)
+/// of the matrix, at block coordinates (rowCoordinate[k], colCoordinate[k]),
+/// sorted by (row, col).
+struct BlockGroup {
+  std::int64_t rows;
+  std::int64_t cols;
+  std::size_t firstBlock;
+  std::vector<std::int64_t> rowCoordinate;
+  std::vector<std::int64_t> colCoordinate;
+
+  std::size_t size() const { return rowCoordinate.size(); }
+};
+
+/// A symmetric block-sparse matrix storing its upper block triangle.
+///
+/// Values live in one contiguous array: the stored blocks one after another
+/// in block-index order (group by group, groups sorted by (rows, cols)),
+/// each block row-major (rows x cols). Diagonal blocks are stored whole
+/// (both of their triangles) and used as they are, so callers keep them
+/// symmetric. An off-diagonal block B at (i, j), i < j, means H_ij = B and
+/// H_ji = B^T: a contribution to a pair of blocks must be added once, at
+/// (i, j) or at (j, i), not at both.
+class BlockSparseMatrix {
+public:
+  /// Builds the structure, zero-filled, from the block coordinates
+  /// `coords` (any order, duplicates and lower-triangle coordinates
+  /// allowed). If `positions` is given, it receives one slot per input
+  /// coordinate. Throws std::invalid_argument if the layout is not a
+  /// non-decreasing list starting at 0, or a coordinate is outside
+  /// [0, numBlocks).
+  BlockSparseMatrix(
+      BlockLayout layout,
+      const std::vector<std::pair<std::int64_t, std::int64_t>> &coords,
+      std::vector<BlockSlot> *positions = nullptr);
+
+  /// Sets every stored value to zero, keeping the structure.
+  void setZero();
+
+  /// Adds the dense block `local` at a slot from the constructor. `local`
+  /// is row-major and shaped as the input coordinate (row, col) it came
+  /// from: size(row) x size(col); a transposed slot adds its transpose.
+  /// Not synchronised: concurrent calls must target distinct blocks (use
+  /// addBlockConcurrent otherwise). Throws std::out_of_range for a block
+  /// index outside [0, numStoredBlocks()).
+  void addBlock(BlockSlot slot, const double *local);
+
+  /// addBlock that may run concurrently with itself on any slots: a lock
+  /// (one of a few, picked by block index) serialises writes to a block.
+  void addBlockConcurrent(BlockSlot slot, const double *local);
+
+  /// y = H x over all scalar DoFs, using both triangles. `x` and `y` hold
+  /// size() values and must not overlap. Each block row of y is computed by
+  /// one thread in a fixed order, so the result does not depend on the
+  /// number of threads.
+  void multiply(const double *x, double *y, ThreadPool &pool) const;
+
+  /// Writes the diagonal blocks to `out`, concatenated in block order, each
+  /// row-major (size(i) x size(i)); blocks that are not stored are zero.
+  void diagonalBlocks(std::vector<double> &out) const;
+
+  /// The dense size() x size() matrix, row-major, both triangles filled.
+  /// For tests and debugging.
+  std::vector<double> toDense() const;
+
+  const BlockLayout &layout() const { return layout_; }
+  std::int64_t numBlocks() const { return layout_.numBlocks(); }
+  /// Scalar dimension.
+  std::int64_t size() const { return layout_.blockOffset.back(); }
+  std::size_t numStoredBlocks() const { return blockRow_.size(); }
+
+  const std::vector<BlockGroup> &groups() const { return groups_; }
+  std::int64_t blockRow(std::size_t block) const { return blockRow_[block]; }
+  std::int64_t blockCol(std::size_t block) const { return blockCol_[block]; }
+  /// The row-major values of stored block `block`.
+  double *blockData(std::size_t block) {
+    return values_.data() + valueOffset_[block];
+  }
+  const double *blockData(std::size_t block) const {
+    return values_.data() + valueOffset_[block];
+  }
+  /// All stored values, in the order described above.
+  const std::vector<double> &values() const { return values_; }
+  std::vector<double> &values() { return values_; }
+
+private:
+  BlockLayout layout_;
+  std::vector<BlockGroup> groups_;
+  // Per stored block: its block coordinates and where its values start
+  // (valueOffset_ has one more entry, the total).
+  std::vector<std::int64_t> blockRow_;
+  std::vector<std::int64_t> blockCol_;
+  std::vector<std::size_t> valueOffset_;
+  std::vector<double> values_;
+  // For multiply, per block row r: the stored blocks in row r
+  // (rowBlocks_[rowStart_[r] .. rowStart_[r+1])) and the off-diagonal stored
+  // blocks in column r, whose transposes lie in row r.
+  std::vector<std::size_t> rowStart_;
+  std::vector<std::size_t> rowBlocks_;
+  std::vector<std::size_t> colStart_;
+  std::vector<std::size_t> colBlocks_;
+  // Per block, the index of its stored diagonal block, or -1.
+  std::vector<std::int64_t> diagonalBlock_;
+  // Striped locks for addBlockConcurrent; behind a pointer because mutexes
+  // cannot move.
+  std::unique_ptr<std::mutex[]> locks_;
+};
+
+} // namespace yasps::runtime
+
+#endif // YASPS_RUNTIME_BLOCKSPARSEMATRIX_H

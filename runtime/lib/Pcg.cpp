@@ -1,0 +1,254 @@
+//===- Pcg.cpp - block-Jacobi preconditioned conjugate gradient -----------===//
+
+#include "yasps/Runtime/Pcg.h"
+
+#include "yasps/Runtime/BlockSparseMatrix.h"
+#include "yasps/Runtime/ThreadPool.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+#include <string>
+
+using namespace yasps::runtime;
+
+// Dot products sum fixed-size segments in parallel, then the segment sums in
+// order: the result does not depend on the number of threads, so neither
+// does the iteration count.
+static constexpr std::int64_t kSegment = 4096;
+// Elements per chunk for element-wise vector updates.
+static constexpr std::int64_t kElementsPerChunk = 4096;
+// Diagonal blocks per chunk when building and applying the preconditioner.
+static constexpr std::int64_t kBlocksPerChunk = 64;
+
+namespace {
+/// The inverses of the diagonal blocks restricted to the free DoFs, each
+/// stored whole (size x size, row-major) with zero rows and columns at fixed
+/// DoFs, so that applying it also projects onto the free DoFs.
+class BlockJacobi {
+public:
+  BlockJacobi(const BlockSparseMatrix &H, const std::uint8_t *fixed,
+              ThreadPool &pool)
+      : layout_(H.layout()) {
+    H.diagonalBlocks(inverse_);
+    start_.assign(static_cast<std::size_t>(layout_.numBlocks()) + 1, 0);
+    for (std::int64_t r = 0; r < layout_.numBlocks(); ++r)
+      start_[r + 1] =
+          start_[r] +
+          static_cast<std::size_t>(layout_.blockSize(r) * layout_.blockSize(r));
+    pool.parallelFor(0, layout_.numBlocks(), kBlocksPerChunk,
+                     [&](std::int64_t begin, std::int64_t end) {
+                       std::vector<std::int64_t> freeDofs;
+                       std::vector<double> a, l;
+                       for (std::int64_t r = begin; r < end; ++r)
+                         invertBlock(r, fixed, freeDofs, a, l);
+                     });
+  }
+
+  /// z = M^-1 r.
+  void apply(const double *r, double *z, ThreadPool &pool) const {
+    pool.parallelFor(0, layout_.numBlocks(), kBlocksPerChunk,
+                     [&](std::int64_t begin, std::int64_t end) {
+                       for (std::int64_t b = begin; b < end; ++b) {
+                         std::int64_t s = layout_.blockSize(b);
+                         std::int64_t o = layout_.blockOffset[b];
+                         const double *inv = inverse_.data() + start_[b];
+                         for (std::int64_t i = 0; i < s; ++i) {
+                           double sum = 0.0;
+                           for (std::int64_t j = 0; j < s; ++j)
+                             sum += inv[i * s + j] * r[o + j];
+                           z[o + i] = sum;
+                         }
+                       }
+                     });
+  }
+
+private:
+  /// Replaces diagonal block `r` (in inverse_) by its preconditioner.
+  void invertBlock(std::int64_t r, const std::uint8_t *fixed,
+                   std::vector<std::int64_t> &freeDofs, std::vector<double> &a,
+                   std::vector<double> &l) {
+    std::int64_t s = layout_.blockSize(r);
+    double *block = inverse_.data() + start_[r];
+    freeDofs.clear();
+    for (std::int64_t i = 0; i < s; ++i)
+      if (!fixed || !fixed[layout_.blockOffset[r] + i])
+        freeDofs.push_back(i);
+    std::int64_t m = static_cast<std::int64_t>(freeDofs.size());
+    a.assign(static_cast<std::size_t>(m * m), 0.0);
+    for (std::int64_t i = 0; i < m; ++i)
+      for (std::int64_t j = 0; j < m; ++j)
+        a[i * m + j] = block[freeDofs[i] * s + freeDofs[j]];
+    std::fill(block, block + s * s, 0.0);
+
+    // Cholesky A = L L^T, lower triangle of l.
+    l.assign(static_cast<std::size_t>(m * m), 0.0);
+    bool ok = true;
+    for (std::int64_t j = 0; j < m && ok; ++j) {
+      double d = a[j * m + j];
+      for (std::int64_t k = 0; k < j; ++k)
+        d -= l[j * m + k] * l[j * m + k];
+      // `!(d > 0)` also catches NaN.
+      if (!(d > 0.0) || !std::isfinite(d)) {
+        ok = false;
+        break;
+      }
+      double ljj = std::sqrt(d);
+      l[j * m + j] = ljj;
+      for (std::int64_t i = j + 1; i < m; ++i) {
+        double v = a[i * m + j];
+        for (std::int64_t k = 0; k < j; ++k)
+          v -= l[i * m + k] * l[j * m + k];
+        l[i * m + j] = v / ljj;
+      }
+    }
+    if (!ok) {
+      for (std::int64_t i = 0; i < m; ++i) {
+        double d = std::fabs(a[i * m + i]);
+        block[freeDofs[i] * s + freeDofs[i]] =
+            d > 0.0 && std::isfinite(d) ? 1.0 / d : 1.0;
+      }
+      return;
+    }
+    // Column e of A^-1 solves L L^T x = e_col; `a` is reused for x.
+    for (std::int64_t col = 0; col < m; ++col) {
+      double *y = a.data();
+      for (std::int64_t i = 0; i < m; ++i) {
+        double v = i == col ? 1.0 : 0.0;
+        for (std::int64_t k = 0; k < i; ++k)
+          v -= l[i * m + k] * y[k];
+        y[i] = v / l[i * m + i];
+      }
+      for (std::int64_t i = m - 1; i >= 0; --i) {
+        double v = y[i];
+        for (std::int64_t k = i + 1; k < m; ++k)
+          v -= l[k * m + i] * y[k];
+        y[i] = v / l[i * m + i];
+      }
+      for (std::int64_t i = 0; i < m; ++i)
+        block[freeDofs[i] * s + freeDofs[col]] = y[i];
+    }
+  }
+
+  const BlockLayout &layout_;
+  std::vector<double> inverse_;
+  std::vector<std::size_t> start_;
+};
+} // namespace
+
+static double dot(const double *a, const double *b, std::int64_t n,
+                  std::vector<double> &partial, ThreadPool &pool) {
+  std::int64_t numSegments = (n + kSegment - 1) / kSegment;
+  partial.assign(static_cast<std::size_t>(numSegments), 0.0);
+  pool.parallelFor(0, numSegments, 1,
+                   [&](std::int64_t begin, std::int64_t end) {
+                     for (std::int64_t s = begin; s < end; ++s) {
+                       double sum = 0.0;
+                       for (std::int64_t i = s * kSegment;
+                            i < std::min(n, (s + 1) * kSegment); ++i)
+                         sum += a[i] * b[i];
+                       partial[s] = sum;
+                     }
+                   });
+  double sum = 0.0;
+  for (double p : partial)
+    sum += p;
+  return sum;
+}
+
+/// y = a * x + b * y, element-wise.
+static void axpby(double a, const double *x, double b, double *y,
+                  std::int64_t n, ThreadPool &pool) {
+  pool.parallelFor(0, n, kElementsPerChunk,
+                   [&](std::int64_t begin, std::int64_t end) {
+                     for (std::int64_t i = begin; i < end; ++i)
+                       y[i] = a * x[i] + b * y[i];
+                   });
+}
+
+static bool allFinite(const double *v, std::size_t n) {
+  for (std::size_t i = 0; i < n; ++i)
+    if (!std::isfinite(v[i]))
+      return false;
+  return true;
+}
+
+PcgResult yasps::runtime::solvePcg(const BlockSparseMatrix &H, const double *b,
+                                   double *x, const PcgOptions &options,
+                                   ThreadPool &pool) {
+  const std::int64_t n = H.size();
+  const std::size_t un = static_cast<std::size_t>(n);
+  const std::uint8_t *fixed = nullptr;
+  if (options.fixedDofs) {
+    if (options.fixedDofs->size() != un)
+      throw std::invalid_argument("the fixed-DoF mask has " +
+                                  std::to_string(options.fixedDofs->size()) +
+                                  " entries but the matrix has " +
+                                  std::to_string(n) + " DoFs");
+    fixed = options.fixedDofs->data();
+  }
+  if (options.maxIterations < 0)
+    throw std::invalid_argument("PCG needs maxIterations >= 0, got " +
+                                std::to_string(options.maxIterations));
+  if (!(options.relativeTolerance >= 0.0))
+    throw std::invalid_argument("PCG needs a relative tolerance >= 0, got " +
+                                std::to_string(options.relativeTolerance));
+
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  std::fill(x, x + n, 0.0);
+  std::vector<double> r(b, b + n);
+  if (fixed)
+    for (std::int64_t i = 0; i < n; ++i)
+      if (fixed[i])
+        r[i] = 0.0;
+  // Checked up front: a NaN in H might otherwise sit where the iterates are
+  // zero and go unnoticed, or be hidden by the preconditioner's fallback.
+  if (!allFinite(r.data(), un) ||
+      !allFinite(H.values().data(), H.values().size()))
+    return {0, nan, false};
+
+  std::vector<double> partial;
+  const double bNorm = std::sqrt(dot(r.data(), r.data(), n, partial, pool));
+  if (bNorm == 0.0)
+    return {0, 0.0, true};
+
+  BlockJacobi preconditioner(H, fixed, pool);
+  std::vector<double> z(un), p(un), q(un);
+  preconditioner.apply(r.data(), z.data(), pool);
+  p = z;
+  double rz = dot(r.data(), z.data(), n, partial, pool);
+  double rNorm = bNorm;
+  const double threshold = options.relativeTolerance * bNorm;
+  std::int64_t iterations = 0;
+  while (true) {
+    if (!std::isfinite(rNorm))
+      return {iterations, nan, false};
+    if (rNorm <= threshold)
+      return {iterations, rNorm / bNorm, true};
+    if (iterations == options.maxIterations)
+      return {iterations, rNorm / bNorm, false};
+
+    H.multiply(p.data(), q.data(), pool);
+    if (fixed)
+      for (std::int64_t i = 0; i < n; ++i)
+        if (fixed[i])
+          q[i] = 0.0;
+    double pq = dot(p.data(), q.data(), n, partial, pool);
+    // H is not positive definite along p (or rz vanished): CG cannot go on.
+    if (!(pq > 0.0) || !std::isfinite(pq) || !(rz > 0.0))
+      return {iterations, std::isfinite(pq) ? rNorm / bNorm : nan, false};
+    double alpha = rz / pq;
+    axpby(alpha, p.data(), 1.0, x, n, pool);
+    axpby(-alpha, q.data(), 1.0, r.data(), n, pool);
+    ++iterations;
+    rNorm = std::sqrt(dot(r.data(), r.data(), n, partial, pool));
+    if (rNorm <= threshold)
+      continue;
+
+    preconditioner.apply(r.data(), z.data(), pool);
+    double rzNext = dot(r.data(), z.data(), n, partial, pool);
+    axpby(1.0, z.data(), rzNext / rz, p.data(), n, pool);
+    rz = rzNext;
+  }
+}

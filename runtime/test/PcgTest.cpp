@@ -1,0 +1,287 @@
+//===- PcgTest.cpp - tests of the block-Jacobi preconditioned CG ----------===//
+
+#include "yasps/Runtime/Pcg.h"
+
+#include "yasps/Runtime/BlockSparseMatrix.h"
+#include "yasps/Runtime/ThreadPool.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdint>
+#include <limits>
+#include <random>
+#include <stdexcept>
+#include <utility>
+#include <vector>
+
+using yasps::runtime::BlockLayout;
+using yasps::runtime::BlockSlot;
+using yasps::runtime::BlockSparseMatrix;
+using yasps::runtime::PcgOptions;
+using yasps::runtime::PcgResult;
+using yasps::runtime::solvePcg;
+using yasps::runtime::ThreadPool;
+
+namespace {
+using Coord = std::pair<std::int64_t, std::int64_t>;
+
+BlockLayout layoutOf(const std::vector<std::int64_t> &sizes) {
+  BlockLayout layout{{0}};
+  for (std::int64_t s : sizes)
+    layout.blockOffset.push_back(layout.blockOffset.back() + s);
+  return layout;
+}
+
+/// A random symmetric positive definite block system: 50 blocks of 3 and 4
+/// of 12, random off-diagonal blocks, and diagonal blocks that make it
+/// strictly diagonally dominant, barely (so CG needs several iterations).
+BlockSparseMatrix randomSpd(std::mt19937 &rng, bool offDiagonal = true) {
+  std::vector<std::int64_t> sizes(50, 3);
+  for (std::size_t k : {5u, 17u, 30u, 44u})
+    sizes[k] = 12;
+  BlockLayout layout = layoutOf(sizes);
+  std::int64_t numBlocks = layout.numBlocks();
+  std::uniform_int_distribution<std::int64_t> pickBlock(0, numBlocks - 1);
+  std::uniform_real_distribution<double> value(-1.0, 1.0);
+  std::vector<Coord> coords;
+  std::vector<std::vector<double>> locals;
+  for (int k = 0; offDiagonal && k < 150; ++k) {
+    std::int64_t i = pickBlock(rng), j = pickBlock(rng);
+    if (i == j)
+      continue;
+    std::vector<double> local(
+        static_cast<std::size_t>(layout.blockSize(i) * layout.blockSize(j)));
+    for (double &v : local)
+      v = value(rng);
+    coords.push_back({i, j});
+    locals.push_back(std::move(local));
+  }
+  // Absolute row sums of the off-diagonal part, then the diagonal blocks: a
+  // random symmetric part plus a shift above the row sums.
+  std::int64_t n = layout.blockOffset.back();
+  std::vector<double> rowSum(static_cast<std::size_t>(n), 0.0);
+  for (std::size_t k = 0; k < coords.size(); ++k) {
+    auto [i, j] = coords[k];
+    std::int64_t rows = layout.blockSize(i), cols = layout.blockSize(j);
+    for (std::int64_t r = 0; r < rows; ++r)
+      for (std::int64_t c = 0; c < cols; ++c) {
+        double v = std::fabs(locals[k][r * cols + c]);
+        rowSum[layout.blockOffset[i] + r] += v;
+        rowSum[layout.blockOffset[j] + c] += v;
+      }
+  }
+  for (std::int64_t b = 0; b < numBlocks; ++b) {
+    std::int64_t s = layout.blockSize(b);
+    std::vector<double> local(static_cast<std::size_t>(s * s));
+    for (std::int64_t r = 0; r < s; ++r)
+      for (std::int64_t c = 0; c <= r; ++c)
+        local[r * s + c] = local[c * s + r] = 0.3 * value(rng);
+    for (std::int64_t r = 0; r < s; ++r) {
+      double offSum = 0.0;
+      for (std::int64_t c = 0; c < s; ++c)
+        if (c != r)
+          offSum += std::fabs(local[r * s + c]);
+      local[r * s + r] = rowSum[layout.blockOffset[b] + r] + offSum + 0.1;
+    }
+    coords.push_back({b, b});
+    locals.push_back(std::move(local));
+  }
+  std::vector<BlockSlot> slots;
+  BlockSparseMatrix m(layout, coords, &slots);
+  for (std::size_t k = 0; k < slots.size(); ++k)
+    m.addBlock(slots[k], locals[k].data());
+  return m;
+}
+
+/// Solves the dense n x n system a x = b by Gaussian elimination with
+/// partial pivoting.
+std::vector<double> denseSolve(std::vector<double> a, std::vector<double> b) {
+  std::size_t n = b.size();
+  for (std::size_t k = 0; k < n; ++k) {
+    std::size_t pivot = k;
+    for (std::size_t i = k + 1; i < n; ++i)
+      if (std::fabs(a[i * n + k]) > std::fabs(a[pivot * n + k]))
+        pivot = i;
+    for (std::size_t j = 0; j < n; ++j)
+      std::swap(a[k * n + j], a[pivot * n + j]);
+    std::swap(b[k], b[pivot]);
+    for (std::size_t i = k + 1; i < n; ++i) {
+      double f = a[i * n + k] / a[k * n + k];
+      for (std::size_t j = k; j < n; ++j)
+        a[i * n + j] -= f * a[k * n + j];
+      b[i] -= f * b[k];
+    }
+  }
+  std::vector<double> x(n);
+  for (std::size_t i = n; i-- > 0;) {
+    double v = b[i];
+    for (std::size_t j = i + 1; j < n; ++j)
+      v -= a[i * n + j] * x[j];
+    x[i] = v / a[i * n + i];
+  }
+  return x;
+}
+
+std::vector<double> randomVector(std::mt19937 &rng, std::int64_t n) {
+  std::uniform_real_distribution<double> value(-1.0, 1.0);
+  std::vector<double> v(static_cast<std::size_t>(n));
+  for (double &e : v)
+    e = value(rng);
+  return v;
+}
+
+double relativeError(const std::vector<double> &x,
+                     const std::vector<double> &reference) {
+  double diff = 0.0, norm = 0.0;
+  for (std::size_t i = 0; i < x.size(); ++i) {
+    diff += (x[i] - reference[i]) * (x[i] - reference[i]);
+    norm += reference[i] * reference[i];
+  }
+  return std::sqrt(diff / norm);
+}
+} // namespace
+
+TEST(Pcg, SolvesRandomSpdBlockSystems) {
+  std::mt19937 rng(3);
+  for (int trial = 0; trial < 3; ++trial) {
+    BlockSparseMatrix h = randomSpd(rng);
+    std::vector<double> b = randomVector(rng, h.size());
+    std::vector<double> expected = denseSolve(h.toDense(), b);
+    PcgOptions options;
+    options.relativeTolerance = 1e-12;
+    std::int64_t firstIterations = -1;
+    for (unsigned threads : {1u, 4u}) {
+      ThreadPool pool(threads);
+      std::vector<double> x(b.size(), 5.0);
+      PcgResult result = solvePcg(h, b.data(), x.data(), options, pool);
+      EXPECT_TRUE(result.converged) << "trial " << trial;
+      EXPECT_LE(result.relativeResidual, 1e-12);
+      EXPECT_GT(result.iterations, 1);
+      EXPECT_LT(relativeError(x, expected), 1e-8) << "trial " << trial;
+      if (firstIterations < 0)
+        firstIterations = result.iterations;
+      else
+        EXPECT_EQ(result.iterations, firstIterations);
+    }
+  }
+}
+
+TEST(Pcg, SolvesOnTheFreeDofsOnly) {
+  std::mt19937 rng(5);
+  BlockSparseMatrix h = randomSpd(rng);
+  std::int64_t n = h.size();
+  std::vector<double> b = randomVector(rng, n);
+  std::vector<std::uint8_t> fixed(static_cast<std::size_t>(n), 0);
+  // Whole blocks and single DoFs inside blocks (of 3 and of 12).
+  for (std::int64_t i = 0; i < n; i += 7)
+    fixed[i] = 1;
+  for (std::int64_t i = 0; i < 3; ++i)
+    fixed[h.layout().blockOffset[2] + i] = 1;
+
+  // The reference: the dense system restricted to the free DoFs.
+  std::vector<double> dense = h.toDense();
+  std::vector<std::int64_t> freeDofs;
+  for (std::int64_t i = 0; i < n; ++i)
+    if (!fixed[i])
+      freeDofs.push_back(i);
+  std::size_t m = freeDofs.size();
+  std::vector<double> a(m * m), bFree(m);
+  for (std::size_t i = 0; i < m; ++i) {
+    bFree[i] = b[freeDofs[i]];
+    for (std::size_t j = 0; j < m; ++j)
+      a[i * m + j] = dense[freeDofs[i] * n + freeDofs[j]];
+  }
+  std::vector<double> xFree = denseSolve(a, bFree);
+
+  PcgOptions options;
+  options.relativeTolerance = 1e-12;
+  options.fixedDofs = &fixed;
+  ThreadPool pool(2);
+  std::vector<double> x(static_cast<std::size_t>(n), 5.0);
+  PcgResult result = solvePcg(h, b.data(), x.data(), options, pool);
+  EXPECT_TRUE(result.converged);
+  std::vector<double> solvedFree(m);
+  for (std::size_t i = 0; i < m; ++i)
+    solvedFree[i] = x[freeDofs[i]];
+  EXPECT_LT(relativeError(solvedFree, xFree), 1e-8);
+  for (std::int64_t i = 0; i < n; ++i)
+    EXPECT_TRUE(!fixed[i] || x[i] == 0.0) << "fixed DoF " << i;
+
+  std::vector<std::uint8_t> wrongSize(static_cast<std::size_t>(n) - 1, 0);
+  options.fixedDofs = &wrongSize;
+  EXPECT_THROW(solvePcg(h, b.data(), x.data(), options, pool),
+               std::invalid_argument);
+}
+
+TEST(Pcg, ReportsNonConvergence) {
+  std::mt19937 rng(9);
+  BlockSparseMatrix h = randomSpd(rng);
+  std::vector<double> b = randomVector(rng, h.size());
+  PcgOptions options;
+  options.relativeTolerance = 1e-12;
+  options.maxIterations = 2;
+  ThreadPool pool(2);
+  std::vector<double> x(b.size());
+  PcgResult result = solvePcg(h, b.data(), x.data(), options, pool);
+  EXPECT_FALSE(result.converged);
+  EXPECT_EQ(result.iterations, 2);
+  EXPECT_GT(result.relativeResidual, 1e-12);
+  EXPECT_LT(result.relativeResidual, 1.0);
+
+  options.maxIterations = -1;
+  EXPECT_THROW(solvePcg(h, b.data(), x.data(), options, pool),
+               std::invalid_argument);
+  options.maxIterations = 10;
+  options.relativeTolerance = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_THROW(solvePcg(h, b.data(), x.data(), options, pool),
+               std::invalid_argument);
+}
+
+TEST(Pcg, ReportsNaNInput) {
+  std::mt19937 rng(13);
+  BlockSparseMatrix h = randomSpd(rng);
+  std::vector<double> b = randomVector(rng, h.size());
+  ThreadPool pool(2);
+  std::vector<double> x(b.size());
+  PcgOptions options;
+
+  std::vector<double> badB = b;
+  badB[17] = std::numeric_limits<double>::quiet_NaN();
+  PcgResult result = solvePcg(h, badB.data(), x.data(), options, pool);
+  EXPECT_FALSE(result.converged);
+  EXPECT_TRUE(std::isnan(result.relativeResidual));
+
+  h.values()[h.values().size() / 2] = std::numeric_limits<double>::quiet_NaN();
+  result = solvePcg(h, b.data(), x.data(), options, pool);
+  EXPECT_FALSE(result.converged);
+  EXPECT_TRUE(std::isnan(result.relativeResidual));
+}
+
+TEST(Pcg, SolvesBlockDiagonalSystemsInOneIteration) {
+  std::mt19937 rng(17);
+  BlockSparseMatrix h = randomSpd(rng, /*offDiagonal=*/false);
+  std::vector<double> b = randomVector(rng, h.size());
+  std::vector<double> expected = denseSolve(h.toDense(), b);
+  PcgOptions options;
+  options.relativeTolerance = 1e-10;
+  ThreadPool pool(3);
+  std::vector<double> x(b.size());
+  PcgResult result = solvePcg(h, b.data(), x.data(), options, pool);
+  EXPECT_TRUE(result.converged);
+  EXPECT_EQ(result.iterations, 1);
+  EXPECT_LT(relativeError(x, expected), 1e-12);
+}
+
+TEST(Pcg, ZeroRightHandSideNeedsNoIteration) {
+  std::mt19937 rng(19);
+  BlockSparseMatrix h = randomSpd(rng);
+  std::vector<double> b(static_cast<std::size_t>(h.size()), 0.0);
+  std::vector<double> x(b.size(), 1.0);
+  ThreadPool pool(1);
+  PcgResult result = solvePcg(h, b.data(), x.data(), PcgOptions(), pool);
+  EXPECT_TRUE(result.converged);
+  EXPECT_EQ(result.iterations, 0);
+  EXPECT_EQ(result.relativeResidual, 0.0);
+  EXPECT_EQ(x, b);
+}
