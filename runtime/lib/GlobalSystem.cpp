@@ -1,0 +1,141 @@
+//===- GlobalSystem.cpp - assembling the Newton system --------------------===//
+
+#include "yasps/Runtime/GlobalSystem.h"
+
+#include <algorithm>
+#include <stdexcept>
+#include <string>
+
+using namespace yasps::runtime;
+
+static std::int64_t blockOfDof(const BlockLayout &layout, std::int64_t dof) {
+  const auto &offsets = layout.blockOffset;
+  auto it = std::upper_bound(offsets.begin(), offsets.end(), dof);
+  return static_cast<std::int64_t>(it - offsets.begin()) - 1;
+}
+
+BlockSparseMatrix
+GlobalSystem::buildStructure(const BlockLayout &layout,
+                             const std::vector<DofMap> &energies,
+                             std::vector<EnergyMap> &maps) {
+  std::int64_t size =
+      layout.blockOffset.empty() ? 0 : layout.blockOffset.back();
+  std::vector<std::pair<std::int64_t, std::int64_t>> coords;
+  maps.resize(energies.size());
+  for (std::size_t e = 0; e < energies.size(); ++e) {
+    const DofMap &in = energies[e];
+    EnergyMap &map = maps[e];
+    map.count = in.count;
+    map.numParams = in.numParams;
+    map.localBlock.assign(in.count * in.numParams, -1);
+    map.offset.assign(in.count * in.numParams, -1);
+    // The instance's distinct blocks, in order of first appearance.
+    std::vector<std::vector<std::int64_t>> blocks(in.count);
+    for (std::int64_t i = 0; i < in.count; ++i) {
+      for (std::int64_t a = 0; a < in.numParams; ++a) {
+        std::int64_t dof = in.dofs[i * in.numParams + a];
+        if (dof < 0)
+          continue;
+        if (dof >= size)
+          throw std::invalid_argument(
+              "energy " + std::to_string(e) + ", instance " +
+              std::to_string(i) + ": DoF " + std::to_string(dof) +
+              " is outside the system of " + std::to_string(size) + " DoFs");
+        std::int64_t block = blockOfDof(layout, dof);
+        auto &mine = blocks[i];
+        auto found = std::find(mine.begin(), mine.end(), block);
+        if (found == mine.end()) {
+          mine.push_back(block);
+          found = mine.end() - 1;
+        }
+        map.localBlock[i * in.numParams + a] =
+            static_cast<std::int32_t>(found - mine.begin());
+        map.offset[i * in.numParams + a] =
+            static_cast<std::int32_t>(dof - layout.blockOffset[block]);
+      }
+      map.maxBlocks = std::max<std::int64_t>(map.maxBlocks, blocks[i].size());
+    }
+    map.globalBlock.assign(in.count * map.maxBlocks, -1);
+    for (std::int64_t i = 0; i < in.count; ++i)
+      for (std::size_t k = 0; k < blocks[i].size(); ++k) {
+        map.globalBlock[i * map.maxBlocks + k] = blocks[i][k];
+        for (std::size_t l = k; l < blocks[i].size(); ++l) {
+          std::int64_t bi = blocks[i][k], bj = blocks[i][l];
+          coords.emplace_back(std::min(bi, bj), std::max(bi, bj));
+        }
+      }
+  }
+  std::vector<BlockSlot> slots;
+  BlockSparseMatrix matrix(layout, coords, &slots);
+  // Hand each instance its pair slots, in the order coordinates were made.
+  std::size_t next = 0;
+  for (EnergyMap &map : maps) {
+    std::int64_t m = map.maxBlocks;
+    map.pairSlot.assign(map.count * m * m, BlockSlot{0, false});
+    for (std::int64_t i = 0; i < map.count; ++i) {
+      const std::int64_t *global = &map.globalBlock[i * m];
+      std::int64_t k = 0;
+      while (k < m && global[k] >= 0)
+        ++k;
+      for (std::int64_t a = 0; a < k; ++a)
+        for (std::int64_t b = a; b < k; ++b) {
+          BlockSlot slot = slots[next++];
+          map.pairSlot[(i * m + a) * m + b] = slot;
+          map.pairSlot[(i * m + b) * m + a] = slot;
+        }
+    }
+  }
+  return matrix;
+}
+
+GlobalSystem::GlobalSystem(BlockLayout layout,
+                           const std::vector<DofMap> &energies)
+    : matrix(buildStructure(layout, energies, maps)),
+      gradientValues(static_cast<std::size_t>(matrix.size()), 0.0) {}
+
+void GlobalSystem::setZero() {
+  matrix.setZero();
+  std::fill(gradientValues.begin(), gradientValues.end(), 0.0);
+}
+
+void GlobalSystem::add(std::size_t energy, const double *gradients,
+                       const double *hessians) {
+  if (energy >= maps.size())
+    throw std::out_of_range("energy " + std::to_string(energy) +
+                            " out of range: the system has " +
+                            std::to_string(maps.size()) + " energies");
+  const EnergyMap &map = maps[energy];
+  const BlockLayout &layout = matrix.layout();
+  std::int64_t n = map.numParams, m = map.maxBlocks;
+  for (std::int64_t i = 0; i < map.count; ++i) {
+    const std::int32_t *local = &map.localBlock[i * n];
+    const std::int32_t *offset = &map.offset[i * n];
+    const std::int64_t *global = &map.globalBlock[i * m];
+    const double *g = gradients + i * n;
+    const double *h = hessians + i * n * n;
+    for (std::int64_t a = 0; a < n; ++a) {
+      if (local[a] < 0)
+        continue;
+      std::int64_t ga = global[local[a]];
+      gradientValues[layout.blockOffset[ga] + offset[a]] += g[a];
+      for (std::int64_t b = 0; b < n; ++b) {
+        if (local[b] < 0)
+          continue;
+        std::int64_t gb = global[local[b]];
+        // Each pair of distinct blocks is stored once, upper triangle: the
+        // entries with ga > gb are its transpose, added from (b, a).
+        if (ga > gb)
+          continue;
+        BlockSlot slot = map.pairSlot[(i * m + local[a]) * m + local[b]];
+        double *data = matrix.blockData(slot.block);
+        std::int64_t cols = layout.blockSize(gb);
+        data[offset[a] * cols + offset[b]] += h[a * n + b];
+      }
+    }
+  }
+}
+
+PcgResult GlobalSystem::solve(double *x, const PcgOptions &options,
+                              ThreadPool &pool) const {
+  return solvePcg(matrix, gradientValues.data(), x, options, pool);
+}
