@@ -24,6 +24,7 @@
 #include "yasps/Dialect/Yasps/IR/Yasps.h"
 #include "yasps/Dialect/Yasps/Transforms/Passes.h"
 #include "yasps/Runtime/CpuKernel.h"
+#include "yasps/Runtime/GlobalSystem.h"
 #include "yasps/Runtime/ThreadPool.h"
 #include "yasps/Target/CPU/CpuCompiler.h"
 
@@ -31,6 +32,7 @@
 #include <nanobind/ndarray.h>
 #include <nanobind/stl/map.h>
 #include <nanobind/stl/pair.h>
+#include <nanobind/stl/tuple.h>
 #include <nanobind/stl/string.h>
 #include <nanobind/stl/vector.h>
 
@@ -262,6 +264,84 @@ attributeParams(const std::string &ir, const std::string &pipeline,
   return result;
 }
 
+/// The global Newton system of a scene, over the C++ runtime.
+class PySystem {
+public:
+  using Int64Array = nb::ndarray<int64_t, nb::c_contig, nb::device::cpu>;
+  using DoubleArray = nb::ndarray<double, nb::c_contig, nb::device::cpu>;
+
+  PySystem(Int64Array blockOffsets, std::vector<Int64Array> dofMaps) {
+    ::yasps::runtime::BlockLayout layout;
+    layout.blockOffset.assign(blockOffsets.data(),
+                              blockOffsets.data() + blockOffsets.size());
+    std::vector<::yasps::runtime::DofMap> maps;
+    for (Int64Array &map : dofMaps) {
+      if (map.ndim() != 2)
+        throw std::invalid_argument("a DoF map must be (count, params)");
+      storage.emplace_back(map.data(), map.data() + map.size());
+      shapes.emplace_back(map.shape(0), map.shape(1));
+      maps.push_back({(int64_t)map.shape(0), (int64_t)map.shape(1),
+                      storage.back().data()});
+    }
+    system = std::make_unique<::yasps::runtime::GlobalSystem>(layout, maps);
+  }
+
+  int64_t size() const { return system->size(); }
+  void setZero() { system->setZero(); }
+
+  void add(size_t energy, DoubleArray gradients, DoubleArray hessians) {
+    if (energy >= shapes.size())
+      throw std::invalid_argument("no energy " + std::to_string(energy));
+    auto [count, n] = shapes[energy];
+    if (gradients.size() != size_t(count * n) ||
+        hessians.size() != size_t(count * n * n))
+      throw std::invalid_argument(
+          "energy " + std::to_string(energy) + " expects " +
+          std::to_string(count) + " gradients of " + std::to_string(n) +
+          " and Hessians of " + std::to_string(n) + "x" + std::to_string(n));
+    system->add(energy, gradients.data(), hessians.data());
+  }
+
+  void gradient(DoubleArray out) const {
+    check(out, size_t(size()));
+    std::copy(system->gradient().begin(), system->gradient().end(),
+              out.data());
+  }
+
+  void dense(DoubleArray out) const {
+    check(out, size_t(size() * size()));
+    std::vector<double> d = system->hessian().toDense();
+    std::copy(d.begin(), d.end(), out.data());
+  }
+
+  nb::tuple solve(DoubleArray out, double tolerance, int64_t maxIterations,
+                  unsigned threads) const {
+    check(out, size_t(size()));
+    ::yasps::runtime::PcgOptions options;
+    options.relativeTolerance = tolerance;
+    options.maxIterations = maxIterations;
+    ::yasps::runtime::PcgResult result;
+    {
+      nb::gil_scoped_release release;
+      result = system->solve(out.data(), options, poolFor(threads));
+    }
+    return nb::make_tuple(result.iterations, result.relativeResidual,
+                          result.converged);
+  }
+
+private:
+  static void check(const DoubleArray &out, size_t size) {
+    if (out.size() != size)
+      throw std::invalid_argument("output array of " +
+                                  std::to_string(out.size()) +
+                                  " entries, expected " +
+                                  std::to_string(size));
+  }
+  std::vector<std::vector<int64_t>> storage;
+  std::vector<std::pair<int64_t, int64_t>> shapes;
+  std::unique_ptr<::yasps::runtime::GlobalSystem> system;
+};
+
 } // namespace
 
 NB_MODULE(_yasps_native, m) {
@@ -338,6 +418,21 @@ NB_MODULE(_yasps_native, m) {
         nb::arg("name") = "<yasps>", nb::arg("pre_pipeline") = "",
         "Compiles CPU kernels for the attributes (scene-relative paths) of "
         "the IR's scene, reusing in-memory and on-disk caches.");
+  nb::class_<PySystem>(m, "GlobalSystem",
+                       "The block-sparse Newton system of a scene.")
+      .def(nb::init<PySystem::Int64Array, std::vector<PySystem::Int64Array>>(),
+           nb::arg("block_offsets"), nb::arg("dof_maps"))
+      .def_prop_ro("size", &PySystem::size)
+      .def("set_zero", &PySystem::setZero)
+      .def("add", &PySystem::add, nb::arg("energy"), nb::arg("gradients"),
+           nb::arg("hessians"))
+      .def("gradient", &PySystem::gradient, nb::arg("out"))
+      .def("dense", &PySystem::dense, nb::arg("out"))
+      .def("solve", &PySystem::solve, nb::arg("out"), nb::arg("tolerance"),
+           nb::arg("max_iterations"), nb::arg("threads") = 0,
+           "PCG on H x = g into out; returns (iterations, relative residual, "
+           "converged)");
+
   m.def("attribute_params", &attributeParams, nb::arg("ir"),
         nb::arg("pipeline"), nb::arg("paths"), nb::arg("name") = "<yasps>",
         "yasps.params of the attributes (e.g. derivative attributes) after "

@@ -20,11 +20,13 @@ from .attribute import (Attribute, concat, constant, hstack, identity, select,
                         vstack, zeros)
 from .errors import (IRError, LineageError, SceneError, ShapeError,
                      ValueUpdateError, YaspsError)
+from .minimize import SolverError
 from .scene import Connectivity, Entity, Mesh, Primitive, PrimitiveUnion, Scene, scene
 
 __all__ = [
     "Attribute", "Connectivity", "config", "Entity", "IRError", "LineageError", "Mesh",
     "Primitive", "PrimitiveUnion", "Scene", "SceneError", "ShapeError",
+    "SolverError",
     "ValueUpdateError", "YaspsError", "concat", "constant", "hstack",
     "identity", "scene", "select", "vstack", "zeros",
 ]

@@ -342,6 +342,19 @@ class Scene(Entity):
 
         return energy_derivatives(self, energy, threads)
 
+    def minimizeEnergy(self, tolerance: float = 1e-6, maxIterations: int = 1000,
+                       threads: Optional[int] = None) -> list:
+        """Assembles the gradient g and PSD-projected Hessian H of all
+        energies and solves ``H dx = g`` with block-Jacobi PCG (relative
+        tolerance ``tolerance``). Returns one ``(N, rows, cols)`` array per
+        minimisation target, in the order given to ``addMinimizeTarget``;
+        the Newton step is ``-dx`` (paper 4.8). ``lastSolve`` holds the
+        iteration count and residual. Raises :class:`yasps.SolverError` if
+        PCG does not converge."""
+        from .minimize import minimize_energy
+
+        return minimize_energy(self, tolerance, maxIterations, threads)
+
     # ------------------------------------------------------------------ IR
 
     def ir(self, verify: bool = True, locations: bool = False) -> str:

@@ -1,0 +1,150 @@
+"""The global Newton system: assembly against dense references built from
+the per-instance derivatives, and the PCG solution against numpy.linalg."""
+
+import numpy as np
+import pytest
+
+import yasps
+from yasps import energies as E
+from yasps.minimize import assemble
+
+from conftest import box_mesh
+
+rng = np.random.default_rng(5)
+
+
+def dense_reference(scene):
+    """Gradient and projected Hessian assembled with NumPy from
+    energyDerivatives and the parameter locations."""
+    targets = scene.minimizeTargets
+    base, size = {}, 0
+    for t in targets:
+        base[id(t)] = size
+        size += t.owner.numInstances * t.rows * t.cols
+    g = np.zeros(size)
+    H = np.zeros((size, size))
+    for energy in scene.energies:
+        d = scene.energyDerivatives(energy)
+        for i in range(len(d.value)):
+            dofs = [None if loc is None else
+                    base[id(loc[0])] + loc[1] * loc[0].rows * loc[0].cols + loc[2]
+                    for loc in d.locations(i)]
+            for a, da in enumerate(dofs):
+                if da is None:
+                    continue
+                g[da] += d.gradient[i, a]
+                for b, db in enumerate(dofs):
+                    if db is not None:
+                        H[da, db] += d.projectedHessian[i, a, b]
+    return g, H
+
+
+def soft_box():
+    verts, tets = box_mesh(2)
+    s = yasps.scene("soft")
+    m = s.addMesh("m")
+    v = m.addPrimitive("v", numInstances=len(verts))
+    t = m.addPrimitive("t", numInstances=len(tets))
+    x = v.addAttribute("x", rows=3)
+    x.updateValue(verts * 0.9 + rng.normal(scale=0.02, size=verts.shape))
+    xh = v.addConstant("x_hat", rows=3)
+    xh.updateValue(verts)
+    dm = np.stack([verts[tets][:, k] - verts[tets][:, 0] for k in (1, 2, 3)], axis=2)
+    inv = t.addConstant("inv", rows=3, cols=3)
+    inv.updateValue(np.linalg.inv(dm))
+    vol = t.addConstant("vol", rows=1)
+    vol.updateValue(np.abs(np.linalg.det(dm))[:, None] / 6)
+    t2v = t.addConnectivity("t2v", v, tets, 4)
+    c = t.addAttribute("c", through=t2v, source=x)
+    s.addEnergy(v.addAttribute("inertia", computed_attribute=E.inertia(x, xh, 1.0)))
+    s.addEnergy(t.addAttribute("snh", computed_attribute=E.stable_neo_hookean(
+        E.deformation_gradient(c, inv), 10.0, 100.0, vol)))
+    s.addMinimizeTarget([x])
+    return s
+
+
+def test_assembly_and_solve_on_a_soft_box():
+    s = soft_box()
+    system, layout = assemble(s)
+    g_ref, H_ref = dense_reference(s)
+    g = np.zeros(system.size)
+    system.gradient(g)
+    H = np.zeros(system.size * system.size)
+    system.dense(H)
+    H = H.reshape(system.size, system.size)
+    np.testing.assert_allclose(g, g_ref, rtol=1e-12, atol=1e-12)
+    np.testing.assert_allclose(H, H_ref, rtol=1e-12, atol=1e-10 * np.abs(H_ref).max())
+    (dx,) = s.minimizeEnergy(tolerance=1e-12)
+    want = np.linalg.solve(H_ref, g_ref)
+    np.testing.assert_allclose(dx.reshape(-1), want, rtol=1e-8,
+                               atol=1e-8 * np.abs(want).max())
+    assert s.lastSolve["converged"] and s.lastSolve["iterations"] > 0
+
+
+def mixed_scene(pairs):
+    """Soft vertices, affine bodies and dynamic pairs through a UNION, with
+    points well apart so that the system is well conditioned."""
+    rng = np.random.default_rng(1)
+    s = yasps.scene("mixed")
+    soft = s.addMesh("soft").addPrimitive("v", numInstances=3)
+    xs = soft.addAttribute("x", rows=3)
+    xs.updateValue(np.array([[0.0, 0, 0], [0.3, 0, 0], [0, 0.3, 0]])
+                   + rng.normal(scale=0.01, size=(3, 3)))
+    xh = soft.addConstant("x_hat", rows=3)
+    xh.updateValue(xs.value[:, :, 0])
+    rigid = s.addMesh("rigid")
+    body = rigid.addPrimitive("body", numInstances=1)
+    A = body.addAttribute("A", rows=3, cols=3)
+    A.updateValue(np.eye(3) + rng.normal(scale=0.05, size=(3, 3)))
+    t = body.addAttribute("t", rows=3)
+    t.updateValue([0.02, 0.0, 0.0])
+    verts = rigid.addPrimitive("v", numInstances=2)
+    verts.addConstant("rest", rows=3).updateValue(
+        np.array([[0, 0, 0.3], [0.3, 0.3, 0.3]]) + rng.normal(scale=0.01, size=(2, 3)))
+    v2b = verts.addConnectivity("v2b", body, [0, 0], 1)
+    jA = verts.addAttribute("A", through=v2b, source=A)
+    jt = verts.addAttribute("t", through=v2b, source=t)
+    verts.addAttribute("x", computed_attribute=jA.resize(3, 3) * verts["rest"] + jt.resize(3, 1))
+    u = s.addMesh("world").addPrimitiveUnion("v", [soft, verts])
+    u.addAttribute("x")
+    pp = s.world.addPrimitive("pp", numInstances=len(pairs), isDynamic=True)
+    p2v = pp.addConnectivity("p2v", u, pairs, 2)
+    x = pp.addAttribute("x", through=p2v, source=u["x"])
+    d2 = pp.addAttribute("d2", computed_attribute=E.point_point_distance2(x.row(0), x.row(1)))
+    s.addEnergy(soft.addAttribute("inertia", computed_attribute=E.inertia(xs, xh, 1.0)))
+    # Orthogonality alone leaves rotations free; an inertia-like term on the
+    # body keeps the system well conditioned.
+    s.addEnergy(body.addAttribute("orth", computed_attribute=E.abd_orthogonality(A, 10.0)
+                                  + 0.5 * (A - np.eye(3)).squaredNorm()
+                                  + 0.5 * t.squaredNorm()))
+    s.addEnergy(pp.addAttribute("b", computed_attribute=E.ipc_barrier(d2, 1.0, 1.0)),
+                dynamic_instances=True)
+    s.addMinimizeTarget([xs, A, t])
+    return s, pp, p2v, u, soft, verts
+
+
+def test_mixed_soft_affine_system_and_changing_pairs():
+    s, pp, p2v, u, soft, verts = mixed_scene([[0, 3], [1, 4]])
+    for pairs in ([[0, 3], [1, 4]], [[2, 4]], [[0, 1], [2, 3], [1, 4]]):
+        pp.updateNumInstances(len(pairs))
+        p2v.updateConnectivity(pairs)
+        system, layout = assemble(s)
+        g_ref, H_ref = dense_reference(s)
+        H = np.zeros(system.size ** 2)
+        system.dense(H)
+        np.testing.assert_allclose(H.reshape(system.size, -1), H_ref, rtol=1e-11,
+                                   atol=1e-11 * np.abs(H_ref).max())
+        dxs, dA, dt = s.minimizeEnergy(tolerance=1e-12)
+        assert dxs.shape == (3, 3, 1) and dA.shape == (1, 3, 3) and dt.shape == (1, 3, 1)
+        flat = np.concatenate([dxs.reshape(-1), np.transpose(dA, (0, 2, 1)).reshape(-1),
+                               dt.reshape(-1)])
+        want = np.linalg.solve(H_ref, g_ref)
+        np.testing.assert_allclose(flat, want, rtol=1e-7, atol=1e-7 * np.abs(want).max())
+
+
+def test_non_convergence_is_reported():
+    s = soft_box()
+    with pytest.raises(yasps.SolverError, match="PCG stopped after 1 iterations") as err:
+        s.minimizeEnergy(tolerance=1e-14, maxIterations=1)
+    assert not err.value.info["converged"]
+    assert err.value.solution[0].shape == s.m.v["x"].value.shape

@@ -1,0 +1,161 @@
+"""The global Newton system: DoF layout, assembly and the PCG solve.
+
+The DoFs are the entries of the minimisation targets, target after target
+(the paper's appendix A.1), each target instance one block of r*c DoFs. Every
+energy's local parameters are mapped to DoFs (-1 for UNION padding) through
+the same parameter groups that differentiation produced; the C++ runtime
+assembles the local gradients and projected Hessians into a block-sparse
+system (appendix B) and solves it with block-Jacobi PCG (section 8).
+"""
+
+from __future__ import annotations
+
+from typing import Dict, List, Optional
+
+import numpy as np
+
+from . import compiler, config
+from .attribute import Attribute
+from .errors import SceneError, YaspsError
+from .evaluate import ParamSlot, _ParamResolver, _resolve, energy_derivatives
+from .emit import emit_scene
+from .values import from_column_major
+
+
+class SolverError(YaspsError, RuntimeError):
+    """PCG did not reach the requested tolerance; ``solution`` holds the
+    last iterate (one array per target) and ``info`` the solver report."""
+
+    def __init__(self, message: str, solution: list, info: dict):
+        super().__init__(message)
+        self.solution = solution
+        self.info = info
+
+
+class DofLayout:
+    """Where each target's entries sit in the global vector."""
+
+    def __init__(self, targets: List[Attribute]):
+        self.targets = targets
+        self.offset: Dict[int, int] = {}
+        blocks = [0]
+        for t in targets:
+            self.offset[id(t)] = blocks[-1]
+            rc = t.rows * t.cols
+            blocks += list(blocks[-1] + rc * np.arange(1, t.owner.numInstances + 1))
+        self.block_offsets = np.asarray(blocks, dtype=np.int64)
+        self.size = int(blocks[-1])
+
+    def split(self, x: np.ndarray) -> List[np.ndarray]:
+        """Per target, its part of ``x`` as an ``(N, rows, cols)`` array."""
+        out = []
+        for t in self.targets:
+            start = self.offset[id(t)]
+            n = t.owner.numInstances * t.rows * t.cols
+            out.append(from_column_major(x[start:start + n].copy(), t.rows, t.cols))
+        return out
+
+
+class _DofMapper:
+    """Vectorised DoF maps of attributes and parameter groups."""
+
+    def __init__(self, scene, layout: DofLayout, resolver: _ParamResolver):
+        self.scene = scene
+        self.layout = layout
+        self.resolver = resolver
+        self.memo: Dict[int, np.ndarray] = {}
+
+    def attribute(self, attr: Attribute) -> np.ndarray:
+        """(instances of attr's owner) x (its parameters) DoFs."""
+        if id(attr) in self.memo:
+            return self.memo[id(attr)]
+        count = attr.owner.numInstances
+        if attr.kind in ("data", "constant"):
+            if id(attr) in self.layout.offset:
+                rc = attr.rows * attr.cols
+                dofs = self.layout.offset[id(attr)] + \
+                    np.arange(count)[:, None] * rc + np.arange(rc)[None, :]
+            else:
+                dofs = np.zeros((count, 0), dtype=np.int64)
+        else:
+            parts = [self.slot(s, count) for s in self.resolver.slots(attr)]
+            dofs = np.concatenate(parts, axis=1) if parts else \
+                np.zeros((count, 0), dtype=np.int64)
+        self.memo[id(attr)] = dofs.astype(np.int64)
+        return self.memo[id(attr)]
+
+    def slot(self, slot: ParamSlot, count: int) -> np.ndarray:
+        f = slot.fields
+        if slot.kind == "read":
+            target = _resolve(self.scene, f[1])
+            rc = target.rows * target.cols
+            inst = np.arange(count) if target.owner is slot.owner else np.zeros(count, int)
+            return self.layout.offset[id(target)] + inst[:, None] * rc + np.arange(rc)[None, :]
+        width = int(f[-1])
+        out = np.full((count, width), -1, dtype=np.int64)
+        if slot.kind == "join":
+            conn = slot.owner._symbols[f[1].lstrip("@")]
+            sub = self.attribute(_resolve(self.scene, f[3]))
+            picked = sub[conn.indices[:, int(f[2])]]
+            out[:, :picked.shape[1]] = picked
+            return out
+        union = _resolve(self.scene, f[1])
+        offsets = union.offsets
+        for m, member in enumerate(union.members):
+            lo, hi = int(offsets[m]), int(offsets[m + 1])
+            sub = self.attribute(member._attributes[f[2]])
+            out[lo:hi, :sub.shape[1]] = sub
+        return out
+
+
+def assemble(scene, threads: Optional[int] = None):
+    """The assembled global system: (native system, layout, reports)."""
+    targets = scene.minimizeTargets
+    if not targets:
+        raise SceneError(f"scene '{scene.name}' has no minimisation targets "
+                         "(addMinimizeTarget)")
+    layout = DofLayout(targets)
+    resolver = _ParamResolver(scene, emit_scene(scene, locations=True))
+    mapper = _DofMapper(scene, layout, resolver)
+    contributions = []
+    for energy in scene.energies:
+        try:
+            d = energy_derivatives(scene, energy, threads)
+        except SceneError as err:
+            if "depends on no minimisation target" in str(err):
+                continue
+            raise
+        count = energy.owner.numInstances
+        dofs = np.concatenate([mapper.slot(p, count) for p in d.params], axis=1) \
+            if d.params else np.zeros((count, 0), dtype=np.int64)
+        contributions.append((np.ascontiguousarray(dofs, dtype=np.int64), d))
+    native = compiler._module()
+    system = native.GlobalSystem(layout.block_offsets,
+                                 [dofs for dofs, _ in contributions])
+    system.set_zero()
+    for k, (_, d) in enumerate(contributions):
+        system.add(k, np.ascontiguousarray(d.gradient),
+                   np.ascontiguousarray(d.projectedHessian))
+    return system, layout
+
+
+def minimize_energy(scene, tolerance: float = 1e-6, maxIterations: int = 1000,
+                    threads: Optional[int] = None) -> List[np.ndarray]:
+    """Solves H dx = g for the assembled projected Hessian and gradient."""
+    if not (tolerance >= 0):
+        raise ValueError(f"minimizeEnergy: tolerance must be >= 0, got {tolerance}")
+    system, layout = assemble(scene, threads)
+    x = np.zeros(system.size)
+    iterations, residual, converged = system.solve(
+        x, float(tolerance), int(maxIterations),
+        config.num_threads if threads is None else threads)
+    info = {"iterations": int(iterations), "relativeResidual": float(residual),
+            "converged": bool(converged)}
+    scene.lastSolve = info
+    solution = layout.split(x)
+    if not converged:
+        raise SolverError(
+            f"minimizeEnergy: PCG stopped after {iterations} iterations at "
+            f"relative residual {residual:.3g} (tolerance {tolerance:g}); "
+            "the last iterate is in .solution", solution, info)
+    return solution
