@@ -1,9 +1,9 @@
 #!/usr/bin/env bash
-# The demo command: installs what is missing, builds, and runs the main demo.
-# Until the simulation runtime exists the demo is the paper's running example
-# (two bunnies, UNION, dynamic collision pairs): first its IR through the
-# attribute-inlining pipeline of yasps-opt, then built in Python and
-# evaluated with compiled CPU kernels.
+# The demo command: installs what is missing, builds, and runs the main demo:
+# a soft box dropped onto the ground (implicit Euler, stable Neo-Hookean,
+# IPC barrier, Newton with yasps' directions) on the CPU, after the paper's
+# running example (two bunnies, UNION, dynamic collision pairs) through
+# yasps-opt and through Python.
 set -euo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
 build=${BUILD_DIR:-$root/build}
@@ -18,3 +18,6 @@ echo "== examples/ir/two_bunnies.mlir after yasps-inline-reads (barrier energy)"
 
 echo "== examples/two_bunnies.py"
 YASPS_BUILD_DIR="$build" python3 "$root/examples/two_bunnies.py"
+
+echo "== examples/drop.py: a soft box dropped onto the ground"
+YASPS_BUILD_DIR="$build" python3 "$root/examples/drop.py"

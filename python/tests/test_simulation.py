@@ -1,0 +1,21 @@
+"""A shortened run of the drop demo: the box never goes below the ground,
+every accepted Newton step lowers the energy, and the box comes to rest."""
+
+import sys
+
+from conftest import REPO
+
+sys.path.insert(0, str(REPO / "examples"))
+
+import drop  # noqa: E402
+
+
+def test_box_drops_and_comes_to_rest():
+    history = drop.simulate(frames=150, cells=2, verbose=False)
+    assert min(frame["lowest"] for frame in history) > 0.0
+    # It reached the ground (the barrier acts within 2 cm).
+    assert min(frame["lowest"] for frame in history) < 0.02
+    for frame in history:
+        energies = frame["energies"]
+        assert all(b <= a for a, b in zip(energies, energies[1:]))
+    assert max(frame["speed"] for frame in history[-10:]) < 0.05
