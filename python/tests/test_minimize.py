@@ -79,6 +79,7 @@ def test_assembly_and_solve_on_a_soft_box():
     np.testing.assert_allclose(dx.reshape(-1), want, rtol=1e-8,
                                atol=1e-8 * np.abs(want).max())
     assert s.lastSolve["converged"] and s.lastSolve["iterations"] > 0
+    assert set(s.lastSolve["seconds"]) == {"derivatives", "indices", "assembly", "solve"}
 
 
 def mixed_scene(pairs):
