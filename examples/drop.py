@@ -8,7 +8,10 @@ differentiates, projects, assembles and solves; the Newton loop, the line
 search and the step bound that keeps every vertex above the ground are a few
 lines of Python (yasps.sim).
 
-    python3 examples/drop.py [--frames 80] [--cells 4]
+    python3 examples/drop.py [--frames 80] [--cells 4] [--output out/drop]
+
+The frames are written as a VTU sequence (ParaView reads `frame_*.vtu`) and
+a PNG shows a side view of selected frames.
 """
 
 from __future__ import annotations
@@ -76,7 +79,8 @@ def stay_above_ground(x: np.ndarray, p: np.ndarray) -> float:
     return float(min(1.0, (0.9 * z[falling] / -dz[falling]).min()))
 
 
-def simulate(frames: int, cells: int, verbose: bool = True):
+def simulate(frames: int, cells: int, verbose: bool = True,
+             on_frame=None):
     s, x, x_hat = build(cells)
     v = np.zeros_like(x.value)
     history = []
@@ -90,6 +94,8 @@ def simulate(frames: int, cells: int, verbose: bool = True):
         history.append({"lowest": lowest, "speed": float(np.abs(v).max()),
                         "energies": report.energies,
                         "iterations": report.iterations})
+        if on_frame is not None:
+            on_frame(frame, x.value[:, :, 0])
         if verbose:
             done = int(30 * (frame + 1) / frames)
             print(f"\r[{'#' * done}{'.' * (30 - done)}] frame {frame + 1}/{frames}"
@@ -101,12 +107,47 @@ def simulate(frames: int, cells: int, verbose: bool = True):
     return history
 
 
+def write_outputs(output: Path, cells: int, frames: list) -> None:
+    """frame_####.vtu for ParaView and a PNG side view of some frames."""
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    import meshio
+
+    _, tets = box_tet_mesh(cells)
+    output.mkdir(parents=True, exist_ok=True)
+    for k, positions in enumerate(frames):
+        meshio.write(output / f"frame_{k:04d}.vtu",
+                     meshio.Mesh(positions, [("tetra", tets)]))
+    picks = np.linspace(0, len(frames) - 1, 6).astype(int)
+    fig, axes = plt.subplots(1, len(picks), figsize=(3 * len(picks), 3),
+                             sharey=True)
+    for ax, k in zip(axes, picks):
+        p = frames[k]
+        ax.scatter(p[:, 0], p[:, 2], s=4)
+        ax.axhline(0.0, color="k", lw=1)
+        ax.set_title(f"t = {k * DT:.2f} s")
+        ax.set_xlim(-0.05, 0.25)
+        ax.set_ylim(-0.01, 0.32)
+        ax.set_aspect("equal")
+    axes[0].set_ylabel("z (m)")
+    fig.tight_layout()
+    fig.savefig(output / "drop.png", dpi=100)
+    plt.close(fig)
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--frames", type=int, default=80)
     parser.add_argument("--cells", type=int, default=4)
+    parser.add_argument("--output", type=Path, default=Path("out/drop"))
     args = parser.parse_args()
-    simulate(args.frames, args.cells)
+    frames = []
+    simulate(args.frames, args.cells,
+             on_frame=lambda k, positions: frames.append(positions.copy()))
+    write_outputs(args.output, args.cells, frames)
+    print(f"frames: {args.output}/frame_*.vtu (ParaView), picture: "
+          f"{args.output}/drop.png")
 
 
 if __name__ == "__main__":
