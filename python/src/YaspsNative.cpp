@@ -287,6 +287,7 @@ public:
   }
 
   int64_t size() const { return system->size(); }
+  size_t storedBlocks() const { return system->hessian().numStoredBlocks(); }
   void setZero() { system->setZero(); }
 
   void add(size_t energy, DoubleArray gradients, DoubleArray hessians) {
@@ -327,6 +328,54 @@ public:
     }
     return nb::make_tuple(result.iterations, result.relativeResidual,
                           result.converged);
+  }
+
+  /// Scalar entries of the Hessian (both triangles).
+  int64_t nonZeros() const {
+    const auto &H = system->hessian();
+    int64_t count = 0;
+    for (size_t b = 0; b < H.numStoredBlocks(); ++b) {
+      int64_t r = H.blockRow(b), c = H.blockCol(b);
+      int64_t entries = H.layout().blockSize(r) * H.layout().blockSize(c);
+      count += r == c ? entries : 2 * entries;
+    }
+    return count;
+  }
+
+  /// The Hessian in coordinate form, into arrays of nonZeros() entries.
+  void coordinates(Int64Array rows, Int64Array cols, DoubleArray values) const {
+    size_t nnz = size_t(nonZeros());
+    if (rows.size() != nnz || cols.size() != nnz)
+      throw std::invalid_argument("coordinate arrays need " +
+                                  std::to_string(nnz) + " entries");
+    check(values, nnz);
+    const auto &H = system->hessian();
+    const auto &offset = H.layout().blockOffset;
+    size_t k = 0;
+    for (size_t b = 0; b < H.numStoredBlocks(); ++b) {
+      int64_t r = H.blockRow(b), c = H.blockCol(b);
+      int64_t nr = H.layout().blockSize(r), nc = H.layout().blockSize(c);
+      const double *data = H.blockData(b);
+      for (int64_t i = 0; i < nr; ++i)
+        for (int64_t j = 0; j < nc; ++j) {
+          rows.data()[k] = offset[r] + i;
+          cols.data()[k] = offset[c] + j;
+          values.data()[k++] = data[i * nc + j];
+          if (r != c) {
+            rows.data()[k] = offset[c] + j;
+            cols.data()[k] = offset[r] + i;
+            values.data()[k++] = data[i * nc + j];
+          }
+        }
+    }
+  }
+
+  /// y = H x with the runtime's SpMV.
+  void multiply(DoubleArray x, DoubleArray y, unsigned threads) const {
+    check(x, size_t(size()));
+    check(y, size_t(size()));
+    nb::gil_scoped_release release;
+    system->hessian().multiply(x.data(), y.data(), poolFor(threads));
   }
 
 private:
@@ -428,6 +477,14 @@ NB_MODULE(_yasps_native, m) {
            nb::arg("hessians"))
       .def("gradient", &PySystem::gradient, nb::arg("out"))
       .def("dense", &PySystem::dense, nb::arg("out"))
+      .def_prop_ro("non_zeros", &PySystem::nonZeros)
+      .def_prop_ro("stored_blocks", [](const PySystem &self) {
+        return self.storedBlocks();
+      })
+      .def("coordinates", &PySystem::coordinates, nb::arg("rows"),
+           nb::arg("cols"), nb::arg("values"))
+      .def("multiply", &PySystem::multiply, nb::arg("x"), nb::arg("y"),
+           nb::arg("threads") = 0)
       .def("solve", &PySystem::solve, nb::arg("out"), nb::arg("tolerance"),
            nb::arg("max_iterations"), nb::arg("threads") = 0,
            "PCG on H x = g into out; returns (iterations, relative residual, "

@@ -149,6 +149,26 @@ void BlockSparseMatrix::addBlockConcurrent(BlockSlot slot,
   addBlock(slot, local);
 }
 
+// Fixed-size block products: vertex blocks (3x3) dominate the Hessians of
+// IPC scenes, and the compiler fully unrolls these (paper appendix C).
+template <int R, int C>
+static inline void timesBlock(const double *data, const double *x, double *y) {
+  for (int i = 0; i < R; ++i) {
+    double sum = 0.0;
+    for (int j = 0; j < C; ++j)
+      sum += data[i * C + j] * x[j];
+    y[i] += sum;
+  }
+}
+
+template <int R, int C>
+static inline void timesTransposedBlock(const double *data, const double *x,
+                                        double *y) {
+  for (int i = 0; i < R; ++i)
+    for (int j = 0; j < C; ++j)
+      y[j] += data[i * C + j] * x[i];
+}
+
 void BlockSparseMatrix::multiply(const double *x, double *y,
                                  ThreadPool &pool) const {
   const std::vector<std::int64_t> &offset = layout_.blockOffset;
@@ -167,6 +187,10 @@ void BlockSparseMatrix::multiply(const double *x, double *y,
             std::int64_t cols = layout_.blockSize(c);
             const double *data = blockData(b);
             const double *xc = x + offset[c];
+            if (rows == 3 && cols == 3) {
+              timesBlock<3, 3>(data, xc, yr);
+              continue;
+            }
             for (std::int64_t i = 0; i < rows; ++i) {
               double sum = 0.0;
               for (std::int64_t j = 0; j < cols; ++j)
@@ -181,6 +205,10 @@ void BlockSparseMatrix::multiply(const double *x, double *y,
             std::int64_t qRows = layout_.blockSize(q);
             const double *data = blockData(b);
             const double *xq = x + offset[q];
+            if (qRows == 3 && rows == 3) {
+              timesTransposedBlock<3, 3>(data, xq, yr);
+              continue;
+            }
             for (std::int64_t i = 0; i < qRows; ++i)
               for (std::int64_t j = 0; j < rows; ++j)
                 yr[j] += data[i * rows + j] * xq[i];

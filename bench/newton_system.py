@@ -1,0 +1,108 @@
+#!/usr/bin/env python3
+"""One Newton iteration on the 19k-vertex bunny: time split and SpMV.
+
+Stable Neo-Hookean on the 79,935 tets of ../shared/data/bunny-19k.msh plus
+inertia, minimised over the vertex positions. Prints the time of one
+`minimizeEnergy` split into derivatives, indices, assembly and PCG, the PCG
+iterations, and the block-sparse SpMV of the runtime against SciPy's CSR
+SpMV on the same matrix (one thread each; SciPy's is single-threaded).
+
+    python3 bench/newton_system.py [--repeat 20]
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+os.environ.setdefault("YASPS_CACHE_DIR", tempfile.mkdtemp(prefix="yasps-bench-"))
+HERE = Path(__file__).resolve().parent
+sys.path.insert(0, str(HERE.parent / "python"))
+sys.path.insert(0, str(HERE))
+
+import numpy as np  # noqa: E402
+import scipy.sparse as sparse  # noqa: E402
+
+import yasps  # noqa: E402
+from yasps import energies as E  # noqa: E402
+from yasps.minimize import assemble  # noqa: E402
+from meshes import bunny  # noqa: E402
+
+
+def build():
+    verts, tets = bunny("19k")
+    rest = verts[tets]
+    dm = np.stack([rest[:, k] - rest[:, 0] for k in (1, 2, 3)], axis=2)
+    rng = np.random.default_rng(0)
+    s = yasps.scene("bunny")
+    m = s.addMesh("bunny")
+    v = m.addPrimitive("v", numInstances=len(verts))
+    t = m.addPrimitive("t", numInstances=len(tets))
+    x = v.addAttribute("x", rows=3)
+    x.updateValue(verts + rng.normal(scale=1e-3, size=verts.shape))
+    v.addConstant("x_hat", rows=3).updateValue(verts)
+    t.addConstant("inv", rows=3, cols=3).updateValue(np.linalg.inv(dm))
+    t.addConstant("vol", rows=1).updateValue(np.abs(np.linalg.det(dm))[:, None] / 6)
+    t2v = t.addConnectivity("t2v", v, tets, 4)
+    c = t.addAttribute("c", through=t2v, source=x)
+    dt2 = 1e-4
+    s.addEnergy(t.addAttribute("elastic", computed_attribute=dt2 * E.stable_neo_hookean(
+        E.deformation_gradient(c, t["inv"]), 1e4, 4e4, t["vol"])))
+    s.addEnergy(v.addAttribute("inertia", computed_attribute=E.inertia(x, v["x_hat"], 1e-3)))
+    s.addMinimizeTarget([x])
+    return s
+
+
+def median(fn, repeat):
+    times = []
+    for _ in range(repeat):
+        t0 = time.perf_counter()
+        fn()
+        times.append(time.perf_counter() - t0)
+    return float(np.median(times))
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    parser.add_argument("--repeat", type=int, default=20)
+    args = parser.parse_args()
+    yasps.config.num_threads = 1
+    s = build()
+    s.minimizeEnergy(tolerance=1e-4)          # compiles the kernels
+    s.minimizeEnergy(tolerance=1e-4)
+    info = s.lastSolve
+    seconds = info["seconds"]
+    total = sum(seconds.values())
+    print("one Newton iteration, bunny-19k (19,193 vertices, 79,935 tets), "
+          "stable Neo-Hookean + inertia, one thread")
+    for stage in ("derivatives", "indices", "assembly", "solve"):
+        print(f"  {stage:12s}{seconds[stage] * 1e3:9.1f} ms  "
+              f"{100 * seconds[stage] / total:5.1f}%")
+    print(f"  PCG: {info['iterations']} iterations to relative residual "
+          f"{info['relativeResidual']:.2e}")
+
+    system, _ = assemble(s, threads=1)
+    nnz = system.non_zeros
+    rows, cols = np.empty(nnz, np.int64), np.empty(nnz, np.int64)
+    values = np.empty(nnz)
+    system.coordinates(rows, cols, values)
+    csr = sparse.csr_matrix((values, (rows, cols)), shape=(system.size,) * 2)
+    x = np.random.default_rng(1).normal(size=system.size)
+    y = np.empty(system.size)
+    system.multiply(x, y, 1)
+    np.testing.assert_allclose(y, csr @ x, rtol=1e-10, atol=1e-10 * np.abs(y).max())
+    ours = median(lambda: system.multiply(x, y, 1), args.repeat)
+    scipy_time = median(lambda: csr @ x, args.repeat)
+    print(f"  SpMV ({system.size} DoFs, {system.stored_blocks} stored blocks, "
+          f"{nnz} scalar non-zeros):")
+    print(f"    yasps block-sparse  {ours * 1e3:7.2f} ms")
+    print(f"    SciPy CSR           {scipy_time * 1e3:7.2f} ms   "
+          f"({scipy_time / ours:.2f}x yasps)")
+
+
+if __name__ == "__main__":
+    main()
