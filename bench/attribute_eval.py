@@ -20,7 +20,6 @@ import os
 import subprocess
 import sys
 import tempfile
-import time
 from pathlib import Path
 
 import numpy as np
@@ -30,6 +29,7 @@ sys.path.insert(0, str(HERE.parent / "python"))
 sys.path.insert(0, str(HERE))
 
 import yasps  # noqa: E402
+from timing import median  # noqa: E402
 from meshes import bunny  # noqa: E402
 
 
@@ -79,13 +79,6 @@ def build_cpp(workdir: Path) -> ctypes.CDLL:
     return ctypes.CDLL(str(lib))
 
 
-def median_time(fn, repeat: int) -> float:
-    times = []
-    for _ in range(repeat):
-        t0 = time.perf_counter()
-        fn()
-        times.append(time.perf_counter() - t0)
-    return float(np.median(times))
 
 
 def main() -> None:
@@ -112,9 +105,9 @@ def main() -> None:
         library = native.compile_cpu(emit_scene(s), [path], cache)
         out = np.empty(len(tets) * 9)
         buffers = [_buffer(s, k, p, out) for k, p in dict(library.kernels)[path]]
-        kernel = median_time(lambda: library.launch(path, len(tets), buffers, 1),
+        kernel = median(lambda: library.launch(path, len(tets), buffers, 1),
                              args.repeat)
-        end_to_end = median_time(lambda: F.compute(threads=1), args.repeat)
+        end_to_end = median(lambda: F.compute(threads=1), args.repeat)
 
         # NumPy: gather, differences, batched 3x3 products.
         def numpy_f():
@@ -123,7 +116,7 @@ def main() -> None:
             return ds @ dm_inv
         reference = numpy_f()
         np.testing.assert_allclose(result, reference, rtol=1e-12, atol=1e-12)
-        numpy_time = median_time(numpy_f, args.repeat)
+        numpy_time = median(numpy_f, args.repeat)
 
         cpp = build_cpp(Path(tmp))
         x_cm = np.ascontiguousarray(x)            # 3x1: row- = column-major
@@ -135,7 +128,7 @@ def main() -> None:
                                                 ctypes.c_int64(len(tets)))
         call()
         np.testing.assert_allclose(cpp_out, out, rtol=1e-12, atol=1e-12)
-        cpp_time = median_time(call, args.repeat)
+        cpp_time = median(call, args.repeat)
 
     print(f"deformation gradient of {len(tets)} tets (bunny-19k), one thread, "
           f"median of {args.repeat}")

@@ -35,6 +35,7 @@ import jax  # noqa: E402
 import jax.numpy as jnp  # noqa: E402
 
 import yasps  # noqa: E402
+from timing import median  # noqa: E402
 from yasps import energies as E  # noqa: E402
 from yasps.evaluate import _buffer, _compile, DIFFERENTIATION_PIPELINE  # noqa: E402
 from yasps.emit import emit_scene  # noqa: E402
@@ -137,13 +138,6 @@ ENERGIES = {
 }
 
 
-def median(fn, repeat):
-    times = []
-    for _ in range(repeat):
-        t0 = time.perf_counter()
-        fn()
-        times.append(time.perf_counter() - t0)
-    return float(np.median(times))
 
 
 def main() -> None:

@@ -16,7 +16,6 @@ import argparse
 import os
 import sys
 import tempfile
-import time
 from pathlib import Path
 
 os.environ.setdefault("YASPS_CACHE_DIR", tempfile.mkdtemp(prefix="yasps-bench-"))
@@ -28,6 +27,7 @@ import numpy as np  # noqa: E402
 import scipy.sparse as sparse  # noqa: E402
 
 import yasps  # noqa: E402
+from timing import median  # noqa: E402
 from yasps import energies as E  # noqa: E402
 from yasps.minimize import assemble  # noqa: E402
 from meshes import bunny  # noqa: E402
@@ -57,13 +57,6 @@ def build():
     return s
 
 
-def median(fn, repeat):
-    times = []
-    for _ in range(repeat):
-        t0 = time.perf_counter()
-        fn()
-        times.append(time.perf_counter() - t0)
-    return float(np.median(times))
 
 
 def main() -> None:

@@ -23,7 +23,6 @@ os.environ.setdefault("YASPS_CACHE_DIR", tempfile.mkdtemp(prefix="yasps-bench-")
 HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE.parent / "python"))
 
-import numpy as np  # noqa: E402
 import sympy as sp  # noqa: E402
 
 import yasps  # noqa: E402

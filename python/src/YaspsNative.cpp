@@ -32,8 +32,8 @@
 #include <nanobind/ndarray.h>
 #include <nanobind/stl/map.h>
 #include <nanobind/stl/pair.h>
-#include <nanobind/stl/tuple.h>
 #include <nanobind/stl/string.h>
+#include <nanobind/stl/tuple.h>
 #include <nanobind/stl/vector.h>
 
 #include <map>
@@ -141,6 +141,13 @@ std::string runPipeline(const std::string &ir, const std::string &pipeline,
 struct CpuLibrary {
   std::shared_ptr<mlir::yasps::CpuKernelLibrary> library;
   mlir::yasps::CpuCompileStats stats;
+
+  const mlir::yasps::CpuKernel &kernel(const std::string &attribute) const {
+    const mlir::yasps::CpuKernel *found = library->lookup(attribute);
+    if (!found)
+      throw std::invalid_argument("no compiled kernel for " + attribute);
+    return *found;
+  }
 };
 
 CpuLibrary compileCpu(const std::string &ir,
@@ -189,9 +196,7 @@ using Buffer = nb::ndarray<nb::c_contig, nb::device::cpu>;
 void launchCpu(const CpuLibrary &self, const std::string &attribute,
                int64_t numInstances, const std::vector<Buffer> &buffers,
                unsigned threads) {
-  const mlir::yasps::CpuKernel *kernel = self.library->lookup(attribute);
-  if (!kernel)
-    throw std::invalid_argument("no compiled kernel for " + attribute);
+  const mlir::yasps::CpuKernel *kernel = &self.kernel(attribute);
   if (buffers.size() != kernel->arguments.size())
     throw std::invalid_argument("kernel for " + attribute + " takes " +
                                 std::to_string(kernel->arguments.size()) +
@@ -305,8 +310,7 @@ public:
 
   void gradient(DoubleArray out) const {
     check(out, size_t(size()));
-    std::copy(system->gradient().begin(), system->gradient().end(),
-              out.data());
+    std::copy(system->gradient().begin(), system->gradient().end(), out.data());
   }
 
   void dense(DoubleArray out) const {
@@ -383,8 +387,7 @@ private:
     if (out.size() != size)
       throw std::invalid_argument("output array of " +
                                   std::to_string(out.size()) +
-                                  " entries, expected " +
-                                  std::to_string(size));
+                                  " entries, expected " + std::to_string(size));
   }
   std::vector<std::vector<int64_t>> storage;
   std::vector<std::pair<int64_t, int64_t>> shapes;
@@ -425,24 +428,14 @@ NB_MODULE(_yasps_native, m) {
       .def(
           "params",
           [](const CpuLibrary &self, const std::string &attribute) {
-            const mlir::yasps::CpuKernel *kernel =
-                self.library->lookup(attribute);
-            if (!kernel)
-              throw std::invalid_argument("no compiled kernel for " +
-                                          attribute);
-            return kernel->params;
+            return self.kernel(attribute).params;
           },
           nb::arg("attribute"),
           "Local parameters of a derivative attribute's kernel")
       .def(
           "op_counts",
           [](const CpuLibrary &self, const std::string &attribute) {
-            const mlir::yasps::CpuKernel *kernel =
-                self.library->lookup(attribute);
-            if (!kernel)
-              throw std::invalid_argument("no compiled kernel for " +
-                                          attribute);
-            return kernel->opCounts;
+            return self.kernel(attribute).opCounts;
           },
           nb::arg("attribute"),
           "Static arithmetic op counts of a kernel (mul, add, div, math)")
@@ -478,9 +471,8 @@ NB_MODULE(_yasps_native, m) {
       .def("gradient", &PySystem::gradient, nb::arg("out"))
       .def("dense", &PySystem::dense, nb::arg("out"))
       .def_prop_ro("non_zeros", &PySystem::nonZeros)
-      .def_prop_ro("stored_blocks", [](const PySystem &self) {
-        return self.storedBlocks();
-      })
+      .def_prop_ro("stored_blocks",
+                   [](const PySystem &self) { return self.storedBlocks(); })
       .def("coordinates", &PySystem::coordinates, nb::arg("rows"),
            nb::arg("cols"), nb::arg("values"))
       .def("multiply", &PySystem::multiply, nb::arg("x"), nb::arg("y"),

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import itertools
 import os
 import sys
 import tempfile
@@ -18,28 +17,12 @@ os.environ.setdefault("YASPS_CACHE_DIR",
                       tempfile.mkdtemp(prefix="yasps-test-cache-"))
 
 import yasps  # noqa: E402
+from yasps.sim import box_tet_mesh  # noqa: E402
 
 
 def box_mesh(n: int = 2):
-    """A cube of n^3 cells, each split into 6 positively oriented tets."""
-    grid = np.array(list(itertools.product(range(n + 1), repeat=3)), float)
-    index = {tuple(p.astype(int)): i for i, p in enumerate(grid)}
-    tets = []
-    for cell in itertools.product(range(n), repeat=3):
-        c = np.array(cell)
-        # Kuhn subdivision: one tet per permutation of the axes.
-        for perm in itertools.permutations(range(3)):
-            path = [c.copy()]
-            for axis in perm:
-                step = path[-1].copy()
-                step[axis] += 1
-                path.append(step)
-            tet = [index[tuple(p)] for p in path]
-            a, b, cc, d = grid[tet]
-            if np.linalg.det(np.stack([b - a, cc - a, d - a])) < 0:
-                tet[2], tet[3] = tet[3], tet[2]
-            tets.append(tet)
-    return grid / n, np.array(tets, dtype=np.int32)
+    """A unit cube of n^3 cells, each split into 6 positively oriented tets."""
+    return box_tet_mesh(n)
 
 
 def running_example(n: int = 2):
