@@ -112,6 +112,22 @@ OwningOpRef<ModuleOp> parseVerified(const std::string &ir,
   return module;
 }
 
+/// Runs a textual pass pipeline on `module`; throws std::invalid_argument
+/// for a pipeline that does not parse and IRError with the diagnostics if a
+/// pass fails. An empty pipeline still runs the verifier.
+void applyPipeline(ModuleOp module, const std::string &pipeline,
+                   DiagnosticCollector &diagnostics) {
+  PassManager pm(module.getContext(), ModuleOp::getOperationName(),
+                 OpPassManager::Nesting::Implicit);
+  std::string errors;
+  llvm::raw_string_ostream errorStream(errors);
+  if (failed(parsePassPipeline(pipeline, pm, errorStream)))
+    throw std::invalid_argument("invalid pass pipeline '" + pipeline +
+                                "': " + errors);
+  if (failed(pm.run(module)))
+    throw IRError(diagnostics.take());
+}
+
 /// Parses and verifies `ir`, then runs `pipeline` (textual pass pipeline on
 /// the module, e.g. "yasps-inline-reads,cse"; empty for none) and returns the
 /// printed result.
@@ -124,16 +140,7 @@ std::string runPipeline(const std::string &ir, const std::string &pipeline,
   OwningOpRef<ModuleOp> module =
       parseVerified(ir, bufferName, sourceMgr, diagnostics);
 
-  PassManager pm(&context, ModuleOp::getOperationName(),
-                 OpPassManager::Nesting::Implicit);
-  std::string errors;
-  llvm::raw_string_ostream errorStream(errors);
-  if (failed(parsePassPipeline(pipeline, pm, errorStream)))
-    throw std::invalid_argument("invalid pass pipeline '" + pipeline +
-                                "': " + errors);
-  // An empty pipeline still runs the verifier.
-  if (failed(pm.run(*module)))
-    throw IRError(diagnostics.take());
+  applyPipeline(*module, pipeline, diagnostics);
   return printModule(*module);
 }
 
@@ -231,14 +238,7 @@ attributeParams(const std::string &ir, const std::string &pipeline,
   DiagnosticCollector diagnostics(context, sourceMgr);
   OwningOpRef<ModuleOp> module =
       parseVerified(ir, bufferName, sourceMgr, diagnostics);
-  PassManager pm(&context, ModuleOp::getOperationName(),
-                 OpPassManager::Nesting::Implicit);
-  std::string errors;
-  llvm::raw_string_ostream errorStream(errors);
-  if (failed(parsePassPipeline(pipeline, pm, errorStream)))
-    throw std::invalid_argument("invalid pass pipeline: " + errors);
-  if (failed(pm.run(*module)))
-    throw IRError(diagnostics.take());
+  applyPipeline(*module, pipeline, diagnostics);
   std::vector<std::vector<std::vector<std::string>>> result;
   auto scenes = module->getOps<mlir::yasps::SceneOp>();
   for (const std::string &text : paths) {
@@ -248,22 +248,8 @@ attributeParams(const std::string &ir, const std::string &pipeline,
                           : nullptr;
     auto params =
         decl ? decl->getAttrOfType<ArrayAttr>("yasps.params") : ArrayAttr();
-    std::vector<std::vector<std::string>> slots;
-    for (auto param : params ? params.getAsRange<ArrayAttr>()
-                             : ArrayAttr().getAsRange<ArrayAttr>()) {
-      std::vector<std::string> fields;
-      for (Attribute field : param) {
-        std::string out;
-        if (auto str = dyn_cast<StringAttr>(field))
-          out = str.str();
-        else if (auto integer = dyn_cast<IntegerAttr>(field))
-          out = std::to_string(integer.getInt());
-        else
-          llvm::raw_string_ostream(out) << field;
-        fields.push_back(out);
-      }
-      slots.push_back(fields);
-    }
+    std::vector<std::vector<std::string>> slots =
+        mlir::yasps::describeParams(params);
     result.push_back(slots);
   }
   return result;

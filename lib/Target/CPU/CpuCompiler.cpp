@@ -69,6 +69,28 @@ void mlir::yasps::registerCpuCompilerDialects(DialectRegistry &registry) {
   registerLLVMDialectTranslation(registry);
 }
 
+std::vector<std::vector<std::string>>
+mlir::yasps::describeParams(ArrayAttr params) {
+  std::vector<std::vector<std::string>> out;
+  if (!params)
+    return out;
+  for (auto param : params.getAsRange<ArrayAttr>()) {
+    std::vector<std::string> fields;
+    for (Attribute field : param) {
+      std::string text;
+      if (auto str = dyn_cast<StringAttr>(field))
+        text = str.str();
+      else if (auto integer = dyn_cast<IntegerAttr>(field))
+        text = std::to_string(integer.getInt());
+      else
+        llvm::raw_string_ostream(text) << field;
+      fields.push_back(text);
+    }
+    out.push_back(fields);
+  }
+  return out;
+}
+
 CpuKernelLibrary::~CpuKernelLibrary() = default;
 
 const CpuKernel *CpuKernelLibrary::lookup(StringRef attributePath) const {
@@ -159,22 +181,8 @@ std::vector<CpuKernel> describeKernels(ModuleOp kernels) {
       for (NamedAttribute entry : counts)
         kernel.opCounts[entry.getName().str()] =
             cast<IntegerAttr>(entry.getValue()).getInt();
-    if (auto params = func->getAttrOfType<ArrayAttr>("yasps.params")) {
-      for (auto param : params.getAsRange<ArrayAttr>()) {
-        std::vector<std::string> fields;
-        for (Attribute field : param) {
-          std::string text;
-          if (auto str = dyn_cast<StringAttr>(field))
-            text = str.str();
-          else if (auto integer = dyn_cast<IntegerAttr>(field))
-            text = std::to_string(integer.getInt());
-          else
-            llvm::raw_string_ostream(text) << field;
-          fields.push_back(text);
-        }
-        kernel.params.push_back(fields);
-      }
-    }
+    kernel.params =
+        describeParams(func->getAttrOfType<ArrayAttr>("yasps.params"));
     result.push_back(std::move(kernel));
   }
   return result;

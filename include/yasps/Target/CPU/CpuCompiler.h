@@ -74,6 +74,10 @@ struct CpuCompileOptions {
   unsigned optLevel = 3;
 };
 
+/// The printed fields of each entry of a `yasps.params` attribute (empty for
+/// a null attribute), e.g. {"join", "@t2v", "2", "@m::@v::@x", "3"}.
+std::vector<std::vector<std::string>> describeParams(ArrayAttr params);
+
 /// Registers the dialects, interfaces and translations the CPU pipeline uses.
 void registerCpuCompilerDialects(DialectRegistry &registry);
 
