@@ -283,9 +283,9 @@ print(r.stats["from_disk"], r.stats["from_memory"])
     assert len(list((tmp_path / "cache").glob("*.o"))) == 1
 
 
-@pytest.mark.parametrize("n", [1, 2, 3, 6, 12])
+@pytest.mark.parametrize("n", [1, 2, 3, 6, 9, 12, 24])
 def test_projection_matches_numpy_eigh(n):
-    count = 50
+    count = 60
     s = yasps.scene("proj")
     prim = s.addMesh("m").addPrimitive("p", numInstances=count)
     h = prim.addAttribute("h", rows=n, cols=n)
@@ -296,6 +296,14 @@ def test_projection_matches_numpy_eigh(n):
     M[0] = Q @ np.diag(np.resize([2.0, 2.0, -1e-12, 1e-12, 0.0, -3.0], n)) @ Q.T
     M[1] = np.diag(np.resize([1e-200, 1e200, -1e-200, 3.0], n))
     M[2] = -np.eye(n)
+    # Near the smallest normal numbers (products of entries underflow), a
+    # cluster of equal negative eigenvalues, eigenvalues spread over 30
+    # orders of magnitude.
+    M[3] = Q @ np.diag(rng.normal(size=n)) @ Q.T * 1e-300
+    M[4] = Q @ np.diag(np.resize([-2.0, -2.0, -2.0, 1e-14], n)) @ Q.T
+    M[5] = Q @ np.diag(10.0 ** rng.uniform(-15, 15, n)
+                       * rng.choice([-1, 1], n)) @ Q.T
+    M[3:6] = (M[3:6] + np.transpose(M[3:6], (0, 2, 1))) / 2
     h.updateValue(M)
     w, V = np.linalg.eigh(M)
     scale = np.abs(M).max(axis=(1, 2))[:, None, None]

@@ -1,16 +1,20 @@
 // RUN: yasps-opt %s -yasps-lower-to-loops="attributes=@m::@p::@clamped,@m::@p::@kept" -yasps-strip-scenes -canonicalize | FileCheck %s
 
-// PSD projection: two n x n scratch buffers in the entry block (not in the
-// instance loop, where each alloca would grow the stack), Jacobi sweeps until
-// nothing rotates, eigenvalues clamped with maximumf.
+// PSD projection: scratch buffers in the entry block (not in the instance
+// loop, where each alloca would grow the stack); an LDL^T test returns
+// positive definite matrices as they are; otherwise Householder
+// tridiagonalisation (square roots), QL iterations until the subdiagonal is
+// negligible (scf.while), and eigenvalues clamped on one side of zero.
 // CHECK-LABEL: func.func @yasps_eval_m__p__clamped(
-// CHECK: memref.alloca() : memref<3x3xf64>
-// CHECK: memref.alloca() : memref<3x3xf64>
+// CHECK-DAG: memref.alloca() : memref<3x3xf64>
+// CHECK-DAG: memref.alloca() : memref<3xf64>
 // CHECK: scf.parallel
-// CHECK: scf.for {{.*}} iter_args({{.*}}) -> (i1)
-// CHECK: math.copysign
-// CHECK: arith.maximumf
-// CHECK: memref.store
+// CHECK: arith.cmpf ogt
+// CHECK: scf.if {{.*}} -> (f64, f64, f64, f64, f64, f64, f64, f64, f64)
+// CHECK: math.sqrt
+// CHECK: scf.while
+// CHECK: arith.cmpf olt
+// CHECK: scf.yield
 
 // `none` leaves the matrix as it is: no decomposition.
 // CHECK-LABEL: func.func @yasps_eval_m__p__kept(

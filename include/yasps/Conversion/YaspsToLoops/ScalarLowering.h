@@ -39,7 +39,7 @@ FailureOr<ScalarMatrix> lowerToScalars(OpBuilder &b, Operation *op,
                                        ArrayRef<ScalarMatrix> operands,
                                        bool symbolicZeros = false);
 
-/// PSD projection of the symmetric matrix `in` (cyclic Jacobi
+/// PSD projection of the symmetric matrix `in` (tridiagonal QL
 /// eigen-decomposition, eigenvalues clamped or made absolute); `none`
 /// returns `in`.
 ScalarMatrix lowerProjection(OpBuilder &b, Location loc,
