@@ -17,11 +17,12 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parent.parent
 MARKER = "<!-- Everything below is generated from ODS by scripts/gen_docs.py. -->"
 
-# (document, TableGen file, mlir-tblgen arguments)
+# (document, TableGen files, mlir-tblgen arguments)
 DOCUMENTS = [
-    ("docs/dialect.md", "include/yasps/Dialect/Yasps/IR/YaspsOps.td",
+    ("docs/dialect.md", ["include/yasps/Dialect/Yasps/IR/YaspsOps.td"],
      ["-gen-dialect-doc", "-dialect=yasps"]),
-    ("docs/passes.md", "include/yasps/Dialect/Yasps/Transforms/Passes.td",
+    ("docs/passes.md", ["include/yasps/Dialect/Yasps/Transforms/Passes.td",
+                        "include/yasps/Conversion/Passes.td"],
      ["-gen-pass-doc"]),
 ]
 
@@ -47,15 +48,15 @@ def main() -> int:
     opts = parser.parse_args()
 
     stale = []
-    for doc, td, args in DOCUMENTS:
+    for doc, tds, args in DOCUMENTS:
         path = ROOT / doc
         text = path.read_text()
         if MARKER not in text:
             print(f"{doc}: marker line missing:\n  {MARKER}", file=sys.stderr)
             return 1
         head = text.split(MARKER)[0]
-        wanted = head + MARKER + "\n\n" + generate(opts.tblgen, td, args,
-                                                   opts.llvm_include)
+        wanted = head + MARKER + "\n\n" + "\n".join(
+            generate(opts.tblgen, td, args, opts.llvm_include) for td in tds)
         if wanted != text:
             stale.append(doc)
             if not opts.check:

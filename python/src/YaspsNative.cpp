@@ -27,6 +27,7 @@
 #include "yasps/Runtime/GlobalSystem.h"
 #include "yasps/Runtime/ThreadPool.h"
 #include "yasps/Target/CPU/CpuCompiler.h"
+#include "yasps/Target/GPU/GpuCompiler.h"
 
 #include <nanobind/nanobind.h>
 #include <nanobind/ndarray.h>
@@ -58,6 +59,7 @@ MLIRContext &getContext() {
   static MLIRContext *context = [] {
     DialectRegistry registry;
     mlir::yasps::registerCpuCompilerDialects(registry);
+    mlir::yasps::registerGpuCompilerDialects(registry);
     auto *ctx = new MLIRContext(registry, MLIRContext::Threading::DISABLED);
     ctx->loadAllAvailableDialects();
     // Diagnostics quote the user's line; the generic form of the op adds
@@ -172,6 +174,39 @@ CpuLibrary compileCpu(const std::string &ir,
   options.optLevel = optLevel;
   CpuLibrary result;
   auto library = mlir::yasps::compileCpuKernels(*module, attributes, options,
+                                                &result.stats, prePipeline);
+  if (!library) {
+    std::string message = llvm::toString(library.takeError());
+    std::string collected = diagnostics.take();
+    throw IRError(collected.empty() ? message : collected + message);
+  }
+  result.library = *library;
+  return result;
+}
+
+/// Compiled GPU kernels: binaries and launch descriptions (no device needed).
+struct GpuLibrary {
+  std::shared_ptr<mlir::yasps::GpuKernelLibrary> library;
+  mlir::yasps::GpuCompileStats stats;
+};
+
+GpuLibrary compileGpu(const std::string &ir,
+                      const std::vector<std::string> &attributes,
+                      const std::vector<std::string> &chips, bool keepPtx,
+                      const std::string &cacheDir,
+                      const std::string &bufferName,
+                      const std::string &prePipeline) {
+  std::lock_guard<std::mutex> guard(getLock());
+  llvm::SourceMgr sourceMgr;
+  DiagnosticCollector diagnostics(getContext(), sourceMgr);
+  OwningOpRef<ModuleOp> module =
+      parseVerified(ir, bufferName, sourceMgr, diagnostics);
+  mlir::yasps::GpuCompileOptions options;
+  options.chips = chips;
+  options.keepPtx = keepPtx;
+  options.cacheDir = cacheDir;
+  GpuLibrary result;
+  auto library = mlir::yasps::compileGpuKernels(*module, attributes, options,
                                                 &result.stats, prePipeline);
   if (!library) {
     std::string message = llvm::toString(library.takeError());
@@ -441,6 +476,65 @@ NB_MODULE(_yasps_native, m) {
            nb::arg("buffers"), nb::arg("threads") = 0,
            "Evaluates an attribute's kernel on num_instances instances.");
 
+  nb::class_<GpuLibrary>(m, "GpuLibrary",
+                         "Compiled GPU kernels of a scene's attributes.")
+      .def_prop_ro(
+          "kernels",
+          [](const GpuLibrary &self) {
+            nb::list out;
+            for (const auto &kernel : self.library->kernels) {
+              nb::dict d;
+              d["attribute"] = kernel.attribute;
+              d["name"] = kernel.kernelName;
+              d["threads_per_block"] = kernel.threadsPerBlock;
+              nb::list args, params;
+              for (const auto &arg : kernel.arguments)
+                args.append(nb::make_tuple(arg.kind, arg.path));
+              using Kind = mlir::yasps::GpuLaunchParam::Kind;
+              for (const auto &param : kernel.launchParams)
+                params.append(param.kind == Kind::Constant
+                                  ? nb::make_tuple("constant", param.value)
+                                  : nb::make_tuple(param.kind == Kind::Buffer
+                                                       ? "buffer"
+                                                       : "index",
+                                                   param.argument));
+              d["arguments"] = args;
+              d["launch_params"] = params;
+              out.append(d);
+            }
+            return out;
+          },
+          "one dict per kernel: attribute, name (entry point), "
+          "threads_per_block, arguments [(kind, path)], launch_params "
+          "[('index'|'buffer', loop-kernel argument) or ('constant', value)]")
+      .def_prop_ro(
+          "binaries",
+          [](const GpuLibrary &self) {
+            nb::list out;
+            for (const auto &binary : self.library->binaries)
+              out.append(nb::make_tuple(
+                  binary.chip, binary.format,
+                  nb::bytes(binary.bytes.data(), binary.bytes.size())));
+            return out;
+          },
+          "[(chip, 'cubin'|'ptx', bytes)]")
+      .def_prop_ro(
+          "stats",
+          [](const GpuLibrary &self) {
+            nb::dict d;
+            d["from_disk"] = self.stats.fromDisk;
+            d["lower_seconds"] = self.stats.lowerSeconds;
+            d["serialize_seconds"] = self.stats.serializeSeconds;
+            d["key"] = self.stats.key;
+            return d;
+          },
+          "how the compilation went (cache hit, times, cache key)");
+  m.def("compile_gpu", &compileGpu, nb::arg("ir"), nb::arg("attributes"),
+        nb::arg("chips"), nb::arg("keep_ptx") = true, nb::arg("cache_dir") = "",
+        nb::arg("name") = "<yasps>", nb::arg("pre_pipeline") = "",
+        "Compiles GPU kernels (cubins per chip, PTX of the newest) for the "
+        "attributes of the IR's scene; needs the CUDA toolkit's ptxas, not "
+        "a GPU.");
   m.def("compile_cpu", &compileCpu, nb::arg("ir"), nb::arg("attributes"),
         nb::arg("cache_dir") = "", nb::arg("opt_level") = 3,
         nb::arg("name") = "<yasps>", nb::arg("pre_pipeline") = "",

@@ -45,4 +45,20 @@ def YaspsLowerToLoops : Pass<"yasps-lower-to-loops", "::mlir::ModuleOp"> {
   ];
 }
 
+def YaspsSinkScratchIntoLaunch
+    : Pass<"yasps-sink-scratch-into-launch", "::mlir::ModuleOp"> {
+  let summary = "Give every GPU thread its own kernel scratch buffers";
+  let description = [{
+    Loop kernels allocate the scratch buffers of dense linear algebra (the
+    eigen-decomposition of `yasps.project`) once, in the function's entry
+    block, because a CPU thread runs its instances one after another. On a
+    GPU every instance is a thread of its own: after
+    `convert-parallel-loops-to-gpu`, this pass moves each such
+    `memref.alloca` that is used only inside one `gpu.launch` to the start
+    of the launch's body, where `gpu-kernel-outlining` keeps it (private,
+    per-thread memory) instead of passing a host buffer to the kernel.
+    An alloca used outside the launch, or in two launches, is an error.
+  }];
+}
+
 #endif // YASPS_CONVERSION_PASSES_TD

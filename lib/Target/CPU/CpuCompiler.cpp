@@ -2,9 +2,7 @@
 
 #include "yasps/Target/CPU/CpuCompiler.h"
 
-#include "yasps/Conversion/Passes.h"
 #include "yasps/Dialect/Yasps/IR/Yasps.h"
-#include "yasps/Dialect/Yasps/Transforms/Passes.h"
 
 #include "mlir/Conversion/ArithToLLVM/ArithToLLVM.h"
 #include "mlir/Conversion/ControlFlowToLLVM/ControlFlowToLLVM.h"
@@ -15,8 +13,12 @@
 #include "mlir/Conversion/Passes.h"
 #include "mlir/Conversion/UBToLLVM/UBToLLVM.h"
 #include "mlir/Dialect/ControlFlow/IR/ControlFlow.h"
+#include "mlir/Dialect/Func/IR/FuncOps.h"
 #include "mlir/Dialect/Index/IR/IndexDialect.h"
 #include "mlir/Dialect/LLVMIR/LLVMDialect.h"
+#include "mlir/Dialect/Math/IR/Math.h"
+#include "mlir/Dialect/MemRef/IR/MemRef.h"
+#include "mlir/Dialect/SCF/IR/SCF.h"
 #include "mlir/Dialect/UB/IR/UBOps.h"
 #include "mlir/ExecutionEngine/ExecutionEngine.h"
 #include "mlir/ExecutionEngine/OptUtils.h"
@@ -31,7 +33,6 @@
 #include "llvm/Support/FileSystem.h"
 #include "llvm/Support/MemoryBuffer.h"
 #include "llvm/Support/Path.h"
-#include "llvm/Support/SHA256.h"
 #include "llvm/Support/TargetSelect.h"
 #include "llvm/TargetParser/Host.h"
 
@@ -67,28 +68,6 @@ void mlir::yasps::registerCpuCompilerDialects(DialectRegistry &registry) {
   ub::registerConvertUBToLLVMInterface(registry);
   registerBuiltinDialectTranslation(registry);
   registerLLVMDialectTranslation(registry);
-}
-
-std::vector<std::vector<std::string>>
-mlir::yasps::describeParams(ArrayAttr params) {
-  std::vector<std::vector<std::string>> out;
-  if (!params)
-    return out;
-  for (auto param : params.getAsRange<ArrayAttr>()) {
-    std::vector<std::string> fields;
-    for (Attribute field : param) {
-      std::string text;
-      if (auto str = dyn_cast<StringAttr>(field))
-        text = str.str();
-      else if (auto integer = dyn_cast<IntegerAttr>(field))
-        text = std::to_string(integer.getInt());
-      else
-        llvm::raw_string_ostream(text) << field;
-      fields.push_back(text);
-    }
-    out.push_back(fields);
-  }
-  return out;
 }
 
 CpuKernelLibrary::~CpuKernelLibrary() = default;
@@ -134,58 +113,15 @@ double secondsSince(Clock::time_point start) {
   return std::chrono::duration<double>(Clock::now() - start).count();
 }
 
-llvm::Error diagnosticsError(const std::string &what,
-                             const std::string &diagnostics) {
-  return llvm::createStringError(llvm::inconvertibleErrorCode(),
-                                 what + (diagnostics.empty() ? "" : ":\n") +
-                                     diagnostics);
-}
-
-/// Runs `populate`'s passes on `module`, returning the diagnostics as an
-/// error if they fail.
-template <typename Populate>
-llvm::Error runPasses(ModuleOp module, const std::string &what,
-                      Populate populate) {
-  std::string diagnostics;
-  llvm::raw_string_ostream os(diagnostics);
-  ScopedDiagnosticHandler handler(module.getContext(), [&](Diagnostic &diag) {
-    os << diag.getLocation() << ": " << diag << "\n";
-    for (Diagnostic &note : diag.getNotes())
-      os << "  note: " << note << "\n";
-    return success();
-  });
-  PassManager pm(module.getContext());
-  if (failed(populate(pm)) || failed(pm.run(module)))
-    return diagnosticsError(what, diagnostics);
-  return llvm::Error::success();
-}
-
-/// The kernels' metadata, read from the functions yasps-lower-to-loops made.
-std::vector<CpuKernel> describeKernels(ModuleOp kernels) {
-  std::vector<CpuKernel> result;
-  for (auto func : kernels.getOps<func::FuncOp>()) {
-    auto of = func->getAttrOfType<SymbolRefAttr>("yasps.kernel_of");
-    auto args = func->getAttrOfType<ArrayAttr>("yasps.kernel_args");
-    if (!of || !args)
-      continue;
+/// CPU kernels for the described loop kernels (their code comes later).
+std::vector<CpuKernel> cpuKernels(std::vector<KernelDescription> described) {
+  std::vector<CpuKernel> kernels;
+  for (KernelDescription &description : described) {
     CpuKernel kernel;
-    llvm::raw_string_ostream(kernel.attribute) << of;
-    kernel.symbol = func.getSymName().str();
-    for (auto role : args.getAsRange<ArrayAttr>()) {
-      KernelArgument arg;
-      arg.kind = cast<StringAttr>(role[0]).str();
-      llvm::raw_string_ostream(arg.path) << role[1];
-      kernel.arguments.push_back(arg);
-    }
-    if (auto counts = func->getAttrOfType<DictionaryAttr>("yasps.op_counts"))
-      for (NamedAttribute entry : counts)
-        kernel.opCounts[entry.getName().str()] =
-            cast<IntegerAttr>(entry.getValue()).getInt();
-    kernel.params =
-        describeParams(func->getAttrOfType<ArrayAttr>("yasps.params"));
-    result.push_back(std::move(kernel));
+    static_cast<KernelDescription &>(kernel) = std::move(description);
+    kernels.push_back(std::move(kernel));
   }
-  return result;
+  return kernels;
 }
 
 std::string hostDescription() {
@@ -197,16 +133,12 @@ std::string hostDescription() {
 }
 
 std::string cacheKey(ModuleOp kernels, const CpuCompileOptions &options) {
-  std::string text;
-  llvm::raw_string_ostream os(text);
-  kernels.print(os, OpPrintingFlags().printGenericOpForm());
-  os << "\n"
-     << kLoweringPipeline << "\nO" << options.optLevel << "\n"
+  std::string extra;
+  llvm::raw_string_ostream os(extra);
+  os << kLoweringPipeline << "\nO" << options.optLevel << "\n"
      << kCodegenVersion << "\n"
      << hostDescription();
-  std::array<uint8_t, 32> hash = llvm::SHA256::hash(llvm::ArrayRef(
-      reinterpret_cast<const uint8_t *>(text.data()), text.size()));
-  return llvm::toHex(hash, /*LowerCase=*/true);
+  return hashKernels(kernels, extra);
 }
 
 void initializeNativeTarget() {
@@ -265,24 +197,11 @@ mlir::yasps::compileCpuKernels(ModuleOp module,
   Clock::time_point start = Clock::now();
 
   // 1. Kernel functions in upstream dialects.
-  OwningOpRef<ModuleOp> kernels(cast<ModuleOp>(module->clone()));
-  if (llvm::Error err =
-          runPasses(*kernels, "kernel generation failed", [&](PassManager &pm) {
-            if (!prePipeline.empty() &&
-                failed(parsePassPipeline(prePipeline, pm)))
-              return failure();
-            YaspsLowerToLoopsOptions lowerOptions;
-            lowerOptions.attributes.assign(attributes.begin(),
-                                           attributes.end());
-            pm.addPass(createYaspsLowerToLoops(lowerOptions));
-            pm.addPass(createYaspsStripScenes());
-            pm.addPass(createCanonicalizerPass());
-            pm.addPass(createCSEPass());
-            pm.addPass(createYaspsCountOps());
-            return success();
-          }))
-    return std::move(err);
-  std::vector<CpuKernel> described = describeKernels(*kernels);
+  auto generated = generateLoopKernels(module, attributes, prePipeline);
+  if (!generated)
+    return generated.takeError();
+  OwningOpRef<ModuleOp> kernels = std::move(*generated);
+  std::vector<CpuKernel> described = cpuKernels(describeKernels(*kernels));
   st.lowerSeconds = secondsSince(start);
 
   // 2. Caches: this process, then disk.

@@ -12,6 +12,8 @@
 #ifndef YASPS_TARGET_CPU_CPUCOMPILER_H
 #define YASPS_TARGET_CPU_CPUCOMPILER_H
 
+#include "yasps/Target/KernelGeneration.h"
+
 #include "mlir/IR/BuiltinOps.h"
 #include "mlir/IR/DialectRegistry.h"
 #include "llvm/Support/Error.h"
@@ -23,25 +25,9 @@
 
 namespace mlir::yasps {
 
-/// What one buffer argument of a kernel holds.
-struct KernelArgument {
-  std::string kind; ///< "out", "attr", "conn" or "offsets"
-  std::string path; ///< scene-relative symbol path, e.g. "@m::@v::@x"
-};
-
 /// One compiled attribute kernel, callable with MLIR's packed ABI:
 /// (index begin, index end, memref<?x...> buffers...).
-struct CpuKernel {
-  std::string attribute; ///< the attribute it evaluates
-  std::string symbol;    ///< the kernel function's name
-  std::vector<KernelArgument> arguments;
-  /// For derivative attributes, their local parameters (`yasps.params`),
-  /// each as its printed fields, e.g. {"join", "@m::@t::@t2v", "2",
-  /// "@m::@v::@x"}.
-  std::vector<std::vector<std::string>> params;
-  /// Static counts of the kernel's arithmetic (yasps-count-ops): "mul",
-  /// "add", "div", "math".
-  std::map<std::string, int64_t> opCounts;
+struct CpuKernel : KernelDescription {
   void (*packed)(void **) = nullptr;
 };
 
@@ -73,10 +59,6 @@ struct CpuCompileOptions {
   /// LLVM optimisation level of the kernels (0-3).
   unsigned optLevel = 3;
 };
-
-/// The printed fields of each entry of a `yasps.params` attribute (empty for
-/// a null attribute), e.g. {"join", "@t2v", "2", "@m::@v::@x", "3"}.
-std::vector<std::vector<std::string>> describeParams(ArrayAttr params);
 
 /// Registers the dialects, interfaces and translations the CPU pipeline uses.
 void registerCpuCompilerDialects(DialectRegistry &registry);

@@ -1,0 +1,71 @@
+//===- KernelGeneration.h - loop kernels shared by every target -*- C++ -*-===//
+//
+// Both back ends start from the same kernels: yasps IR is lowered to one
+// loop function per requested attribute (yasps-lower-to-loops), the scene is
+// stripped, and the result is canonicalised, CSE'd and annotated with op
+// counts. The functions' attributes describe what the runtime must bind.
+//
+//===----------------------------------------------------------------------===//
+
+#ifndef YASPS_TARGET_KERNELGENERATION_H
+#define YASPS_TARGET_KERNELGENERATION_H
+
+#include "mlir/IR/BuiltinOps.h"
+#include "mlir/IR/OwningOpRef.h"
+#include "mlir/Pass/PassManager.h"
+#include "llvm/Support/Error.h"
+
+#include <map>
+#include <string>
+#include <vector>
+
+namespace mlir::yasps {
+
+/// What one buffer argument of a kernel holds.
+struct KernelArgument {
+  std::string kind; ///< "out", "attr", "conn" or "offsets"
+  std::string path; ///< scene-relative symbol path, e.g. "@m::@v::@x"
+};
+
+/// What a kernel computes and takes, independent of the target.
+struct KernelDescription {
+  std::string attribute; ///< the attribute it evaluates
+  std::string symbol;    ///< the kernel function's name
+  std::vector<KernelArgument> arguments;
+  /// For derivative attributes, their local parameters (`yasps.params`),
+  /// each as its printed fields, e.g. {"join", "@m::@t::@t2v", "2",
+  /// "@m::@v::@x"}.
+  std::vector<std::vector<std::string>> params;
+  /// Static counts of the kernel's arithmetic (yasps-count-ops): "mul",
+  /// "add", "div", "math".
+  std::map<std::string, int64_t> opCounts;
+};
+
+/// The printed fields of each entry of a `yasps.params` attribute (empty for
+/// a null attribute), e.g. {"join", "@t2v", "2", "@m::@v::@x", "3"}.
+std::vector<std::vector<std::string>> describeParams(ArrayAttr params);
+
+/// Runs `populate`'s passes on `module`; on failure the error carries
+/// `what` and the diagnostics.
+llvm::Error
+runPasses(ModuleOp module, const std::string &what,
+          llvm::function_ref<LogicalResult(PassManager &)> populate);
+
+/// A copy of `module` with loop kernels for `attributes` (scene-relative
+/// paths; empty: every energy). `prePipeline` (a yasps-opt pipeline string,
+/// e.g. "yasps-inline-reads,cse,yasps-differentiate") runs first, for
+/// attributes that passes create.
+llvm::Expected<OwningOpRef<ModuleOp>>
+generateLoopKernels(ModuleOp module, const std::vector<std::string> &attributes,
+                    llvm::StringRef prePipeline);
+
+/// The kernels' descriptions, read from the functions of
+/// generateLoopKernels.
+std::vector<KernelDescription> describeKernels(ModuleOp kernels);
+
+/// A SHA-256 hex digest of `kernels` (generic form) and `extra`.
+std::string hashKernels(ModuleOp kernels, llvm::StringRef extra);
+
+} // namespace mlir::yasps
+
+#endif // YASPS_TARGET_KERNELGENERATION_H

@@ -1,0 +1,116 @@
+//===- KernelGeneration.cpp - loop kernels shared by every target ---------===//
+
+#include "yasps/Target/KernelGeneration.h"
+
+#include "yasps/Conversion/Passes.h"
+#include "yasps/Dialect/Yasps/Transforms/Passes.h"
+
+#include "mlir/Dialect/Func/IR/FuncOps.h"
+#include "mlir/Pass/PassRegistry.h"
+#include "mlir/Transforms/Passes.h"
+#include "llvm/Support/SHA256.h"
+
+using namespace mlir;
+using namespace mlir::yasps;
+
+std::vector<std::vector<std::string>>
+mlir::yasps::describeParams(ArrayAttr params) {
+  std::vector<std::vector<std::string>> out;
+  if (!params)
+    return out;
+  for (auto param : params.getAsRange<ArrayAttr>()) {
+    std::vector<std::string> fields;
+    for (Attribute field : param) {
+      std::string text;
+      if (auto str = dyn_cast<StringAttr>(field))
+        text = str.str();
+      else if (auto integer = dyn_cast<IntegerAttr>(field))
+        text = std::to_string(integer.getInt());
+      else
+        llvm::raw_string_ostream(text) << field;
+      fields.push_back(text);
+    }
+    out.push_back(fields);
+  }
+  return out;
+}
+
+llvm::Error mlir::yasps::runPasses(
+    ModuleOp module, const std::string &what,
+    llvm::function_ref<LogicalResult(PassManager &)> populate) {
+  std::string diagnostics;
+  llvm::raw_string_ostream os(diagnostics);
+  ScopedDiagnosticHandler handler(module.getContext(), [&](Diagnostic &diag) {
+    os << diag.getLocation() << ": " << diag << "\n";
+    for (Diagnostic &note : diag.getNotes())
+      os << "  note: " << note << "\n";
+    return success();
+  });
+  PassManager pm(module.getContext());
+  if (failed(populate(pm)) || failed(pm.run(module)))
+    return llvm::createStringError(llvm::inconvertibleErrorCode(),
+                                   what + (diagnostics.empty() ? "" : ":\n") +
+                                       diagnostics);
+  return llvm::Error::success();
+}
+
+llvm::Expected<OwningOpRef<ModuleOp>>
+mlir::yasps::generateLoopKernels(ModuleOp module,
+                                 const std::vector<std::string> &attributes,
+                                 StringRef prePipeline) {
+  OwningOpRef<ModuleOp> kernels(cast<ModuleOp>(module->clone()));
+  if (llvm::Error err =
+          runPasses(*kernels, "kernel generation failed", [&](PassManager &pm) {
+            if (!prePipeline.empty() &&
+                failed(parsePassPipeline(prePipeline, pm)))
+              return failure();
+            YaspsLowerToLoopsOptions lowerOptions;
+            lowerOptions.attributes.assign(attributes.begin(),
+                                           attributes.end());
+            pm.addPass(createYaspsLowerToLoops(lowerOptions));
+            pm.addPass(createYaspsStripScenes());
+            pm.addPass(createCanonicalizerPass());
+            pm.addPass(createCSEPass());
+            pm.addPass(createYaspsCountOps());
+            return success();
+          }))
+    return std::move(err);
+  return kernels;
+}
+
+std::vector<KernelDescription> mlir::yasps::describeKernels(ModuleOp kernels) {
+  std::vector<KernelDescription> result;
+  for (auto func : kernels.getOps<func::FuncOp>()) {
+    auto of = func->getAttrOfType<SymbolRefAttr>("yasps.kernel_of");
+    auto args = func->getAttrOfType<ArrayAttr>("yasps.kernel_args");
+    if (!of || !args)
+      continue;
+    KernelDescription kernel;
+    llvm::raw_string_ostream(kernel.attribute) << of;
+    kernel.symbol = func.getSymName().str();
+    for (auto role : args.getAsRange<ArrayAttr>()) {
+      KernelArgument arg;
+      arg.kind = cast<StringAttr>(role[0]).str();
+      llvm::raw_string_ostream(arg.path) << role[1];
+      kernel.arguments.push_back(arg);
+    }
+    if (auto counts = func->getAttrOfType<DictionaryAttr>("yasps.op_counts"))
+      for (NamedAttribute entry : counts)
+        kernel.opCounts[entry.getName().str()] =
+            cast<IntegerAttr>(entry.getValue()).getInt();
+    kernel.params =
+        describeParams(func->getAttrOfType<ArrayAttr>("yasps.params"));
+    result.push_back(std::move(kernel));
+  }
+  return result;
+}
+
+std::string mlir::yasps::hashKernels(ModuleOp kernels, StringRef extra) {
+  std::string text;
+  llvm::raw_string_ostream os(text);
+  kernels.print(os, OpPrintingFlags().printGenericOpForm());
+  os << "\n" << extra;
+  std::array<uint8_t, 32> hash = llvm::SHA256::hash(llvm::ArrayRef(
+      reinterpret_cast<const uint8_t *>(text.data()), text.size()));
+  return llvm::toHex(hash, /*LowerCase=*/true);
+}

@@ -1,0 +1,98 @@
+"""GPU code generation: every kernel of the running example and of the demo
+scene becomes a cubin per chip (a CUDA ELF with the kernel's symbol) and PTX.
+These tests need the CUDA toolkit's ptxas, not a GPU."""
+
+import shutil
+import struct
+import sys
+
+import pytest
+
+from conftest import REPO, running_example
+
+import yasps
+import yasps.gpu
+
+sys.path.insert(0, str(REPO / "examples"))
+import drop  # noqa: E402
+
+pytestmark = pytest.mark.skipif(
+    shutil.which("ptxas", path="/usr/local/cuda/bin:/usr/bin") is None,
+    reason="the CUDA toolkit (ptxas) is not installed")
+
+EM_CUDA = 190
+STT_FUNC = 2
+
+
+def elf_function_symbols(data: bytes) -> set:
+    """Names of the function symbols of a 64-bit little-endian ELF file,
+    read from its section headers and symbol table."""
+    assert data[:4] == b"\x7fELF", "not an ELF file"
+    assert data[4] == 2 and data[5] == 1, "not 64-bit little-endian"
+    machine, = struct.unpack_from("<H", data, 18)
+    assert machine == EM_CUDA, f"e_machine {machine} is not EM_CUDA"
+    shoff, = struct.unpack_from("<Q", data, 40)
+    shentsize, shnum = struct.unpack_from("<HH", data, 58)
+    sections = [struct.unpack_from("<IIQQQQIIQQ", data, shoff + i * shentsize)
+                for i in range(shnum)]
+    names = set()
+    for sh_type, offset, size, link, entsize in (
+            (s[1], s[4], s[5], s[6], s[9]) for s in sections):
+        if sh_type != 2:  # SHT_SYMTAB
+            continue
+        strtab = sections[link][4]
+        for k in range(size // entsize):
+            name, info = struct.unpack_from("<IB", data, offset + k * entsize)
+            if info & 0xF == STT_FUNC:
+                end = data.index(b"\0", strtab + name)
+                names.add(data[strtab + name:end].decode())
+    return names
+
+
+def check_binaries(kernels: yasps.gpu.GpuKernels, chips) -> None:
+    names = {k.name for k in kernels.kernels}
+    for chip in chips:
+        assert names <= elf_function_symbols(kernels.binaries[(chip, "cubin")])
+    ptx = kernels.binaries[(max(chips), "ptx")].decode()
+    assert f".target {max(chips)}" in ptx
+    for name in names:
+        assert f".entry {name}(" in ptx
+
+
+def test_running_example_compiles_for_gpus():
+    s = running_example()
+    kernels = yasps.gpu.compile_scene(s)
+    paths = {k.attribute for k in kernels.kernels}
+    assert paths == set(yasps.gpu.scene_kernel_paths(s))
+    # Every energy, with derivatives for those of the targets; the union's
+    # kernels decode their members like the CPU's.
+    assert any(p.endswith("__hess_proj") for p in paths)
+    check_binaries(kernels, yasps.gpu.DEFAULT_CHIPS)
+    for k in kernels.kernels:
+        kinds = [kind for kind, _ in k.launch_params]
+        assert kinds.count("buffer") == len(k.arguments), k.attribute
+        assert ("index", 0) in k.launch_params and ("index", 1) in k.launch_params
+
+
+def test_demo_scene_compiles_for_gpus_and_caches():
+    s = drop.build(1)[0]
+    first = yasps.gpu.compile_scene(s)
+    check_binaries(first, yasps.gpu.DEFAULT_CHIPS)
+    assert not first.stats["from_disk"]
+    again = yasps.gpu.compile_scene(s)
+    assert again.stats["from_disk"]
+    assert again.binaries == first.binaries
+
+
+def test_projection_scratch_is_per_thread():
+    """The eigensolver's scratch buffers live in the kernel (per thread),
+    not on the host: the kernel takes only the loop's buffers."""
+    s = yasps.scene("p")
+    p = s.addMesh("m").addPrimitive("p", numInstances=4)
+    h = p.addAttribute("h", rows=6, cols=6)
+    p.addAttribute("proj", computed_attribute=h.project())
+    kernels = yasps.gpu.compile_scene(s, ["@m::@p::@proj"], chips=["sm_90"],
+                                      keep_ptx=False)
+    k = kernels.kernel("@m::@p::@proj")
+    assert [kind for kind, _ in k.launch_params].count("buffer") == 2
+    assert list(kernels.binaries) == [("sm_90", "cubin")]

@@ -1,0 +1,104 @@
+"""CUDA code generation for a scene's kernels.
+
+The same loop kernels the CPU runs are lowered through MLIR's GPU and NVVM
+dialects (one GPU thread per instance) and serialised into a cubin per
+compute capability, plus PTX for newer devices. Compiling needs the CUDA
+toolkit's ``ptxas`` but no GPU or driver::
+
+    kernels = yasps.gpu.compile_scene(scene)
+    cubin = kernels.binaries[("sm_90", "cubin")]
+
+Launching the kernels on a device (the CUDA runtime backend) is not part of
+yasps yet: see docs/gpu.md.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Dict, List, Optional, Sequence, Tuple
+
+from . import compiler, config
+from .emit import emit_scene
+from .errors import SceneError
+from .evaluate import DIFFERENTIATION_PIPELINE
+
+#: Compute capabilities compiled by default: Ampere (A100) and Hopper (H100).
+DEFAULT_CHIPS: Tuple[str, ...] = ("sm_80", "sm_90")
+
+
+@dataclass
+class GpuKernel:
+    """One generated CUDA kernel."""
+    attribute: str          #: scene-relative path of the attribute it evaluates
+    name: str               #: the entry point's symbol in the binaries
+    threads_per_block: int  #: launch with ceil(count / this) blocks
+    arguments: List[Tuple[str, str]]  #: buffers (kind, path), as on the CPU
+    #: cuLaunchKernel's parameters in order: ("index", i) is argument i of the
+    #: loop kernel (0: first instance, 1: end), ("buffer", i) a memref
+    #: descriptor of buffer argument i (pointer, pointer, 0, size, 1), and
+    #: ("constant", v) the i64 v.
+    launch_params: List[Tuple[str, int]]
+
+
+@dataclass
+class GpuKernels:
+    """Kernels of a scene and their binaries, keyed by (chip, format)."""
+    kernels: List[GpuKernel]
+    binaries: Dict[Tuple[str, str], bytes]
+    stats: Dict[str, object] = field(default_factory=dict)
+
+    def kernel(self, attribute: str) -> GpuKernel:
+        """The kernel evaluating ``attribute`` (a scene-relative path)."""
+        for k in self.kernels:
+            if k.attribute == attribute:
+                return k
+        raise KeyError(f"no GPU kernel for {attribute}")
+
+
+def scene_kernel_paths(scene) -> List[str]:
+    """The attributes a scene's simulation evaluates: every energy, and for
+    energies that depend on a minimisation target their gradient, Hessian
+    and projected Hessian."""
+    if not scene.energies:
+        raise SceneError(f"scene '{scene.name}' has no energies (addEnergy)")
+    paths = []
+    bases = ["::".join("@" + n for n in e.owner.path + [e.name])
+             for e in scene.energies]
+    derived = [False] * len(bases)
+    if scene.minimizeTargets:
+        ir = emit_scene(scene, locations=True)
+        params = compiler._module().attribute_params(
+            ir, DIFFERENTIATION_PIPELINE, [b + "__grad" for b in bases],
+            scene.name)
+        derived = [bool(p) for p in params]
+    for base, has_derivatives in zip(bases, derived):
+        paths.append(base)
+        if has_derivatives:
+            paths += [base + "__grad", base + "__hess", base + "__hess_proj"]
+    return paths
+
+
+def compile_scene(scene, attributes: Optional[Sequence[str]] = None,
+                  chips: Sequence[str] = DEFAULT_CHIPS,
+                  keep_ptx: bool = True) -> GpuKernels:
+    """Compiles CUDA kernels for ``attributes`` (scene-relative paths such as
+    ``"@m::@tets::@elastic__grad"``; default: ``scene_kernel_paths``).
+    Binaries are cached on disk with the CPU objects (``config.cache_dir``).
+    Raises ``compiler.IRError`` if lowering or ptxas fails."""
+    paths = list(attributes) if attributes is not None \
+        else scene_kernel_paths(scene)
+    native = compiler._module()
+    ir = emit_scene(scene, locations=True)
+    pipeline = DIFFERENTIATION_PIPELINE if scene.minimizeTargets else ""
+    try:
+        library = native.compile_gpu(ir, paths, list(chips), keep_ptx,
+                                     config.cache_dir or "", scene.name,
+                                     pipeline)
+    except native.IRError as err:
+        raise compiler.IRError(str(err)) from None
+    kernels = [GpuKernel(k["attribute"], k["name"], k["threads_per_block"],
+                         [tuple(a) for a in k["arguments"]],
+                         [tuple(p) for p in k["launch_params"]])
+               for k in library.kernels]
+    binaries = {(chip, fmt): data for chip, fmt, data in library.binaries}
+    return GpuKernels(kernels, binaries, dict(library.stats))
