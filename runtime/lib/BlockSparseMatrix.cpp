@@ -92,31 +92,39 @@ BlockSparseMatrix::BlockSparseMatrix(
   }
   values_.assign(valueOffset_.back(), 0.0);
 
-  // Per-row and per-column lists for multiply, by counting sort so that
-  // blocks of a row stay in block-index order (a fixed summation order).
+  // For multiply, per group: the block range of each row (blocks of a row
+  // are consecutive within a group) and the list of off-diagonal blocks of
+  // each column, by counting sort so that they stay in block order.
   const std::size_t numRows = static_cast<std::size_t>(n);
-  rowStart_.assign(numRows + 1, 0);
-  colStart_.assign(numRows + 1, 0);
+  const std::size_t stride = numRows + 1;
+  rowStart_.assign(groups_.size() * stride, 0);
+  colStart_.assign(groups_.size() * stride, 0);
   diagonalBlock_.assign(numRows, -1);
-  for (std::size_t b = 0; b < blockRow_.size(); ++b) {
-    ++rowStart_[blockRow_[b] + 1];
-    if (blockRow_[b] != blockCol_[b])
-      ++colStart_[blockCol_[b] + 1];
-    else
-      diagonalBlock_[blockRow_[b]] = static_cast<std::int64_t>(b);
-  }
-  for (std::size_t r = 0; r < numRows; ++r) {
-    rowStart_[r + 1] += rowStart_[r];
-    colStart_[r + 1] += colStart_[r];
-  }
-  rowBlocks_.resize(rowStart_.back());
-  colBlocks_.resize(colStart_.back());
-  std::vector<std::size_t> rowFill(rowStart_.begin(), rowStart_.end() - 1);
-  std::vector<std::size_t> colFill(colStart_.begin(), colStart_.end() - 1);
-  for (std::size_t b = 0; b < blockRow_.size(); ++b) {
-    rowBlocks_[rowFill[blockRow_[b]]++] = b;
-    if (blockRow_[b] != blockCol_[b])
-      colBlocks_[colFill[blockCol_[b]]++] = b;
+  for (std::size_t g = 0; g < groups_.size(); ++g) {
+    const BlockGroup &group = groups_[g];
+    std::size_t *rows = &rowStart_[g * stride];
+    std::size_t *cols = &colStart_[g * stride];
+    for (std::size_t k = 0; k < group.size(); ++k) {
+      std::size_t b = group.firstBlock + k;
+      ++rows[blockRow_[b] + 1];
+      if (blockRow_[b] != blockCol_[b])
+        ++cols[blockCol_[b] + 1];
+      else
+        diagonalBlock_[blockRow_[b]] = static_cast<std::int64_t>(b);
+    }
+    rows[0] = group.firstBlock;
+    cols[0] = colBlocks_.size();
+    for (std::size_t r = 0; r < numRows; ++r) {
+      rows[r + 1] += rows[r];
+      cols[r + 1] += cols[r];
+    }
+    colBlocks_.resize(cols[numRows]);
+    std::vector<std::size_t> fill(cols, cols + numRows);
+    for (std::size_t k = 0; k < group.size(); ++k) {
+      std::size_t b = group.firstBlock + k;
+      if (blockRow_[b] != blockCol_[b])
+        colBlocks_[fill[blockCol_[b]]++] = b;
+    }
   }
 }
 
@@ -169,49 +177,116 @@ static inline void timesTransposedBlock(const double *data, const double *x,
       y[j] += data[i * C + j] * x[i];
 }
 
+// y_r += B x_c for a stored block B (rows x cols).
+static inline void addProduct(const double *data, std::int64_t rows,
+                              std::int64_t cols, const double *x, double *y) {
+  if (rows == 3 && cols == 3)
+    return timesBlock<3, 3>(data, x, y);
+  for (std::int64_t i = 0; i < rows; ++i) {
+    double sum = 0.0;
+    for (std::int64_t j = 0; j < cols; ++j)
+      sum += data[i * cols + j] * x[j];
+    y[i] += sum;
+  }
+}
+
+// y_c += B^T x_r for a stored block B (rows x cols).
+static inline void addTransposedProduct(const double *data, std::int64_t rows,
+                                        std::int64_t cols, const double *x,
+                                        double *y) {
+  if (rows == 3 && cols == 3)
+    return timesTransposedBlock<3, 3>(data, x, y);
+  for (std::int64_t i = 0; i < rows; ++i)
+    for (std::int64_t j = 0; j < cols; ++j)
+      y[j] += data[i * cols + j] * x[i];
+}
+
+// Both orders below add the same terms to each entry of y in the same
+// order: group by group, first the transposed blocks (q, r), q < r, by
+// increasing q, then the blocks (r, c) of the row by increasing c. So the
+// result does not depend on the number of threads.
+
+void BlockSparseMatrix::multiplyInStorageOrder(const double *x,
+                                               double *y) const {
+  // One pass over the values, each block read once for both of its
+  // products: half the memory traffic of a full (CSR) matrix.
+  const std::vector<std::int64_t> &offset = layout_.blockOffset;
+  std::fill(y, y + size(), 0.0);
+  for (const BlockGroup &group : groups_) {
+    const std::int64_t rows = group.rows, cols = group.cols;
+    const std::size_t end = group.firstBlock + group.size();
+    const double *data = blockData(group.firstBlock);
+    if (rows == 3 && cols == 3) {
+      multiply3x3InStorageOrder(group.firstBlock, end, x, y);
+      continue;
+    }
+    for (std::size_t b = group.firstBlock; b < end;
+         ++b, data += rows * cols) {
+      std::int64_t r = blockRow_[b], c = blockCol_[b];
+      addProduct(data, rows, cols, x + offset[c], y + offset[r]);
+      if (r != c)
+        addTransposedProduct(data, rows, cols, x + offset[r], y + offset[c]);
+    }
+  }
+}
+
+void BlockSparseMatrix::multiply3x3InStorageOrder(std::size_t begin,
+                                                  std::size_t end,
+                                                  const double *x,
+                                                  double *y) const {
+  // Vertex blocks: the row's partial y stays in registers while the
+  // blocks of a row stream by (rows are consecutive in storage); y_r is
+  // written once per row. The terms are added in the order of addProduct.
+  const std::vector<std::int64_t> &offset = layout_.blockOffset;
+  const double *data = blockData(begin);
+  std::size_t b = begin;
+  while (b < end) {
+    const std::int64_t r = blockRow_[b];
+    double *yr = y + offset[r];
+    const double *xr = x + offset[r];
+    double y0 = yr[0], y1 = yr[1], y2 = yr[2];
+    for (; b < end && blockRow_[b] == r; ++b, data += 9) {
+      const std::int64_t c = blockCol_[b];
+      const double *xc = x + offset[c];
+      y0 += data[0] * xc[0] + data[1] * xc[1] + data[2] * xc[2];
+      y1 += data[3] * xc[0] + data[4] * xc[1] + data[5] * xc[2];
+      y2 += data[6] * xc[0] + data[7] * xc[1] + data[8] * xc[2];
+      if (c != r) {
+        double *yc = y + offset[c];
+        timesTransposedBlock<3, 3>(data, xr, yc);
+      }
+    }
+    yr[0] = y0;
+    yr[1] = y1;
+    yr[2] = y2;
+  }
+}
+
 void BlockSparseMatrix::multiply(const double *x, double *y,
                                  ThreadPool &pool) const {
+  if (pool.size() == 1)
+    return multiplyInStorageOrder(x, y);
   const std::vector<std::int64_t> &offset = layout_.blockOffset;
+  const std::size_t stride = static_cast<std::size_t>(numBlocks()) + 1;
   // Each thread writes only the block rows of its chunk, so no two threads
   // write the same entry of y.
   pool.parallelFor(
       0, numBlocks(), kRowsPerChunk, [&](std::int64_t begin, std::int64_t end) {
         for (std::int64_t r = begin; r < end; ++r) {
           double *yr = y + offset[r];
-          std::int64_t rows = layout_.blockSize(r);
-          std::fill(yr, yr + rows, 0.0);
-          // Stored blocks (r, c): y_r += B x_c.
-          for (std::size_t k = rowStart_[r]; k < rowStart_[r + 1]; ++k) {
-            std::size_t b = rowBlocks_[k];
-            std::int64_t c = blockCol_[b];
-            std::int64_t cols = layout_.blockSize(c);
-            const double *data = blockData(b);
-            const double *xc = x + offset[c];
-            if (rows == 3 && cols == 3) {
-              timesBlock<3, 3>(data, xc, yr);
-              continue;
+          std::fill(yr, yr + layout_.blockSize(r), 0.0);
+          for (std::size_t g = 0; g < groups_.size(); ++g) {
+            const BlockGroup &group = groups_[g];
+            const std::size_t *cols = &colStart_[g * stride];
+            const std::size_t *rows = &rowStart_[g * stride];
+            for (std::size_t k = cols[r]; k < cols[r + 1]; ++k) {
+              std::size_t b = colBlocks_[k];
+              addTransposedProduct(blockData(b), group.rows, group.cols,
+                                   x + offset[blockRow_[b]], yr);
             }
-            for (std::int64_t i = 0; i < rows; ++i) {
-              double sum = 0.0;
-              for (std::int64_t j = 0; j < cols; ++j)
-                sum += data[i * cols + j] * xc[j];
-              yr[i] += sum;
-            }
-          }
-          // Stored blocks (q, r), q < r: y_r += B^T x_q.
-          for (std::size_t k = colStart_[r]; k < colStart_[r + 1]; ++k) {
-            std::size_t b = colBlocks_[k];
-            std::int64_t q = blockRow_[b];
-            std::int64_t qRows = layout_.blockSize(q);
-            const double *data = blockData(b);
-            const double *xq = x + offset[q];
-            if (qRows == 3 && rows == 3) {
-              timesTransposedBlock<3, 3>(data, xq, yr);
-              continue;
-            }
-            for (std::int64_t i = 0; i < qRows; ++i)
-              for (std::int64_t j = 0; j < rows; ++j)
-                yr[j] += data[i * rows + j] * xq[i];
+            for (std::size_t b = rows[r]; b < rows[r + 1]; ++b)
+              addProduct(blockData(b), group.rows, group.cols,
+                         x + offset[blockCol_[b]], yr);
           }
         }
       });

@@ -105,9 +105,10 @@ public:
   void addBlockConcurrent(BlockSlot slot, const double *local);
 
   /// y = H x over all scalar DoFs, using both triangles. `x` and `y` hold
-  /// size() values and must not overlap. Each block row of y is computed by
-  /// one thread in a fixed order, so the result does not depend on the
-  /// number of threads.
+  /// size() values and must not overlap. On one thread, one pass over the
+  /// stored blocks does both products of each; on more, each block row of y
+  /// is computed by one thread. Both add the terms of every entry in the
+  /// same order, so the result does not depend on the number of threads.
   void multiply(const double *x, double *y, ThreadPool &pool) const;
 
   /// Writes the diagonal blocks to `out`, concatenated in block order, each
@@ -139,6 +140,10 @@ public:
   std::vector<double> &values() { return values_; }
 
 private:
+  void multiplyInStorageOrder(const double *x, double *y) const;
+  void multiply3x3InStorageOrder(std::size_t begin, std::size_t end,
+                                 const double *x, double *y) const;
+
   BlockLayout layout_;
   std::vector<BlockGroup> groups_;
   // Per stored block: its block coordinates and where its values start
@@ -147,11 +152,11 @@ private:
   std::vector<std::int64_t> blockCol_;
   std::vector<std::size_t> valueOffset_;
   std::vector<double> values_;
-  // For multiply, per block row r: the stored blocks in row r
-  // (rowBlocks_[rowStart_[r] .. rowStart_[r+1])) and the off-diagonal stored
-  // blocks in column r, whose transposes lie in row r.
+  // For multiply, per group g and block row r (index g * (numBlocks + 1)
+  // + r): the group's stored blocks of row r are [rowStart_[i],
+  // rowStart_[i + 1]), and its off-diagonal blocks of column r, whose
+  // transposes lie in row r, are colBlocks_[colStart_[i] .. colStart_[i+1]).
   std::vector<std::size_t> rowStart_;
-  std::vector<std::size_t> rowBlocks_;
   std::vector<std::size_t> colStart_;
   std::vector<std::size_t> colBlocks_;
   // Per block, the index of its stored diagonal block, or -1.
