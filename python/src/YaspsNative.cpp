@@ -300,26 +300,33 @@ public:
     ::yasps::runtime::BlockLayout layout;
     layout.blockOffset.assign(blockOffsets.data(),
                               blockOffsets.data() + blockOffsets.size());
-    std::vector<::yasps::runtime::DofMap> maps;
-    for (Int64Array &map : dofMaps) {
-      if (map.ndim() != 2)
-        throw std::invalid_argument("a DoF map must be (count, params)");
-      storage.emplace_back(map.data(), map.data() + map.size());
-      shapes.emplace_back(map.shape(0), map.shape(1));
-      maps.push_back({(int64_t)map.shape(0), (int64_t)map.shape(1),
-                      storage.back().data()});
-    }
+    std::vector<::yasps::runtime::DofMap> maps =
+        keep(dofMaps, staticMaps, staticShapes);
     system = std::make_unique<::yasps::runtime::GlobalSystem>(layout, maps);
   }
 
+  /// Replaces the dynamic energies (numbered after the static ones).
+  void setDynamic(std::vector<Int64Array> dofMaps) {
+    std::vector<std::vector<int64_t>> kept;
+    std::vector<std::pair<int64_t, int64_t>> shapes;
+    std::vector<::yasps::runtime::DofMap> maps = keep(dofMaps, kept, shapes);
+    system->setDynamic(maps);
+    // The runtime points into the copies: keep them as long as it uses them.
+    dynamicMaps = std::move(kept);
+    dynamicShapes = std::move(shapes);
+  }
+
   int64_t size() const { return system->size(); }
-  size_t storedBlocks() const { return system->hessian().numStoredBlocks(); }
+  size_t storedBlocks() const {
+    return system->staticHessian().numStoredBlocks() +
+           system->dynamicHessian().numStoredBlocks();
+  }
   void setZero() { system->setZero(); }
 
   void add(size_t energy, DoubleArray gradients, DoubleArray hessians) {
-    if (energy >= shapes.size())
+    if (energy >= system->numEnergies())
       throw std::invalid_argument("no energy " + std::to_string(energy));
-    auto [count, n] = shapes[energy];
+    auto [count, n] = shape(energy);
     if (gradients.size() != size_t(count * n) ||
         hessians.size() != size_t(count * n * n))
       throw std::invalid_argument(
@@ -336,7 +343,7 @@ public:
 
   void dense(DoubleArray out) const {
     check(out, size_t(size() * size()));
-    std::vector<double> d = system->hessian().toDense();
+    std::vector<double> d = system->toDense();
     std::copy(d.begin(), d.end(), out.data());
   }
 
@@ -355,43 +362,46 @@ public:
                           result.converged);
   }
 
-  /// Scalar entries of the Hessian (both triangles).
+  /// Scalar entries of the Hessian (both triangles, both parts; an entry
+  /// of both parts counts twice).
   int64_t nonZeros() const {
-    const auto &H = system->hessian();
     int64_t count = 0;
-    for (size_t b = 0; b < H.numStoredBlocks(); ++b) {
-      int64_t r = H.blockRow(b), c = H.blockCol(b);
-      int64_t entries = H.layout().blockSize(r) * H.layout().blockSize(c);
-      count += r == c ? entries : 2 * entries;
-    }
+    for (const auto *H : system->hessianParts())
+      for (size_t b = 0; b < H->numStoredBlocks(); ++b) {
+        int64_t r = H->blockRow(b), c = H->blockCol(b);
+        int64_t entries = H->layout().blockSize(r) * H->layout().blockSize(c);
+        count += r == c ? entries : 2 * entries;
+      }
     return count;
   }
 
-  /// The Hessian in coordinate form, into arrays of nonZeros() entries.
+  /// The Hessian in coordinate form, into arrays of nonZeros() entries
+  /// (duplicates, from the two parts, are to be summed).
   void coordinates(Int64Array rows, Int64Array cols, DoubleArray values) const {
     size_t nnz = size_t(nonZeros());
     if (rows.size() != nnz || cols.size() != nnz)
       throw std::invalid_argument("coordinate arrays need " +
                                   std::to_string(nnz) + " entries");
     check(values, nnz);
-    const auto &H = system->hessian();
-    const auto &offset = H.layout().blockOffset;
     size_t k = 0;
-    for (size_t b = 0; b < H.numStoredBlocks(); ++b) {
-      int64_t r = H.blockRow(b), c = H.blockCol(b);
-      int64_t nr = H.layout().blockSize(r), nc = H.layout().blockSize(c);
-      const double *data = H.blockData(b);
-      for (int64_t i = 0; i < nr; ++i)
-        for (int64_t j = 0; j < nc; ++j) {
-          rows.data()[k] = offset[r] + i;
-          cols.data()[k] = offset[c] + j;
-          values.data()[k++] = data[i * nc + j];
-          if (r != c) {
-            rows.data()[k] = offset[c] + j;
-            cols.data()[k] = offset[r] + i;
+    for (const auto *H : system->hessianParts()) {
+      const auto &offset = H->layout().blockOffset;
+      for (size_t b = 0; b < H->numStoredBlocks(); ++b) {
+        int64_t r = H->blockRow(b), c = H->blockCol(b);
+        int64_t nr = H->layout().blockSize(r), nc = H->layout().blockSize(c);
+        const double *data = H->blockData(b);
+        for (int64_t i = 0; i < nr; ++i)
+          for (int64_t j = 0; j < nc; ++j) {
+            rows.data()[k] = offset[r] + i;
+            cols.data()[k] = offset[c] + j;
             values.data()[k++] = data[i * nc + j];
+            if (r != c) {
+              rows.data()[k] = offset[c] + j;
+              cols.data()[k] = offset[r] + i;
+              values.data()[k++] = data[i * nc + j];
+            }
           }
-        }
+      }
     }
   }
 
@@ -400,7 +410,7 @@ public:
     check(x, size_t(size()));
     check(y, size_t(size()));
     nb::gil_scoped_release release;
-    system->hessian().multiply(x.data(), y.data(), poolFor(threads));
+    system->multiply(x.data(), y.data(), poolFor(threads));
   }
 
 private:
@@ -410,8 +420,32 @@ private:
                                   std::to_string(out.size()) +
                                   " entries, expected " + std::to_string(size));
   }
-  std::vector<std::vector<int64_t>> storage;
-  std::vector<std::pair<int64_t, int64_t>> shapes;
+  /// Copies the DoF maps into `storage` (the runtime keeps no copy).
+  static std::vector<::yasps::runtime::DofMap>
+  keep(std::vector<Int64Array> &dofMaps,
+       std::vector<std::vector<int64_t>> &storage,
+       std::vector<std::pair<int64_t, int64_t>> &shapes) {
+    std::vector<::yasps::runtime::DofMap> maps;
+    storage.clear();
+    shapes.clear();
+    storage.reserve(dofMaps.size());
+    for (Int64Array &map : dofMaps) {
+      if (map.ndim() != 2)
+        throw std::invalid_argument("a DoF map must be (count, params)");
+      storage.emplace_back(map.data(), map.data() + map.size());
+      shapes.emplace_back(map.shape(0), map.shape(1));
+      maps.push_back({(int64_t)map.shape(0), (int64_t)map.shape(1),
+                      storage.back().data()});
+    }
+    return maps;
+  }
+  std::pair<int64_t, int64_t> shape(size_t energy) const {
+    bool isStatic = energy < staticMaps.size();
+    const auto &maps = isStatic ? staticShapes : dynamicShapes;
+    return maps[isStatic ? energy : energy - staticMaps.size()];
+  }
+  std::vector<std::vector<int64_t>> staticMaps, dynamicMaps;
+  std::vector<std::pair<int64_t, int64_t>> staticShapes, dynamicShapes;
   std::unique_ptr<::yasps::runtime::GlobalSystem> system;
 };
 
@@ -545,6 +579,9 @@ NB_MODULE(_yasps_native, m) {
       .def(nb::init<PySystem::Int64Array, std::vector<PySystem::Int64Array>>(),
            nb::arg("block_offsets"), nb::arg("dof_maps"))
       .def_prop_ro("size", &PySystem::size)
+      .def("set_dynamic", &PySystem::setDynamic, nb::arg("dof_maps"),
+           "Replaces the dynamic energies (numbered after the static ones) "
+           "and rebuilds only their structure")
       .def("set_zero", &PySystem::setZero)
       .def("add", &PySystem::add, nb::arg("energy"), nb::arg("gradients"),
            nb::arg("hessians"))

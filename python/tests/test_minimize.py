@@ -126,10 +126,18 @@ def mixed_scene(pairs):
 
 def test_mixed_soft_affine_system_and_changing_pairs():
     s, pp, p2v, u, soft, verts = mixed_scene([[0, 3], [1, 4]])
-    for pairs in ([[0, 3], [1, 4]], [[2, 4]], [[0, 1], [2, 3], [1, 4]]):
+    rebuilt = []
+    for pairs in ([[0, 3], [1, 4]], [[2, 4]], [[0, 1], [2, 3], [1, 4]], [],
+                  "static change", [[0, 4]]):
+        if pairs == "static change":
+            # A static connectivity changes: the static part is rebuilt.
+            verts.connectivities["v2b"].updateConnectivity([0, 0])
+            pairs = [[1, 3]]
         pp.updateNumInstances(len(pairs))
-        p2v.updateConnectivity(pairs)
-        system, layout = assemble(s)
+        p2v.updateConnectivity(np.array(pairs, dtype=np.int64).reshape(-1, 2))
+        report = {}
+        system, layout = assemble(s, report=report)
+        rebuilt.append(report["staticStructureRebuilt"])
         g_ref, H_ref = dense_reference(s)
         H = np.zeros(system.size ** 2)
         system.dense(H)
@@ -141,6 +149,10 @@ def test_mixed_soft_affine_system_and_changing_pairs():
                                dt.reshape(-1)])
         want = np.linalg.solve(H_ref, g_ref)
         np.testing.assert_allclose(flat, want, rtol=1e-7, atol=1e-7 * np.abs(want).max())
+        assert s.lastSolve["staticStructureRebuilt"] is False
+    # Only the first assembly and the static change build the static part;
+    # the changing pairs re-index the dynamic part alone.
+    assert rebuilt == [True, False, False, False, True, False]
 
 
 def test_non_convergence_is_reported():

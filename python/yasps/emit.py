@@ -160,7 +160,8 @@ def _emit_attribute(attr: Attribute, depth: int, locations: bool) -> List[str]:
 
 
 def _emit_members(entity: Entity, depth: int, locations: bool,
-                  extra: Dict[Entity, List[Tuple[str, Attribute]]]) -> List[str]:
+                  extra: Dict[Entity, List[Tuple[str, Attribute]]],
+                  dynamic_counts: bool = True) -> List[str]:
     lines: List[str] = []
     pad = _INDENT * depth
     symbols = list(entity._symbols.values())
@@ -176,30 +177,38 @@ def _emit_members(entity: Entity, depth: int, locations: bool,
                          f"{entity_path(symbol.target)} arity {symbol.arity}")
         elif isinstance(symbol, Mesh):
             lines.append(f"{pad}yasps.mesh @{symbol.name} {{")
-            lines += _emit_members(symbol, depth + 1, locations, extra)
+            lines += _emit_members(symbol, depth + 1, locations, extra,
+                                   dynamic_counts)
             lines.append(f"{pad}}}")
         elif isinstance(symbol, Primitive):
             dynamic = " dynamic" if symbol.isDynamic else ""
+            count = symbol.numInstances
+            if symbol.isDynamic and not dynamic_counts:
+                count = 0
             lines.append(f"{pad}yasps.primitive @{symbol.name}"
-                         f"({symbol.numInstances}){dynamic} {{")
-            lines += _emit_members(symbol, depth + 1, locations, extra)
+                         f"({count}){dynamic} {{")
+            lines += _emit_members(symbol, depth + 1, locations, extra,
+                                   dynamic_counts)
             lines.append(f"{pad}}}")
         elif isinstance(symbol, PrimitiveUnion):
             members = ", ".join(entity_path(m) for m in symbol.members)
             lines.append(f"{pad}yasps.primitive_union @{symbol.name} "
                          f"[{members}] {{")
-            lines += _emit_members(symbol, depth + 1, locations, extra)
+            lines += _emit_members(symbol, depth + 1, locations, extra,
+                                   dynamic_counts)
             lines.append(f"{pad}}}")
     return lines
 
 
 def emit_scene(scene: Scene, locations: bool = False,
-               extra: Optional[Dict[Entity, List[Tuple[str, Attribute]]]] = None
-               ) -> str:
+               extra: Optional[Dict[Entity, List[Tuple[str, Attribute]]]] = None,
+               dynamic_counts: bool = True) -> str:
     """The scene as IR text (one `yasps.scene` op). ``extra`` adds computed
-    attributes (name, expression) to entities without changing the scene."""
+    attributes (name, expression) to entities without changing the scene.
+    ``dynamic_counts=False`` writes 0 instances for dynamic primitives: the
+    text then describes what does not change from step to step."""
     lines = [f"yasps.scene @{scene.name} {{"]
-    lines += _emit_members(scene, 1, locations, extra or {})
+    lines += _emit_members(scene, 1, locations, extra or {}, dynamic_counts)
     for attr, dynamic, projection in scene._energies:
         flag = " dynamic_instances" if dynamic else ""
         if projection != "clamp":

@@ -20,6 +20,7 @@ from .attribute import Attribute
 from .errors import SceneError, YaspsError
 from .evaluate import ParamSlot, _ParamResolver, _resolve, energy_derivatives
 from .emit import emit_scene
+from .scene import Mesh, Primitive, PrimitiveUnion
 from .values import from_column_major
 
 
@@ -109,10 +110,39 @@ class _DofMapper:
         return out
 
 
+def _static_structure_key(scene, layout: DofLayout, static_energies) -> tuple:
+    """What the DoF maps of the static energies depend on: the scene's
+    structure without the instance counts of dynamic primitives, the DoF
+    layout, the indices of every connectivity and the member counts of every
+    union (paper 10.6: only dynamic instances change between steps)."""
+    connectivities, unions = [], []
+    pending = list(scene._symbols.values())
+    while pending:
+        entity = pending.pop()
+        if isinstance(entity, PrimitiveUnion):
+            unions.append(tuple(m.numInstances for m in entity.members))
+        if isinstance(entity, Primitive) and not entity.isDynamic:
+            connectivities += [(id(c), c._version)
+                               for c in entity._connectivities.values()]
+        if isinstance(entity, (Mesh, Primitive, PrimitiveUnion)):
+            pending += list(entity._symbols.values())
+    return (emit_scene(scene, dynamic_counts=False),
+            layout.block_offsets.tobytes(), tuple(sorted(connectivities)),
+            tuple(unions), tuple(id(e) for e in static_energies))
+
+
 def assemble(scene, threads: Optional[int] = None,
-             timings: Optional[Dict[str, float]] = None):
+             timings: Optional[Dict[str, float]] = None,
+             report: Optional[Dict[str, object]] = None):
     """The assembled global system and its DoF layout. ``timings``, if given,
-    receives the seconds spent on derivatives, indices and assembly."""
+    receives the seconds spent on derivatives, indices and assembly;
+    ``report`` whether the static structure was rebuilt.
+
+    The system keeps static energies (instances fixed from step to step) and
+    dynamic ones (``dynamic_instances``, e.g. collision pairs) apart: the
+    static part's DoF maps and block structure are reused for as long as
+    the scene's structure and connectivities are unchanged, and only the
+    dynamic part is re-indexed on every call."""
     clock = time.perf_counter
     spent = {"derivatives": 0.0, "indices": 0.0, "assembly": 0.0}
     targets = scene.minimizeTargets
@@ -120,10 +150,8 @@ def assemble(scene, threads: Optional[int] = None,
         raise SceneError(f"scene '{scene.name}' has no minimisation targets "
                          "(addMinimizeTarget)")
     layout = DofLayout(targets)
-    resolver = _ParamResolver(scene, emit_scene(scene, locations=True))
-    mapper = _DofMapper(scene, layout, resolver)
-    contributions = []
-    for energy in scene.energies:
+    static, dynamic = [], []
+    for energy, is_dynamic, _ in scene._energies:
         start = clock()
         try:
             d = energy_derivatives(scene, energy, threads)
@@ -132,25 +160,44 @@ def assemble(scene, threads: Optional[int] = None,
                 continue
             raise
         spent["derivatives"] += clock() - start
-        start = clock()
-        count = energy.owner.numInstances
-        dofs = np.concatenate([mapper.slot(p, count) for p in d.params], axis=1) \
-            if d.params else np.zeros((count, 0), dtype=np.int64)
-        contributions.append((np.ascontiguousarray(dofs, dtype=np.int64), d))
-        spent["indices"] += clock() - start
+        (dynamic if is_dynamic else static).append((energy, d))
+
     start = clock()
+    mappers = []
+
+    def dof_map(energy: Attribute, d) -> np.ndarray:
+        if not mappers:
+            resolver = _ParamResolver(scene, emit_scene(scene, locations=True))
+            mappers.append(_DofMapper(scene, layout, resolver))
+        count = energy.owner.numInstances
+        dofs = np.concatenate([mappers[0].slot(p, count) for p in d.params],
+                              axis=1) \
+            if d.params else np.zeros((count, 0), dtype=np.int64)
+        return np.ascontiguousarray(dofs, dtype=np.int64)
+
     native = compiler._module()
-    system = native.GlobalSystem(layout.block_offsets,
-                                 [dofs for dofs, _ in contributions])
+    key = _static_structure_key(scene, layout, [e for e, _ in static])
+    cached = scene._static_system
+    rebuilt = cached is None or cached[0] != key
+    if rebuilt:
+        system = native.GlobalSystem(layout.block_offsets,
+                                     [dof_map(e, d) for e, d in static])
+        scene._static_system = (key, system)
+    else:
+        system = cached[1]
+    system.set_dynamic([dof_map(e, d) for e, d in dynamic])
     spent["indices"] += clock() - start
+
     start = clock()
     system.set_zero()
-    for k, (_, d) in enumerate(contributions):
+    for k, (_, d) in enumerate(static + dynamic):
         system.add(k, np.ascontiguousarray(d.gradient),
                    np.ascontiguousarray(d.projectedHessian))
     spent["assembly"] += clock() - start
     if timings is not None:
         timings.update(spent)
+    if report is not None:
+        report["staticStructureRebuilt"] = rebuilt
     return system, layout
 
 
@@ -160,7 +207,8 @@ def minimize_energy(scene, tolerance: float = 1e-6, maxIterations: int = 1000,
     if not (tolerance >= 0):
         raise ValueError(f"minimizeEnergy: tolerance must be >= 0, got {tolerance}")
     timings: Dict[str, float] = {}
-    system, layout = assemble(scene, threads, timings)
+    report: Dict[str, object] = {}
+    system, layout = assemble(scene, threads, timings, report)
     x = np.zeros(system.size)
     start = time.perf_counter()
     iterations, residual, converged = system.solve(
@@ -168,7 +216,7 @@ def minimize_energy(scene, tolerance: float = 1e-6, maxIterations: int = 1000,
         config.num_threads if threads is None else threads)
     timings["solve"] = time.perf_counter() - start
     info = {"iterations": int(iterations), "relativeResidual": float(residual),
-            "converged": bool(converged), "seconds": timings}
+            "converged": bool(converged), "seconds": timings, **report}
     scene.lastSolve = info
     solution = layout.split(x)
     if not converged:

@@ -13,6 +13,8 @@ leaves the scene as it was.
 
 from __future__ import annotations
 
+import itertools
+
 import keyword
 import re
 from typing import Any, Dict, List, Optional, Sequence, Union
@@ -215,6 +217,9 @@ class Scene(Entity):
         self._energies: List[tuple] = []  # (attribute, dynamic, projection)
         self._targets: List[Attribute] = []
         self._energy_counter = 0
+        # The runtime system of the static energies and what it was built
+        # from (yasps.minimize), reused while the structure is unchanged.
+        self._static_system = None
 
     @property
     def meshes(self) -> Dict[str, "Mesh"]:
@@ -610,6 +615,9 @@ class PrimitiveUnion(Entity):
             operands=tuple(a for _, a in found), name=name))
 
 
+_connectivity_versions = itertools.count(1)
+
+
 class Connectivity:
     """A map from each instance of ``source`` to ``arity`` instances of
     ``target`` (paper section 4.4)."""
@@ -621,6 +629,9 @@ class Connectivity:
         self.target = target
         self.arity = arity
         self._indices: Optional[np.ndarray] = None
+        # Changes with every updateConnectivity, so that structures derived
+        # from the indices (the static part of the Newton system) notice.
+        self._version = 0
 
     def __repr__(self) -> str:
         return (f"<yasps.Connectivity {self.name}: {self.source.qualifiedName}"
@@ -646,6 +657,7 @@ class Connectivity:
         """Replaces the indices (for a dynamic source, after
         ``updateNumInstances``); the count must match the source's."""
         self._indices = self._validate(indices)
+        self._version = next(_connectivity_versions)
 
 
 def scene(name: str) -> Scene:

@@ -220,8 +220,7 @@ void BlockSparseMatrix::multiplyInStorageOrder(const double *x,
       multiply3x3InStorageOrder(group.firstBlock, end, x, y);
       continue;
     }
-    for (std::size_t b = group.firstBlock; b < end;
-         ++b, data += rows * cols) {
+    for (std::size_t b = group.firstBlock; b < end; ++b, data += rows * cols) {
       std::int64_t r = blockRow_[b], c = blockCol_[b];
       addProduct(data, rows, cols, x + offset[c], y + offset[r]);
       if (r != c)

@@ -14,14 +14,13 @@ static std::int64_t blockOfDof(const BlockLayout &layout, std::int64_t dof) {
   return static_cast<std::int64_t>(it - offsets.begin()) - 1;
 }
 
-BlockSparseMatrix
-GlobalSystem::buildStructure(const BlockLayout &layout,
-                             const std::vector<DofMap> &energies,
-                             std::vector<EnergyMap> &maps) {
+GlobalSystem::Part GlobalSystem::buildPart(const BlockLayout &layout,
+                                           const std::vector<DofMap> &energies,
+                                           std::size_t firstEnergy) {
   std::int64_t size =
       layout.blockOffset.empty() ? 0 : layout.blockOffset.back();
   std::vector<std::pair<std::int64_t, std::int64_t>> coords;
-  maps.resize(energies.size());
+  std::vector<EnergyMap> maps(energies.size());
   for (std::size_t e = 0; e < energies.size(); ++e) {
     const DofMap &in = energies[e];
     EnergyMap &map = maps[e];
@@ -38,7 +37,7 @@ GlobalSystem::buildStructure(const BlockLayout &layout,
           continue;
         if (dof >= size)
           throw std::invalid_argument(
-              "energy " + std::to_string(e) + ", instance " +
+              "energy " + std::to_string(firstEnergy + e) + ", instance " +
               std::to_string(i) + ": DoF " + std::to_string(dof) +
               " is outside the system of " + std::to_string(size) + " DoFs");
         std::int64_t block = blockOfDof(layout, dof);
@@ -85,26 +84,44 @@ GlobalSystem::buildStructure(const BlockLayout &layout,
         }
     }
   }
-  return matrix;
+  return Part{std::move(maps), std::move(matrix)};
 }
 
 GlobalSystem::GlobalSystem(BlockLayout layout,
-                           const std::vector<DofMap> &energies)
-    : matrix(buildStructure(layout, energies, maps)),
-      gradientValues(static_cast<std::size_t>(matrix.size()), 0.0) {}
+                           const std::vector<DofMap> &staticEnergies)
+    : staticPart(buildPart(layout, staticEnergies, 0)),
+      dynamicPart(buildPart(layout, {}, staticEnergies.size())),
+      gradientValues(static_cast<std::size_t>(staticPart.matrix.size()), 0.0) {}
+
+void GlobalSystem::setDynamic(const std::vector<DofMap> &dynamicEnergies) {
+  dynamicPart = buildPart(staticPart.matrix.layout(), dynamicEnergies,
+                          numStaticEnergies());
+}
 
 void GlobalSystem::setZero() {
-  matrix.setZero();
+  staticPart.matrix.setZero();
+  dynamicPart.matrix.setZero();
   std::fill(gradientValues.begin(), gradientValues.end(), 0.0);
 }
 
 void GlobalSystem::add(std::size_t energy, const double *gradients,
                        const double *hessians) {
-  if (energy >= maps.size())
+  if (energy >= numEnergies())
     throw std::out_of_range("energy " + std::to_string(energy) +
                             " out of range: the system has " +
-                            std::to_string(maps.size()) + " energies");
-  const EnergyMap &map = maps[energy];
+                            std::to_string(numEnergies()) + " energies");
+  if (energy < numStaticEnergies())
+    addTo(staticPart, staticPart.maps[energy], gradients, hessians,
+          gradientValues);
+  else
+    addTo(dynamicPart, dynamicPart.maps[energy - numStaticEnergies()],
+          gradients, hessians, gradientValues);
+}
+
+void GlobalSystem::addTo(Part &part, const EnergyMap &map,
+                         const double *gradients, const double *hessians,
+                         std::vector<double> &gradient) {
+  BlockSparseMatrix &matrix = part.matrix;
   const BlockLayout &layout = matrix.layout();
   std::int64_t n = map.numParams, m = map.maxBlocks;
   for (std::int64_t i = 0; i < map.count; ++i) {
@@ -117,7 +134,7 @@ void GlobalSystem::add(std::size_t energy, const double *gradients,
       if (local[a] < 0)
         continue;
       std::int64_t ga = global[local[a]];
-      gradientValues[layout.blockOffset[ga] + offset[a]] += g[a];
+      gradient[layout.blockOffset[ga] + offset[a]] += g[a];
       for (std::int64_t b = 0; b < n; ++b) {
         if (local[b] < 0)
           continue;
@@ -135,7 +152,21 @@ void GlobalSystem::add(std::size_t energy, const double *gradients,
   }
 }
 
+void GlobalSystem::multiply(const double *x, double *y,
+                            ThreadPool &pool) const {
+  std::vector<double> scratch;
+  multiplySum(hessianParts(), x, y, scratch, pool);
+}
+
+std::vector<double> GlobalSystem::toDense() const {
+  std::vector<double> dense = staticPart.matrix.toDense();
+  std::vector<double> more = dynamicPart.matrix.toDense();
+  for (std::size_t i = 0; i < dense.size(); ++i)
+    dense[i] += more[i];
+  return dense;
+}
+
 PcgResult GlobalSystem::solve(double *x, const PcgOptions &options,
                               ThreadPool &pool) const {
-  return solvePcg(matrix, gradientValues.data(), x, options, pool);
+  return solvePcg(hessianParts(), gradientValues.data(), x, options, pool);
 }

@@ -28,10 +28,16 @@ namespace {
 /// DoFs, so that applying it also projects onto the free DoFs.
 class BlockJacobi {
 public:
-  BlockJacobi(const BlockSparseMatrix &H, const std::uint8_t *fixed,
+  BlockJacobi(const HessianParts &parts, const std::uint8_t *fixed,
               ThreadPool &pool)
-      : layout_(H.layout()) {
-    H.diagonalBlocks(inverse_);
+      : layout_(parts.front()->layout()) {
+    parts.front()->diagonalBlocks(inverse_);
+    std::vector<double> more;
+    for (std::size_t k = 1; k < parts.size(); ++k) {
+      parts[k]->diagonalBlocks(more);
+      for (std::size_t i = 0; i < more.size(); ++i)
+        inverse_[i] += more[i];
+    }
     start_.assign(static_cast<std::size_t>(layout_.numBlocks()) + 1, 0);
     for (std::int64_t r = 0; r < layout_.numBlocks(); ++r)
       start_[r + 1] =
@@ -167,6 +173,21 @@ static void axpby(double a, const double *x, double b, double *y,
                    });
 }
 
+void yasps::runtime::multiplySum(const HessianParts &parts, const double *x,
+                                 double *y, std::vector<double> &scratch,
+                                 ThreadPool &pool) {
+  parts.front()->multiply(x, y, pool);
+  const std::size_t n = static_cast<std::size_t>(parts.front()->size());
+  for (std::size_t k = 1; k < parts.size(); ++k) {
+    if (parts[k]->numStoredBlocks() == 0)
+      continue;
+    scratch.resize(n);
+    parts[k]->multiply(x, scratch.data(), pool);
+    for (std::size_t i = 0; i < n; ++i)
+      y[i] += scratch[i];
+  }
+}
+
 static bool allFinite(const double *v, std::size_t n) {
   for (std::size_t i = 0; i < n; ++i)
     if (!std::isfinite(v[i]))
@@ -177,6 +198,19 @@ static bool allFinite(const double *v, std::size_t n) {
 PcgResult yasps::runtime::solvePcg(const BlockSparseMatrix &H, const double *b,
                                    double *x, const PcgOptions &options,
                                    ThreadPool &pool) {
+  return solvePcg(HessianParts{&H}, b, x, options, pool);
+}
+
+PcgResult yasps::runtime::solvePcg(const HessianParts &parts, const double *b,
+                                   double *x, const PcgOptions &options,
+                                   ThreadPool &pool) {
+  if (parts.empty())
+    throw std::invalid_argument("PCG needs at least one matrix");
+  const BlockSparseMatrix &H = *parts.front();
+  for (const BlockSparseMatrix *part : parts)
+    if (part->layout().blockOffset != H.layout().blockOffset)
+      throw std::invalid_argument(
+          "the parts of a PCG matrix must share one block layout");
   const std::int64_t n = H.size();
   const std::size_t un = static_cast<std::size_t>(n);
   const std::uint8_t *fixed = nullptr;
@@ -204,17 +238,19 @@ PcgResult yasps::runtime::solvePcg(const BlockSparseMatrix &H, const double *b,
         r[i] = 0.0;
   // Checked up front: a NaN in H might otherwise sit where the iterates are
   // zero and go unnoticed, or be hidden by the preconditioner's fallback.
-  if (!allFinite(r.data(), un) ||
-      !allFinite(H.values().data(), H.values().size()))
+  if (!allFinite(r.data(), un))
     return {0, nan, false};
+  for (const BlockSparseMatrix *part : parts)
+    if (!allFinite(part->values().data(), part->values().size()))
+      return {0, nan, false};
 
   std::vector<double> partial;
   const double bNorm = std::sqrt(dot(r.data(), r.data(), n, partial, pool));
   if (bNorm == 0.0)
     return {0, 0.0, true};
 
-  BlockJacobi preconditioner(H, fixed, pool);
-  std::vector<double> z(un), p(un), q(un);
+  BlockJacobi preconditioner(parts, fixed, pool);
+  std::vector<double> z(un), p(un), q(un), partProduct;
   preconditioner.apply(r.data(), z.data(), pool);
   p = z;
   double rz = dot(r.data(), z.data(), n, partial, pool);
@@ -229,7 +265,7 @@ PcgResult yasps::runtime::solvePcg(const BlockSparseMatrix &H, const double *b,
     if (iterations == options.maxIterations)
       return {iterations, rNorm / bNorm, false};
 
-    H.multiply(p.data(), q.data(), pool);
+    multiplySum(parts, p.data(), q.data(), partProduct, pool);
     if (fixed)
       for (std::int64_t i = 0; i < n; ++i)
         if (fixed[i])

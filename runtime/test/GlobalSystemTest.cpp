@@ -97,7 +97,7 @@ TEST(GlobalSystem, AssemblesLikeADenseReference) {
   };
   scatter(scene.edgeDofs, scene.edgeCount, scene.edgeN, ge, he);
   scatter(scene.bodyDofs, scene.bodyCount, scene.bodyN, gb, hb);
-  std::vector<double> assembled = system.hessian().toDense();
+  std::vector<double> assembled = system.toDense();
   for (int64_t k = 0; k < n * n; ++k)
     EXPECT_NEAR(assembled[k], dense[k], 1e-12) << "entry " << k;
   for (int64_t k = 0; k < n; ++k)
@@ -107,7 +107,7 @@ TEST(GlobalSystem, AssemblesLikeADenseReference) {
   system.setZero();
   system.add(0, ge.data(), he.data());
   system.add(1, gb.data(), hb.data());
-  EXPECT_EQ(system.hessian().toDense(), assembled);
+  EXPECT_EQ(system.toDense(), assembled);
 
   // The PCG solution satisfies H x = g.
   std::vector<double> x(n, 0.0);
@@ -131,4 +131,58 @@ TEST(GlobalSystem, RejectsDofsOutsideTheLayout) {
                std::invalid_argument);
   GlobalSystem ok(layout, {});
   EXPECT_THROW(ok.add(0, nullptr, nullptr), std::out_of_range);
+}
+
+TEST(GlobalSystem, RebuildsOnlyTheDynamicPart) {
+  // The edge energy is static; the body energy is dynamic and changes its
+  // number of instances between assemblies (like collision pairs).
+  Scene scene;
+  std::vector<DofMap> maps = scene.maps();
+  GlobalSystem system(scene.layout, {maps[0]});
+  const BlockSparseMatrix *staticMatrix = &system.staticHessian();
+  std::size_t staticBlocks = staticMatrix->numStoredBlocks();
+  EXPECT_EQ(system.numEnergies(), 1u);
+
+  std::mt19937 rng(5);
+  auto he = randomSpd(rng, scene.edgeN, scene.edgeCount);
+  auto hb = randomSpd(rng, scene.bodyN, scene.bodyCount);
+  std::vector<double> ge(scene.edgeCount * scene.edgeN, 1.0),
+      gb(scene.bodyCount * scene.bodyN, -2.0);
+  ThreadPool pool(2);
+  for (std::int64_t bodies : {2, 0, 1}) {
+    system.setDynamic({{bodies, scene.bodyN, scene.bodyDofs.data()}});
+    EXPECT_EQ(system.numEnergies(), 2u);
+    EXPECT_EQ(&system.staticHessian(), staticMatrix);
+    EXPECT_EQ(system.staticHessian().numStoredBlocks(), staticBlocks);
+    system.setZero();
+    system.add(0, ge.data(), he.data());
+    system.add(1, gb.data(), hb.data());
+
+    // The same energies, all static, as the reference.
+    GlobalSystem whole(scene.layout,
+                       {maps[0], {bodies, scene.bodyN, scene.bodyDofs.data()}});
+    whole.setZero();
+    whole.add(0, ge.data(), he.data());
+    whole.add(1, gb.data(), hb.data());
+    EXPECT_EQ(system.toDense(), whole.toDense()) << bodies << " bodies";
+    EXPECT_EQ(system.gradient(), whole.gradient());
+
+    std::vector<double> x(24), y(24), yWhole(24);
+    for (int i = 0; i < 24; ++i)
+      x[i] = std::sin(1.0 + i);
+    system.multiply(x.data(), y.data(), pool);
+    whole.multiply(x.data(), yWhole.data(), pool);
+    for (int i = 0; i < 24; ++i)
+      EXPECT_NEAR(y[i], yWhole[i], 1e-12);
+
+    // PCG on the sum matches PCG on the single matrix.
+    PcgOptions options;
+    options.relativeTolerance = 1e-13;
+    std::vector<double> a(24), b(24);
+    EXPECT_TRUE(system.solve(a.data(), options, pool).converged);
+    EXPECT_TRUE(whole.solve(b.data(), options, pool).converged);
+    for (int i = 0; i < 24; ++i)
+      EXPECT_NEAR(a[i], b[i], 1e-9 * (1 + std::abs(b[i])));
+  }
+  EXPECT_THROW(system.add(2, nullptr, nullptr), std::out_of_range);
 }

@@ -6,7 +6,8 @@
 // the global DoF it belongs to (-1 for parameters that are not DoFs, e.g.
 // the zero padding of UNION slots). The DoFs are partitioned into blocks
 // (one per target instance, paper appendix A.1); the block structure of the
-// Hessian is derived once from the maps (appendix B) and each step only
+// Hessian is derived from the maps (appendix B), once for static energies
+// and again only for dynamic ones when they change, and each step only
 // accumulates into known places.
 //
 //===----------------------------------------------------------------------===//
@@ -30,11 +31,21 @@ struct DofMap {
   const std::int64_t *dofs = nullptr;
 };
 
+/// The global system, kept in two parts (paper section 10.6): the static
+/// energies, whose structure is built once, and the dynamic ones (collision
+/// pairs), whose structure is rebuilt whenever their instances change. The
+/// Hessian is the sum of both parts' matrices. Energies are numbered static
+/// first, then dynamic.
 class GlobalSystem {
 public:
-  /// Builds the block structure. Throws std::invalid_argument for a DoF
-  /// outside the layout.
-  GlobalSystem(BlockLayout layout, const std::vector<DofMap> &energies);
+  /// Builds the block structure of the static energies; the dynamic part
+  /// starts empty. Throws std::invalid_argument for a DoF outside the
+  /// layout.
+  GlobalSystem(BlockLayout layout, const std::vector<DofMap> &staticEnergies);
+
+  /// Replaces the dynamic energies and rebuilds only their structure. The
+  /// dynamic part's values are zero afterwards.
+  void setDynamic(const std::vector<DofMap> &dynamicEnergies);
 
   /// Zeroes the gradient and the Hessian before a new assembly.
   void setZero();
@@ -44,12 +55,25 @@ public:
   void add(std::size_t energy, const double *gradients, const double *hessians);
 
   const std::vector<double> &gradient() const { return gradientValues; }
-  const BlockSparseMatrix &hessian() const { return matrix; }
+  const BlockSparseMatrix &staticHessian() const { return staticPart.matrix; }
+  const BlockSparseMatrix &dynamicHessian() const { return dynamicPart.matrix; }
+  /// The Hessian as the sum of its parts.
+  HessianParts hessianParts() const {
+    return {&staticPart.matrix, &dynamicPart.matrix};
+  }
+  /// y = H x (both parts).
+  void multiply(const double *x, double *y, ThreadPool &pool) const;
+  /// The dense H (both parts), row-major. For tests and debugging.
+  std::vector<double> toDense() const;
 
   /// Solves H x = g by block-Jacobi PCG (x has size() entries).
   PcgResult solve(double *x, const PcgOptions &options, ThreadPool &pool) const;
 
-  std::int64_t size() const { return matrix.size(); }
+  std::int64_t size() const { return staticPart.matrix.size(); }
+  std::size_t numStaticEnergies() const { return staticPart.maps.size(); }
+  std::size_t numEnergies() const {
+    return staticPart.maps.size() + dynamicPart.maps.size();
+  }
 
 private:
   /// Per energy: for each instance and parameter, the index of its block
@@ -61,13 +85,20 @@ private:
     std::vector<std::int64_t> globalBlock; // count x maxBlocks, -1 padded
     std::vector<BlockSlot> pairSlot;       // count x maxBlocks x maxBlocks
   };
+  /// Energies and the matrix their structure makes.
+  struct Part {
+    std::vector<EnergyMap> maps;
+    BlockSparseMatrix matrix;
+  };
 
-  static BlockSparseMatrix buildStructure(const BlockLayout &layout,
-                                          const std::vector<DofMap> &energies,
-                                          std::vector<EnergyMap> &maps);
+  static Part buildPart(const BlockLayout &layout,
+                        const std::vector<DofMap> &energies,
+                        std::size_t firstEnergy);
+  static void addTo(Part &part, const EnergyMap &map, const double *gradients,
+                    const double *hessians, std::vector<double> &gradient);
 
-  std::vector<EnergyMap> maps;
-  BlockSparseMatrix matrix;
+  Part staticPart;
+  Part dynamicPart;
   std::vector<double> gradientValues;
 };
 

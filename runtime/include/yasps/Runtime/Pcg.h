@@ -52,6 +52,20 @@ struct PcgResult {
 PcgResult solvePcg(const BlockSparseMatrix &H, const double *b, double *x,
                    const PcgOptions &options, ThreadPool &pool);
 
+/// A matrix kept as the sum of parts with one block layout (the static and
+/// dynamic parts of a Hessian, paper section 10.6).
+using HessianParts = std::vector<const BlockSparseMatrix *>;
+
+/// solvePcg on H = the sum of `parts`; the preconditioner inverts the sums
+/// of their diagonal blocks. Also throws std::invalid_argument if there is
+/// no part or the parts' layouts differ.
+PcgResult solvePcg(const HessianParts &parts, const double *b, double *x,
+                   const PcgOptions &options, ThreadPool &pool);
+
+/// y = (sum of parts) x; `scratch` holds one part's product.
+void multiplySum(const HessianParts &parts, const double *x, double *y,
+                 std::vector<double> &scratch, ThreadPool &pool);
+
 } // namespace yasps::runtime
 
 #endif // YASPS_RUNTIME_PCG_H
