@@ -323,7 +323,8 @@ public:
   }
   void setZero() { system->setZero(); }
 
-  void add(size_t energy, DoubleArray gradients, DoubleArray hessians) {
+  void add(size_t energy, DoubleArray gradients, DoubleArray hessians,
+           unsigned threads) {
     if (energy >= system->numEnergies())
       throw std::invalid_argument("no energy " + std::to_string(energy));
     auto [count, n] = shape(energy);
@@ -333,7 +334,8 @@ public:
           "energy " + std::to_string(energy) + " expects " +
           std::to_string(count) + " gradients of " + std::to_string(n) +
           " and Hessians of " + std::to_string(n) + "x" + std::to_string(n));
-    system->add(energy, gradients.data(), hessians.data());
+    nb::gil_scoped_release release;
+    system->add(energy, gradients.data(), hessians.data(), &poolFor(threads));
   }
 
   void gradient(DoubleArray out) const {
@@ -584,7 +586,9 @@ NB_MODULE(_yasps_native, m) {
            "and rebuilds only their structure")
       .def("set_zero", &PySystem::setZero)
       .def("add", &PySystem::add, nb::arg("energy"), nb::arg("gradients"),
-           nb::arg("hessians"))
+           nb::arg("hessians"), nb::arg("threads") = 0,
+           "Adds an energy's local gradients and Hessians; with more than "
+           "one thread, instances are split across threads (atomic adds)")
       .def("gradient", &PySystem::gradient, nb::arg("out"))
       .def("dense", &PySystem::dense, nb::arg("out"))
       .def_prop_ro("non_zeros", &PySystem::nonZeros)

@@ -190,9 +190,10 @@ def assemble(scene, threads: Optional[int] = None,
 
     start = clock()
     system.set_zero()
+    workers = config.num_threads if threads is None else threads
     for k, (_, d) in enumerate(static + dynamic):
         system.add(k, np.ascontiguousarray(d.gradient),
-                   np.ascontiguousarray(d.projectedHessian))
+                   np.ascontiguousarray(d.projectedHessian), workers)
     spent["assembly"] += clock() - start
     if timings is not None:
         timings.update(spent)

@@ -2,6 +2,8 @@
 
 #include "yasps/Runtime/GlobalSystem.h"
 
+#include "yasps/Runtime/ThreadPool.h"
+
 #include <algorithm>
 #include <stdexcept>
 #include <string>
@@ -104,27 +106,59 @@ void GlobalSystem::setZero() {
   std::fill(gradientValues.begin(), gradientValues.end(), 0.0);
 }
 
+// Instances per chunk of a parallel assembly: each adds a few hundred
+// entries, so chunks of this size amortise the scheduling.
+static constexpr std::int64_t kInstancesPerChunk = 256;
+
+/// target += value, atomically with respect to other atomicAdds.
+static inline void atomicAdd(double *target, double value) {
+  double expected;
+  __atomic_load(target, &expected, __ATOMIC_RELAXED);
+  double desired;
+  do {
+    desired = expected + value;
+  } while (!__atomic_compare_exchange(target, &expected, &desired,
+                                      /*weak=*/true, __ATOMIC_RELAXED,
+                                      __ATOMIC_RELAXED));
+}
+
+template <bool Atomic> static inline void accumulate(double *target, double v) {
+  if constexpr (Atomic)
+    atomicAdd(target, v);
+  else
+    *target += v;
+}
+
 void GlobalSystem::add(std::size_t energy, const double *gradients,
-                       const double *hessians) {
+                       const double *hessians, ThreadPool *pool) {
   if (energy >= numEnergies())
     throw std::out_of_range("energy " + std::to_string(energy) +
                             " out of range: the system has " +
                             std::to_string(numEnergies()) + " energies");
-  if (energy < numStaticEnergies())
-    addTo(staticPart, staticPart.maps[energy], gradients, hessians,
-          gradientValues);
-  else
-    addTo(dynamicPart, dynamicPart.maps[energy - numStaticEnergies()],
-          gradients, hessians, gradientValues);
+  bool isStatic = energy < numStaticEnergies();
+  Part &part = isStatic ? staticPart : dynamicPart;
+  const EnergyMap &map =
+      part.maps[isStatic ? energy : energy - numStaticEnergies()];
+  if (!pool || pool->size() == 1 || map.count <= kInstancesPerChunk) {
+    addTo<false>(part, map, gradients, hessians, gradientValues, 0, map.count);
+    return;
+  }
+  pool->parallelFor(0, map.count, kInstancesPerChunk,
+                    [&](std::int64_t begin, std::int64_t end) {
+                      addTo<true>(part, map, gradients, hessians,
+                                  gradientValues, begin, end);
+                    });
 }
 
+template <bool Atomic>
 void GlobalSystem::addTo(Part &part, const EnergyMap &map,
                          const double *gradients, const double *hessians,
-                         std::vector<double> &gradient) {
+                         std::vector<double> &gradient, std::int64_t begin,
+                         std::int64_t end) {
   BlockSparseMatrix &matrix = part.matrix;
   const BlockLayout &layout = matrix.layout();
   std::int64_t n = map.numParams, m = map.maxBlocks;
-  for (std::int64_t i = 0; i < map.count; ++i) {
+  for (std::int64_t i = begin; i < end; ++i) {
     const std::int32_t *local = &map.localBlock[i * n];
     const std::int32_t *offset = &map.offset[i * n];
     const std::int64_t *global = &map.globalBlock[i * m];
@@ -134,7 +168,7 @@ void GlobalSystem::addTo(Part &part, const EnergyMap &map,
       if (local[a] < 0)
         continue;
       std::int64_t ga = global[local[a]];
-      gradient[layout.blockOffset[ga] + offset[a]] += g[a];
+      accumulate<Atomic>(&gradient[layout.blockOffset[ga] + offset[a]], g[a]);
       for (std::int64_t b = 0; b < n; ++b) {
         if (local[b] < 0)
           continue;
@@ -146,7 +180,7 @@ void GlobalSystem::addTo(Part &part, const EnergyMap &map,
         BlockSlot slot = map.pairSlot[(i * m + local[a]) * m + local[b]];
         double *data = matrix.blockData(slot.block);
         std::int64_t cols = layout.blockSize(gb);
-        data[offset[a] * cols + offset[b]] += h[a * n + b];
+        accumulate<Atomic>(&data[offset[a] * cols + offset[b]], h[a * n + b]);
       }
     }
   }

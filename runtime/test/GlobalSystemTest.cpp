@@ -186,3 +186,38 @@ TEST(GlobalSystem, RebuildsOnlyTheDynamicPart) {
   }
   EXPECT_THROW(system.add(2, nullptr, nullptr), std::out_of_range);
 }
+
+TEST(GlobalSystem, ThreadedAssemblyMatchesSequential) {
+  // Many instances on few blocks, so that threads collide on every block.
+  std::mt19937 rng(9);
+  BlockLayout layout{{0}};
+  for (int b = 0; b < 20; ++b)
+    layout.blockOffset.push_back(layout.blockOffset.back() + 3);
+  const std::int64_t count = 5000, params = 6;
+  std::vector<std::int64_t> dofs;
+  std::uniform_int_distribution<int> pick(0, 19);
+  for (std::int64_t i = 0; i < count; ++i) {
+    int a = pick(rng), b = pick(rng);
+    for (int v : {a, b})
+      for (int e = 0; e < 3; ++e)
+        dofs.push_back(3 * v + e);
+  }
+  auto hessians = randomSpd(rng, params, count);
+  std::vector<double> gradients(count * params);
+  std::normal_distribution<double> normal;
+  for (double &v : gradients)
+    v = normal(rng);
+
+  GlobalSystem sequential(layout, {{count, params, dofs.data()}});
+  GlobalSystem threaded(layout, {{count, params, dofs.data()}});
+  sequential.setZero();
+  sequential.add(0, gradients.data(), hessians.data());
+  ThreadPool pool(4);
+  threaded.setZero();
+  threaded.add(0, gradients.data(), hessians.data(), &pool);
+  std::vector<double> a = sequential.toDense(), b = threaded.toDense();
+  for (std::size_t k = 0; k < a.size(); ++k)
+    ASSERT_NEAR(a[k], b[k], 1e-9 * (1 + std::abs(a[k]))) << "entry " << k;
+  for (std::size_t k = 0; k < sequential.gradient().size(); ++k)
+    ASSERT_NEAR(sequential.gradient()[k], threaded.gradient()[k], 1e-9);
+}

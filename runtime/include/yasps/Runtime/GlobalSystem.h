@@ -51,8 +51,14 @@ public:
   void setZero();
 
   /// Adds energy `energy`'s local gradients (count x n) and local Hessians
-  /// (count x n x n, each row-major) to the global system.
-  void add(std::size_t energy, const double *gradients, const double *hessians);
+  /// (count x n x n, each row-major) to the global system. With a pool of
+  /// more than one thread, the instances are split across the threads,
+  /// which accumulate with atomic adds (paper appendix B): the sums are then
+  /// exact to rounding but their order, and so the last bits, may change
+  /// from run to run. Without a pool, or with one thread, the instances are
+  /// added in order.
+  void add(std::size_t energy, const double *gradients, const double *hessians,
+           ThreadPool *pool = nullptr);
 
   const std::vector<double> &gradient() const { return gradientValues; }
   const BlockSparseMatrix &staticHessian() const { return staticPart.matrix; }
@@ -94,8 +100,10 @@ private:
   static Part buildPart(const BlockLayout &layout,
                         const std::vector<DofMap> &energies,
                         std::size_t firstEnergy);
+  template <bool Atomic>
   static void addTo(Part &part, const EnergyMap &map, const double *gradients,
-                    const double *hessians, std::vector<double> &gradient);
+                    const double *hessians, std::vector<double> &gradient,
+                    std::int64_t begin, std::int64_t end);
 
   Part staticPart;
   Part dynamicPart;
