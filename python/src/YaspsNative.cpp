@@ -338,6 +338,25 @@ public:
     system->add(energy, gradients.data(), hessians.data(), &poolFor(threads));
   }
 
+  void addFactored(size_t energy, DoubleArray gradients, DoubleArray maps,
+                   DoubleArray inner, int64_t m, unsigned threads) {
+    if (energy >= system->numEnergies())
+      throw std::invalid_argument("no energy " + std::to_string(energy));
+    auto [count, n] = shape(energy);
+    if (gradients.size() != size_t(count * n) ||
+        maps.size() != size_t(count * m * n) ||
+        inner.size() != size_t(count * m * m))
+      throw std::invalid_argument(
+          "energy " + std::to_string(energy) + " expects " +
+          std::to_string(count) + " gradients of " + std::to_string(n) +
+          ", inner maps of " + std::to_string(m) + "x" + std::to_string(n) +
+          " and inner Hessians of " + std::to_string(m) + "x" +
+          std::to_string(m));
+    nb::gil_scoped_release release;
+    system->addFactored(energy, gradients.data(), maps.data(), inner.data(), m,
+                        &poolFor(threads));
+  }
+
   void gradient(DoubleArray out) const {
     check(out, size_t(size()));
     std::copy(system->gradient().begin(), system->gradient().end(), out.data());
@@ -490,6 +509,14 @@ NB_MODULE(_yasps_native, m) {
           nb::arg("attribute"),
           "Local parameters of a derivative attribute's kernel")
       .def(
+          "shape",
+          [](const CpuLibrary &self, const std::string &attribute) {
+            const auto &kernel = self.kernel(attribute);
+            return std::make_pair(kernel.rows, kernel.cols);
+          },
+          nb::arg("attribute"),
+          "(rows, cols) of each instance's value computed by a kernel")
+      .def(
           "op_counts",
           [](const CpuLibrary &self, const std::string &attribute) {
             return self.kernel(attribute).opCounts;
@@ -584,6 +611,12 @@ NB_MODULE(_yasps_native, m) {
       .def("set_dynamic", &PySystem::setDynamic, nb::arg("dof_maps"),
            "Replaces the dynamic energies (numbered after the static ones) "
            "and rebuilds only their structure")
+      .def("add_factored", &PySystem::addFactored, nb::arg("energy"),
+           nb::arg("gradients"), nb::arg("maps"), nb::arg("inner"),
+           nb::arg("m"), nb::arg("threads") = 0,
+           "Adds an energy whose local Hessians are J^T P J, from the inner "
+           "maps J (count, m, n) and projected inner Hessians P (count, m, "
+           "m)")
       .def("set_zero", &PySystem::setZero)
       .def("add", &PySystem::add, nb::arg("energy"), nb::arg("gradients"),
            nb::arg("hessians"), nb::arg("threads") = 0,

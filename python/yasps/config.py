@@ -7,6 +7,12 @@
 - ``num_threads``: threads used to evaluate kernels on the CPU; 0 uses every
   core (or ``YASPS_NUM_THREADS`` if set).
 - ``opt_level``: LLVM optimisation level of CPU kernels (0-3).
+- ``separate_reduced_hessians``: where the reduced-space projection applies
+  (paper 5.4), keep each local Hessian as its factors, the inner map J and
+  the projected inner Hessian P, and form J^T P J only while assembling
+  (paper 7.2, 10.9). Saves memory when the parameters far outnumber the
+  inner variables (e.g. vertices driven by many cage points); costs some
+  arithmetic during assembly. Off by default.
 """
 
 from __future__ import annotations
@@ -27,3 +33,4 @@ def _default_cache_dir() -> Optional[str]:
 cache_dir: Optional[str] = _default_cache_dir()
 num_threads: int = 0
 opt_level: int = 3
+separate_reduced_hessians: bool = False

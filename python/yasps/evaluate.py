@@ -133,6 +133,14 @@ def compute(attr: Attribute, threads: int = None) -> ComputedValue:
 DIFFERENTIATION_PIPELINE = "yasps-inline-reads,canonicalize,cse,yasps-differentiate"
 
 
+def differentiation_pipeline() -> str:
+    """DIFFERENTIATION_PIPELINE with the options of ``config``."""
+    if config.separate_reduced_hessians:
+        return DIFFERENTIATION_PIPELINE + \
+            "{separate-reduced-hessians=true}"
+    return DIFFERENTIATION_PIPELINE
+
+
 class ParamSlot:
     """A group of an energy's local parameters (one entry of
     ``yasps.params``): the entries of a target read directly, or, for one
@@ -213,18 +221,32 @@ class LocalDerivatives:
     """Per-instance value, gradient and Hessian of one energy with respect to
     its local parameters (see :meth:`Scene.energyDerivatives`)."""
 
-    def __init__(self, energy, value, gradient, hessian, projected, params):
+    def __init__(self, energy, value, gradient, hessian, projected, params,
+                 inner_map=None, inner_projected=None):
         self.energy = energy
-        #: PSD-projected Hessians by the energy's projection method.
-        self.projectedHessian = projected
-        #: Energy of every instance, shape (N,).
+        self._projected = projected
+        #: Energy of every instance, shape (N,); None if not computed.
         self.value = value
         #: Gradient of every instance, shape (N, n).
         self.gradient = gradient
-        #: Hessian of every instance, shape (N, n, n).
+        #: Hessian of every instance, shape (N, n, n); None if not computed.
         self.hessian = hessian
         #: The parameter groups, in order.
         self.params = params
+        #: With ``config.separate_reduced_hessians`` and a reduced-space
+        #: projection: the inner maps J, shape (N, m, n), and the projected
+        #: inner Hessians P, shape (N, m, m); otherwise None.
+        self.innerMap = inner_map
+        self.projectedInnerHessian = inner_projected
+
+    @property
+    def projectedHessian(self) -> np.ndarray:
+        """PSD-projected Hessians by the energy's projection method, shape
+        (N, n, n) (formed as J^T P J from the factors if kept separate)."""
+        if self._projected is None and self.innerMap is not None:
+            J, P = self.innerMap, self.projectedInnerHessian
+            return np.einsum("nki,nkl,nlj->nij", J, P, J)
+        return self._projected
 
     def locations(self, i: int):
         """(target attribute, target instance, entry) of each local parameter
@@ -236,9 +258,12 @@ class LocalDerivatives:
         return out
 
 
-def energy_derivatives(scene: Scene, energy: Attribute,
-                       threads: int = None) -> LocalDerivatives:
-    """Local gradients and Hessians of a registered energy, per instance."""
+def energy_derivatives(scene: Scene, energy: Attribute, threads: int = None,
+                       assembly_only: bool = False) -> LocalDerivatives:
+    """Local gradients and Hessians of a registered energy, per instance.
+    ``assembly_only`` computes only what assembly needs: the gradients and
+    the projected Hessians (or their factors), not the values and the
+    unprojected Hessians."""
     if not any(e is energy for e in scene.energies):
         raise SceneError(f"{energy.describe()} is not an energy of scene "
                          f"'{scene.name}' (addEnergy)")
@@ -247,11 +272,18 @@ def energy_derivatives(scene: Scene, energy: Attribute,
                          "(addMinimizeTarget)")
     owner = energy.owner
     base = "::".join("@" + n for n in owner.path + [energy.name])
-    paths = [base + "__grad", base + "__hess", base + "__hess_proj"]
     native = compiler._module()
     ir = emit_scene(scene, locations=True)
+    pipeline = differentiation_pipeline()
+    separate = config.separate_reduced_hessians and bool(
+        native.attribute_params(ir, pipeline, [base + "__hess_inner_proj"],
+                                scene.name)[0])
+    projected = [base + "__ij", base + "__hess_inner_proj"] if separate \
+        else [base + "__hess_proj"]
+    paths = [base + "__grad"] + ([] if assembly_only else [base + "__hess"]) \
+        + projected
     try:
-        library, _ = _compile(ir, paths, scene, DIFFERENTIATION_PIPELINE)
+        library, _ = _compile(ir, paths, scene, pipeline)
     except native.IRError as err:
         if "does not name an attribute" in str(err):
             raise SceneError(f"{energy.describe()} depends on no "
@@ -262,14 +294,17 @@ def energy_derivatives(scene: Scene, energy: Attribute,
               for f in library.params(paths[0])]
     n = sum(p.width for p in params)
     count = owner.numInstances
-    results = []
-    for path, shape in zip(paths, [(n, 1), (n, n), (n, n)]):
-        out = np.empty(count * shape[0] * shape[1], dtype=np.float64)
+    results = {}
+    for path in paths:
         arguments = dict(library.kernels)[path]
+        rows, cols = library.shape(path)
+        out = np.empty(count * rows * cols, dtype=np.float64)
         buffers = [_buffer(scene, kind, p, out) for kind, p in arguments]
         library.launch(path, count, buffers,
                        config.num_threads if threads is None else threads)
-        results.append(from_column_major(out, *shape))
-    value = compute(energy, threads).value[:, 0, 0]
-    return LocalDerivatives(energy, value, results[0][:, :, 0], results[1],
-                            results[2], params)
+        results[path[len(base) + 2:]] = from_column_major(out, rows, cols)
+    value = None if assembly_only else compute(energy, threads).value[:, 0, 0]
+    return LocalDerivatives(energy, value, results["grad"][:, :, 0],
+                            results.get("hess"), results.get("hess_proj"),
+                            params, results.get("ij"),
+                            results.get("hess_inner_proj"))

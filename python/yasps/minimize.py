@@ -154,7 +154,7 @@ def assemble(scene, threads: Optional[int] = None,
     for energy, is_dynamic, _ in scene._energies:
         start = clock()
         try:
-            d = energy_derivatives(scene, energy, threads)
+            d = energy_derivatives(scene, energy, threads, assembly_only=True)
         except SceneError as err:
             if "depends on no minimisation target" in str(err):
                 continue
@@ -192,8 +192,15 @@ def assemble(scene, threads: Optional[int] = None,
     system.set_zero()
     workers = config.num_threads if threads is None else threads
     for k, (_, d) in enumerate(static + dynamic):
-        system.add(k, np.ascontiguousarray(d.gradient),
-                   np.ascontiguousarray(d.projectedHessian), workers)
+        gradient = np.ascontiguousarray(d.gradient)
+        if d.innerMap is not None:
+            # Hessians kept as factors: J^T P J is formed while assembling.
+            system.add_factored(k, gradient, np.ascontiguousarray(d.innerMap),
+                                np.ascontiguousarray(d.projectedInnerHessian),
+                                d.innerMap.shape[1], workers)
+        else:
+            system.add(k, gradient, np.ascontiguousarray(d.projectedHessian),
+                       workers)
     spent["assembly"] += clock() - start
     if timings is not None:
         timings.update(spent)

@@ -129,59 +129,107 @@ template <bool Atomic> static inline void accumulate(double *target, double v) {
     *target += v;
 }
 
-void GlobalSystem::add(std::size_t energy, const double *gradients,
-                       const double *hessians, ThreadPool *pool) {
+std::pair<GlobalSystem::Part *, const GlobalSystem::EnergyMap *>
+GlobalSystem::energyMap(std::size_t energy) {
   if (energy >= numEnergies())
     throw std::out_of_range("energy " + std::to_string(energy) +
                             " out of range: the system has " +
                             std::to_string(numEnergies()) + " energies");
   bool isStatic = energy < numStaticEnergies();
   Part &part = isStatic ? staticPart : dynamicPart;
-  const EnergyMap &map =
-      part.maps[isStatic ? energy : energy - numStaticEnergies()];
-  if (!pool || pool->size() == 1 || map.count <= kInstancesPerChunk) {
-    addTo<false>(part, map, gradients, hessians, gradientValues, 0, map.count);
+  return {&part, &part.maps[isStatic ? energy : energy - numStaticEnergies()]};
+}
+
+/// Runs body(atomic, begin, end) over [0, count): on the pool's threads,
+/// or in order when there is no pool, one thread or little work. `atomic`
+/// (std::true_type when threads share the work) says whether accumulation
+/// must be atomic.
+template <typename Body>
+static void forInstances(ThreadPool *pool, std::int64_t count, Body body) {
+  if (!pool || pool->size() == 1 || count <= kInstancesPerChunk) {
+    body(std::false_type{}, 0, count);
     return;
   }
-  pool->parallelFor(0, map.count, kInstancesPerChunk,
+  pool->parallelFor(0, count, kInstancesPerChunk,
                     [&](std::int64_t begin, std::int64_t end) {
-                      addTo<true>(part, map, gradients, hessians,
-                                  gradientValues, begin, end);
+                      body(std::true_type{}, begin, end);
                     });
 }
 
+void GlobalSystem::add(std::size_t energy, const double *gradients,
+                       const double *hessians, ThreadPool *pool) {
+  auto [part, map] = energyMap(energy);
+  const std::int64_t n = map->numParams;
+  forInstances(pool, map->count,
+               [&](auto atomic, std::int64_t begin, std::int64_t end) {
+                 for (std::int64_t i = begin; i < end; ++i)
+                   addInstance<decltype(atomic)::value>(
+                       *part, *map, i, gradients + i * n, hessians + i * n * n,
+                       gradientValues);
+               });
+}
+
+void GlobalSystem::addFactored(std::size_t energy, const double *gradients,
+                               const double *maps, const double *inner,
+                               std::int64_t m, ThreadPool *pool) {
+  auto [part, map] = energyMap(energy);
+  const std::int64_t n = map->numParams;
+  forInstances(
+      pool, map->count, [&](auto atomic, std::int64_t begin, std::int64_t end) {
+        std::vector<double> pj(static_cast<std::size_t>(m * n)),
+            h(static_cast<std::size_t>(n * n));
+        for (std::int64_t i = begin; i < end; ++i) {
+          const double *j = maps + i * m * n;
+          const double *p = inner + i * m * m;
+          // PJ = P J (m x n), then H = J^T (PJ) (n x n, symmetric: the upper
+          // triangle is computed and mirrored).
+          for (std::int64_t r = 0; r < m; ++r)
+            for (std::int64_t c = 0; c < n; ++c) {
+              double sum = 0.0;
+              for (std::int64_t k = 0; k < m; ++k)
+                sum += p[r * m + k] * j[k * n + c];
+              pj[r * n + c] = sum;
+            }
+          for (std::int64_t a = 0; a < n; ++a)
+            for (std::int64_t b = a; b < n; ++b) {
+              double sum = 0.0;
+              for (std::int64_t k = 0; k < m; ++k)
+                sum += j[k * n + a] * pj[k * n + b];
+              h[a * n + b] = h[b * n + a] = sum;
+            }
+          addInstance<decltype(atomic)::value>(
+              *part, *map, i, gradients + i * n, h.data(), gradientValues);
+        }
+      });
+}
+
 template <bool Atomic>
-void GlobalSystem::addTo(Part &part, const EnergyMap &map,
-                         const double *gradients, const double *hessians,
-                         std::vector<double> &gradient, std::int64_t begin,
-                         std::int64_t end) {
+void GlobalSystem::addInstance(Part &part, const EnergyMap &map, std::int64_t i,
+                               const double *g, const double *h,
+                               std::vector<double> &gradient) {
   BlockSparseMatrix &matrix = part.matrix;
   const BlockLayout &layout = matrix.layout();
   std::int64_t n = map.numParams, m = map.maxBlocks;
-  for (std::int64_t i = begin; i < end; ++i) {
-    const std::int32_t *local = &map.localBlock[i * n];
-    const std::int32_t *offset = &map.offset[i * n];
-    const std::int64_t *global = &map.globalBlock[i * m];
-    const double *g = gradients + i * n;
-    const double *h = hessians + i * n * n;
-    for (std::int64_t a = 0; a < n; ++a) {
-      if (local[a] < 0)
+  const std::int32_t *local = &map.localBlock[i * n];
+  const std::int32_t *offset = &map.offset[i * n];
+  const std::int64_t *global = &map.globalBlock[i * m];
+  for (std::int64_t a = 0; a < n; ++a) {
+    if (local[a] < 0)
+      continue;
+    std::int64_t ga = global[local[a]];
+    accumulate<Atomic>(&gradient[layout.blockOffset[ga] + offset[a]], g[a]);
+    for (std::int64_t b = 0; b < n; ++b) {
+      if (local[b] < 0)
         continue;
-      std::int64_t ga = global[local[a]];
-      accumulate<Atomic>(&gradient[layout.blockOffset[ga] + offset[a]], g[a]);
-      for (std::int64_t b = 0; b < n; ++b) {
-        if (local[b] < 0)
-          continue;
-        std::int64_t gb = global[local[b]];
-        // Each pair of distinct blocks is stored once, upper triangle: the
-        // entries with ga > gb are its transpose, added from (b, a).
-        if (ga > gb)
-          continue;
-        BlockSlot slot = map.pairSlot[(i * m + local[a]) * m + local[b]];
-        double *data = matrix.blockData(slot.block);
-        std::int64_t cols = layout.blockSize(gb);
-        accumulate<Atomic>(&data[offset[a] * cols + offset[b]], h[a * n + b]);
-      }
+      std::int64_t gb = global[local[b]];
+      // Each pair of distinct blocks is stored once, upper triangle: the
+      // entries with ga > gb are its transpose, added from (b, a).
+      if (ga > gb)
+        continue;
+      BlockSlot slot = map.pairSlot[(i * m + local[a]) * m + local[b]];
+      double *data = matrix.blockData(slot.block);
+      std::int64_t cols = layout.blockSize(gb);
+      accumulate<Atomic>(&data[offset[a] * cols + offset[b]], h[a * n + b]);
     }
   }
 }

@@ -221,3 +221,40 @@ TEST(GlobalSystem, ThreadedAssemblyMatchesSequential) {
   for (std::size_t k = 0; k < sequential.gradient().size(); ++k)
     ASSERT_NEAR(sequential.gradient()[k], threaded.gradient()[k], 1e-9);
 }
+
+TEST(GlobalSystem, AssemblesFactoredHessians) {
+  // The body energy's Hessians given as J^T P J with m = 4 inner variables
+  // assemble like the explicit products.
+  Scene scene;
+  std::vector<DofMap> maps = scene.maps();
+  const std::int64_t m = 4, n = scene.bodyN, count = scene.bodyCount;
+  std::mt19937 rng(13);
+  std::normal_distribution<double> normal;
+  std::vector<double> j(count * m * n), g(count * n);
+  for (double &v : j)
+    v = normal(rng);
+  for (double &v : g)
+    v = normal(rng);
+  auto p = randomSpd(rng, m, count);
+  std::vector<double> h(count * n * n, 0.0);
+  for (std::int64_t i = 0; i < count; ++i)
+    for (std::int64_t a = 0; a < n; ++a)
+      for (std::int64_t b = 0; b < n; ++b)
+        for (std::int64_t k = 0; k < m; ++k)
+          for (std::int64_t l = 0; l < m; ++l)
+            h[(i * n + a) * n + b] += j[(i * m + k) * n + a] *
+                                      p[(i * m + k) * m + l] *
+                                      j[(i * m + l) * n + b];
+  GlobalSystem explicitSystem(scene.layout, maps), factored(scene.layout, maps);
+  explicitSystem.setZero();
+  explicitSystem.add(1, g.data(), h.data());
+  factored.setZero();
+  ThreadPool pool(2);
+  factored.addFactored(1, g.data(), j.data(), p.data(), m, &pool);
+  std::vector<double> a = explicitSystem.toDense(), b = factored.toDense();
+  for (std::size_t k = 0; k < a.size(); ++k)
+    ASSERT_NEAR(a[k], b[k], 1e-10 * (1 + std::abs(a[k]))) << "entry " << k;
+  EXPECT_EQ(explicitSystem.gradient(), factored.gradient());
+  EXPECT_THROW(factored.addFactored(2, g.data(), j.data(), p.data(), m),
+               std::out_of_range);
+}

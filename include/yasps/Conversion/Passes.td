@@ -28,7 +28,8 @@ def YaspsLowerToLoops : Pass<"yasps-lower-to-loops", "::mlir::ModuleOp"> {
 
     The function's `yasps.kernel_args` lists what each buffer argument holds
     (`out`, `attr`, `conn`, `offsets`, with the symbol it belongs to); the
-    runtime binds buffers by it. Instance counts are not compiled in: a
+    runtime binds buffers by it. `yasps.kernel_shape` is the [rows, cols] of
+    each instance's value in `out`. Instance counts are not compiled in: a
     dynamic primitive changes size without a new kernel.
   }];
   let options = [

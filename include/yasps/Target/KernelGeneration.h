@@ -32,6 +32,8 @@ struct KernelDescription {
   std::string attribute; ///< the attribute it evaluates
   std::string symbol;    ///< the kernel function's name
   std::vector<KernelArgument> arguments;
+  /// Rows and columns of each instance's value in the output buffer.
+  int64_t rows = 0, cols = 0;
   /// For derivative attributes, their local parameters (`yasps.params`),
   /// each as its printed fields, e.g. {"join", "@m::@t::@t2v", "2",
   /// "@m::@v::@x"}.

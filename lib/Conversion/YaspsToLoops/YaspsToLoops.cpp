@@ -287,6 +287,9 @@ LogicalResult LowerToLoopsPass::lowerAttribute(SceneOp scene,
   func.setType(builder.getFunctionType(entry->getArgumentTypes(), {}));
   func->setAttr("yasps.kernel_of", path);
   func->setAttr("yasps.kernel_args", emitter.getRoles());
+  // Rows and columns of each instance's value in `out`.
+  func->setAttr("yasps.kernel_shape",
+                builder.getDenseI64ArrayAttr({type.getRows(), type.getCols()}));
   // Derivative attributes describe their local parameters; keep that with
   // the kernel for the runtime.
   if (Attribute params = decl->getAttr("yasps.params"))

@@ -94,6 +94,11 @@ std::vector<KernelDescription> mlir::yasps::describeKernels(ModuleOp kernels) {
       llvm::raw_string_ostream(arg.path) << role[1];
       kernel.arguments.push_back(arg);
     }
+    if (auto shape =
+            func->getAttrOfType<DenseI64ArrayAttr>("yasps.kernel_shape")) {
+      kernel.rows = shape[0];
+      kernel.cols = shape[1];
+    }
     if (auto counts = func->getAttrOfType<DictionaryAttr>("yasps.op_counts"))
       for (NamedAttribute entry : counts)
         kernel.opCounts[entry.getName().str()] =

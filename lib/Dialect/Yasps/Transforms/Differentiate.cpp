@@ -687,8 +687,7 @@ FailureOr<AttrOp> Differentiator::jacobian(AttrOp attr, bool inner,
         Value v = upper[std::min(i, p) * d + std::max(i, p)];
         column.push_back(v ? v : zeros(b, attr.getLoc(), scalarType));
       }
-      columns.push_back(ConcatOp::create(b, attr.getLoc(),
-                                         type.withShape(d, 1),
+      columns.push_back(ConcatOp::create(b, attr.getLoc(), type.withShape(d, 1),
                                          ConcatAxis::vertical, column));
     }
   }
@@ -704,6 +703,7 @@ FailureOr<AttrOp> Differentiator::jacobian(AttrOp attr, bool inner,
 namespace {
 struct DifferentiatePass
     : public mlir::yasps::impl::YaspsDifferentiateBase<DifferentiatePass> {
+  using YaspsDifferentiateBase::YaspsDifferentiateBase;
   void runOnOperation() override;
 };
 } // namespace
@@ -781,12 +781,17 @@ void DifferentiatePass::runOnOperation() {
       for (const ParamGroup &g : *groups)
         m += g.leafEntries;
       bool reduced = *reducible && m < d;
-      AttrOp projected =
-          diff.createAttr(*jac, (attr.getSymName() + "__hess_proj").str(),
-                          square, nullptr, cast<ArrayAttr>(params));
-      projected->setAttr(
-          "yasps.projection",
-          StringAttr::get(&getContext(), reduced ? "reduced" : "full"));
+      bool separate = reduced && separateReducedHessians;
+      AttrOp projected = diff.createAttr(
+          *jac,
+          (attr.getSymName() + (separate ? "__hess_inner_proj" : "__hess_proj"))
+              .str(),
+          separate ? row.withShape(m, m) : square, nullptr,
+          cast<ArrayAttr>(params));
+      projected->setAttr("yasps.projection",
+                         StringAttr::get(&getContext(), separate  ? "separate"
+                                                        : reduced ? "reduced"
+                                                                  : "full"));
       Location loc = projected.getLoc();
       if (reduced) {
         FailureOr<AttrOp> innerGrad = diff.jacobian(attr, /*inner=*/true);
@@ -805,6 +810,14 @@ void DifferentiatePass::runOnOperation() {
                                     .getResult()
                               : zeros(pb, loc, innerType);
         Value pi = ProjectOp::create(pb, loc, energy.getProjection(), hi);
+        if (separate) {
+          // J (@E__ij) stays an attribute of its own; the runtime forms
+          // J^T P J while it assembles.
+          (*map)->setAttr("yasps.params", params);
+          YieldOp::create(pb, loc, pi);
+          tables.invalidateSymbolTable(getOwningEntity(attr));
+          continue;
+        }
         Value j =
             ReadOp::create(pb, loc, row.withShape(m, d), getScenePath(*map));
         Value jt = TransposeOp::create(pb, loc, row.withShape(d, m), j);

@@ -60,6 +60,15 @@ public:
   void add(std::size_t energy, const double *gradients, const double *hessians,
            ThreadPool *pool = nullptr);
 
+  /// add() for an energy whose local Hessians are kept as factors (paper
+  /// 7.2, 10.9): instance i's Hessian is J_i^T P_i J_i, with `maps` the
+  /// inner maps J (count x m x n, each row-major) and `inner` the projected
+  /// inner Hessians P (count x m x m). The product is formed one instance
+  /// at a time while assembling, so no n x n Hessian is ever stored.
+  void addFactored(std::size_t energy, const double *gradients,
+                   const double *maps, const double *inner, std::int64_t m,
+                   ThreadPool *pool = nullptr);
+
   const std::vector<double> &gradient() const { return gradientValues; }
   const BlockSparseMatrix &staticHessian() const { return staticPart.matrix; }
   const BlockSparseMatrix &dynamicHessian() const { return dynamicPart.matrix; }
@@ -100,10 +109,13 @@ private:
   static Part buildPart(const BlockLayout &layout,
                         const std::vector<DofMap> &energies,
                         std::size_t firstEnergy);
+  /// The part and map of energy `energy` (throws std::out_of_range).
+  std::pair<Part *, const EnergyMap *> energyMap(std::size_t energy);
+  /// Adds instance i's gradient g (n) and Hessian h (n x n).
   template <bool Atomic>
-  static void addTo(Part &part, const EnergyMap &map, const double *gradients,
-                    const double *hessians, std::vector<double> &gradient,
-                    std::int64_t begin, std::int64_t end);
+  static void addInstance(Part &part, const EnergyMap &map, std::int64_t i,
+                          const double *g, const double *h,
+                          std::vector<double> &gradient);
 
   Part staticPart;
   Part dynamicPart;

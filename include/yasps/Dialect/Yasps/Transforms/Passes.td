@@ -74,6 +74,15 @@ def YaspsDifferentiate : Pass<"yasps-differentiate", "::mlir::ModuleOp"> {
     second Jacobians. Energies must have their reads of computed attributes
     inlined first (`yasps-inline-reads`).
   }];
+  let options = [
+    Option<"separateReducedHessians", "separate-reduced-hessians", "bool",
+           /*default=*/"false",
+           "Where the reduced-space projection applies, keep the inner map "
+           "J (@E__ij, m x n) and the projected inner Hessian "
+           "(@E__hess_inner_proj, m x m) as attributes instead of forming "
+           "@E__hess_proj = J^T P(H_inner) J; the runtime forms the product "
+           "while it assembles (paper 7.2, 10.9)">
+  ];
   let dependentDialects = ["::mlir::yasps::YaspsDialect"];
 }
 
