@@ -234,7 +234,7 @@ using Buffer = nb::ndarray<nb::c_contig, nb::device::cpu>;
 
 /// Runs the kernel of `attribute` on `numInstances` instances; `buffers`
 /// follow the kernel's argument list (float64 for out/attr, int32 for
-/// conn, int64 for offsets).
+/// conn, int64 for offsets and dof_offsets).
 void launchCpu(const CpuLibrary &self, const std::string &attribute,
                int64_t numInstances, const std::vector<Buffer> &buffers,
                unsigned threads) {
@@ -247,9 +247,10 @@ void launchCpu(const CpuLibrary &self, const std::string &attribute,
   std::vector<::yasps::runtime::KernelBuffer> args;
   for (size_t i = 0; i < buffers.size(); ++i) {
     const std::string &kind = kernel->arguments[i].kind;
-    nb::dlpack::dtype expected = kind == "conn"      ? nb::dtype<int32_t>()
-                                 : kind == "offsets" ? nb::dtype<int64_t>()
-                                                     : nb::dtype<double>();
+    nb::dlpack::dtype expected = kind == "conn" ? nb::dtype<int32_t>()
+                                 : kind == "offsets" || kind == "dof_offsets"
+                                     ? nb::dtype<int64_t>()
+                                     : nb::dtype<double>();
     if (buffers[i].dtype() != expected || buffers[i].ndim() != 1)
       throw std::invalid_argument("buffer " + std::to_string(i) + " (" + kind +
                                   " " + kernel->arguments[i].path +

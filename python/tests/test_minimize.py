@@ -188,3 +188,24 @@ def test_separate_reduced_hessians_match_the_formed_products():
         yasps.config.separate_reduced_hessians = False
     for a, b in zip(got, want):
         np.testing.assert_allclose(a, b, rtol=1e-9, atol=1e-12)
+
+
+def test_generated_placement_indices_match_the_parameter_locations():
+    """@E__dofs kernels (yasps-generate-indices) give every local parameter
+    its global DoF, -1 for UNION padding, as ParamSlot.locations says."""
+    from yasps.minimize import DofLayout
+    s, pp, *_ = mixed_scene([[0, 3], [1, 4], [2, 3], [4, 1]])
+    layout = DofLayout(s.minimizeTargets)
+    padded = 0
+    for energy in s.energies:
+        d = s.energyDerivatives(energy)
+        dofs = d.dofs()
+        assert dofs.dtype == np.int64 and dofs.shape == d.gradient.shape
+        for i in range(dofs.shape[0]):
+            want = [-1 if loc is None else
+                    layout.offset[id(loc[0])] + loc[1] * loc[0].rows * loc[0].cols
+                    + loc[2] for loc in d.locations(i)]
+            np.testing.assert_array_equal(dofs[i], want)
+            padded += want.count(-1)
+    # Free vertices in 12-wide UNION slots leave 9 padded entries each.
+    assert padded > 0

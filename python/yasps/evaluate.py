@@ -45,9 +45,20 @@ def _resolve(scene: Scene, path: str):
     return node
 
 
+def target_dof_offsets(scene: Scene) -> np.ndarray:
+    """The first global DoF of each minimisation target, in order: targets
+    one after another, instance after instance (paper appendix A.1)."""
+    sizes = [t.owner.numInstances * t.rows * t.cols
+             for t in scene.minimizeTargets]
+    return np.concatenate([[0], np.cumsum(sizes)[:-1]]).astype(np.int64) \
+        if sizes else np.zeros(0, dtype=np.int64)
+
+
 def _buffer(scene: Scene, kind: str, path: str, out: np.ndarray) -> np.ndarray:
     if kind == "out":
         return out
+    if kind == "dof_offsets":
+        return target_dof_offsets(scene)
     target = _resolve(scene, path)
     if kind == "attr":
         if target._values is None:
@@ -130,14 +141,16 @@ def compute(attr: Attribute, threads: int = None) -> ComputedValue:
 
 
 #: Passes that turn energies into their local derivatives (docs/passes.md).
-DIFFERENTIATION_PIPELINE = "yasps-inline-reads,canonicalize,cse,yasps-differentiate"
+DIFFERENTIATION_PIPELINE = ("yasps-inline-reads,canonicalize,cse,"
+                            "yasps-differentiate,yasps-generate-indices")
 
 
 def differentiation_pipeline() -> str:
     """DIFFERENTIATION_PIPELINE with the options of ``config``."""
     if config.separate_reduced_hessians:
-        return DIFFERENTIATION_PIPELINE + \
-            "{separate-reduced-hessians=true}"
+        return DIFFERENTIATION_PIPELINE.replace(
+            "yasps-differentiate",
+            "yasps-differentiate{separate-reduced-hessians=true}")
     return DIFFERENTIATION_PIPELINE
 
 
@@ -222,8 +235,9 @@ class LocalDerivatives:
     its local parameters (see :meth:`Scene.energyDerivatives`)."""
 
     def __init__(self, energy, value, gradient, hessian, projected, params,
-                 inner_map=None, inner_projected=None):
+                 inner_map=None, inner_projected=None, dofs=None):
         self.energy = energy
+        self._dofs = dofs
         self._projected = projected
         #: Energy of every instance, shape (N,); None if not computed.
         self.value = value
@@ -247,6 +261,13 @@ class LocalDerivatives:
             J, P = self.innerMap, self.projectedInnerHessian
             return np.einsum("nki,nkl,nlj->nij", J, P, J)
         return self._projected
+
+    def dofs(self) -> np.ndarray:
+        """The global DoF of each local parameter of every instance, shape
+        (N, n), -1 for UNION padding: the placement indices of paper A.3,
+        computed by the generated ``@E__dofs`` kernel (counted from 1 there,
+        0 for padding)."""
+        return self._dofs()
 
     def locations(self, i: int):
         """(target attribute, target instance, entry) of each local parameter
@@ -281,7 +302,7 @@ def energy_derivatives(scene: Scene, energy: Attribute, threads: int = None,
     projected = [base + "__ij", base + "__hess_inner_proj"] if separate \
         else [base + "__hess_proj"]
     paths = [base + "__grad"] + ([] if assembly_only else [base + "__hess"]) \
-        + projected
+        + projected + [base + "__dofs"]
     try:
         library, _ = _compile(ir, paths, scene, pipeline)
     except native.IRError as err:
@@ -294,17 +315,23 @@ def energy_derivatives(scene: Scene, energy: Attribute, threads: int = None,
               for f in library.params(paths[0])]
     n = sum(p.width for p in params)
     count = owner.numInstances
-    results = {}
-    for path in paths:
+    workers = config.num_threads if threads is None else threads
+
+    def run(path: str) -> np.ndarray:
         arguments = dict(library.kernels)[path]
         rows, cols = library.shape(path)
         out = np.empty(count * rows * cols, dtype=np.float64)
         buffers = [_buffer(scene, kind, p, out) for kind, p in arguments]
-        library.launch(path, count, buffers,
-                       config.num_threads if threads is None else threads)
-        results[path[len(base) + 2:]] = from_column_major(out, rows, cols)
+        library.launch(path, count, buffers, workers)
+        return from_column_major(out, rows, cols)
+
+    def dofs() -> np.ndarray:
+        # 1-based in the kernel, 0 for padding; exact integers in f64.
+        return run(base + "__dofs")[:, :, 0].astype(np.int64) - 1
+
+    results = {path[len(base) + 2:]: run(path) for path in paths[:-1]}
     value = None if assembly_only else compute(energy, threads).value[:, 0, 0]
     return LocalDerivatives(energy, value, results["grad"][:, :, 0],
                             results.get("hess"), results.get("hess_proj"),
                             params, results.get("ij"),
-                            results.get("hess_inner_proj"))
+                            results.get("hess_inner_proj"), dofs)

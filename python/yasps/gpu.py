@@ -57,8 +57,8 @@ class GpuKernels:
 
 def scene_kernel_paths(scene) -> List[str]:
     """The attributes a scene's simulation evaluates: every energy, and for
-    energies that depend on a minimisation target their gradient, Hessian
-    and projected Hessian."""
+    energies that depend on a minimisation target their gradient, Hessian,
+    projected Hessian and placement indices (``__dofs``)."""
     if not scene.energies:
         raise SceneError(f"scene '{scene.name}' has no energies (addEnergy)")
     paths = []
@@ -74,7 +74,8 @@ def scene_kernel_paths(scene) -> List[str]:
     for base, has_derivatives in zip(bases, derived):
         paths.append(base)
         if has_derivatives:
-            paths += [base + "__grad", base + "__hess", base + "__hess_proj"]
+            paths += [base + "__grad", base + "__hess", base + "__hess_proj",
+                      base + "__dofs"]
     return paths
 
 

@@ -2,8 +2,9 @@
 
 The DoFs are the entries of the minimisation targets, target after target
 (the paper's appendix A.1), each target instance one block of r*c DoFs. Every
-energy's local parameters are mapped to DoFs (-1 for UNION padding) through
-the same parameter groups that differentiation produced; the C++ runtime
+energy's local parameters are mapped to DoFs (-1 for UNION padding) by the
+generated ``@E__dofs`` kernels (appendix A.3, ``yasps-generate-indices``),
+from the same parameter groups that differentiation produced; the C++ runtime
 assembles the local gradients and projected Hessians into a block-sparse
 system (appendix B) and solves it with block-Jacobi PCG (section 8).
 """
@@ -18,7 +19,7 @@ import numpy as np
 from . import compiler, config
 from .attribute import Attribute
 from .errors import SceneError, YaspsError
-from .evaluate import ParamSlot, _ParamResolver, _resolve, energy_derivatives
+from .evaluate import energy_derivatives
 from .emit import emit_scene
 from .scene import Mesh, Primitive, PrimitiveUnion
 from .values import from_column_major
@@ -55,58 +56,6 @@ class DofLayout:
             start = self.offset[id(t)]
             n = t.owner.numInstances * t.rows * t.cols
             out.append(from_column_major(x[start:start + n].copy(), t.rows, t.cols))
-        return out
-
-
-class _DofMapper:
-    """Vectorised DoF maps of attributes and parameter groups."""
-
-    def __init__(self, scene, layout: DofLayout, resolver: _ParamResolver):
-        self.scene = scene
-        self.layout = layout
-        self.resolver = resolver
-        self.memo: Dict[int, np.ndarray] = {}
-
-    def attribute(self, attr: Attribute) -> np.ndarray:
-        """(instances of attr's owner) x (its parameters) DoFs."""
-        if id(attr) in self.memo:
-            return self.memo[id(attr)]
-        count = attr.owner.numInstances
-        if attr.kind in ("data", "constant"):
-            if id(attr) in self.layout.offset:
-                rc = attr.rows * attr.cols
-                dofs = self.layout.offset[id(attr)] + \
-                    np.arange(count)[:, None] * rc + np.arange(rc)[None, :]
-            else:
-                dofs = np.zeros((count, 0), dtype=np.int64)
-        else:
-            parts = [self.slot(s, count) for s in self.resolver.slots(attr)]
-            dofs = np.concatenate(parts, axis=1) if parts else \
-                np.zeros((count, 0), dtype=np.int64)
-        self.memo[id(attr)] = dofs.astype(np.int64)
-        return self.memo[id(attr)]
-
-    def slot(self, slot: ParamSlot, count: int) -> np.ndarray:
-        f = slot.fields
-        if slot.kind == "read":
-            target = _resolve(self.scene, f[1])
-            rc = target.rows * target.cols
-            inst = np.arange(count) if target.owner is slot.owner else np.zeros(count, int)
-            return self.layout.offset[id(target)] + inst[:, None] * rc + np.arange(rc)[None, :]
-        width = int(f[-1])
-        out = np.full((count, width), -1, dtype=np.int64)
-        if slot.kind == "join":
-            conn = slot.owner._symbols[f[1].lstrip("@")]
-            sub = self.attribute(_resolve(self.scene, f[3]))
-            picked = sub[conn.indices[:, int(f[2])]]
-            out[:, :picked.shape[1]] = picked
-            return out
-        union = _resolve(self.scene, f[1])
-        offsets = union.offsets
-        for m, member in enumerate(union.members):
-            lo, hi = int(offsets[m]), int(offsets[m + 1])
-            sub = self.attribute(member._attributes[f[2]])
-            out[lo:hi, :sub.shape[1]] = sub
         return out
 
 
@@ -163,29 +112,17 @@ def assemble(scene, threads: Optional[int] = None,
         (dynamic if is_dynamic else static).append((energy, d))
 
     start = clock()
-    mappers = []
-
-    def dof_map(energy: Attribute, d) -> np.ndarray:
-        if not mappers:
-            resolver = _ParamResolver(scene, emit_scene(scene, locations=True))
-            mappers.append(_DofMapper(scene, layout, resolver))
-        count = energy.owner.numInstances
-        dofs = np.concatenate([mappers[0].slot(p, count) for p in d.params],
-                              axis=1) \
-            if d.params else np.zeros((count, 0), dtype=np.int64)
-        return np.ascontiguousarray(dofs, dtype=np.int64)
-
     native = compiler._module()
     key = _static_structure_key(scene, layout, [e for e, _ in static])
     cached = scene._static_system
     rebuilt = cached is None or cached[0] != key
     if rebuilt:
         system = native.GlobalSystem(layout.block_offsets,
-                                     [dof_map(e, d) for e, d in static])
+                                     [d.dofs() for _, d in static])
         scene._static_system = (key, system)
     else:
         system = cached[1]
-    system.set_dynamic([dof_map(e, d) for e, d in dynamic])
+    system.set_dynamic([d.dofs() for _, d in dynamic])
     spent["indices"] += clock() - start
 
     start = clock()

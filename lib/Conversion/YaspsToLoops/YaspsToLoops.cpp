@@ -47,8 +47,12 @@ public:
     Value arg = entry.addArgument(type, symbol->getLoc());
     buffers[key] = arg;
     MLIRContext *ctx = func.getContext();
-    roles.push_back(ArrayAttr::get(
-        ctx, {StringAttr::get(ctx, kind), getScenePath(symbol)}));
+    // Scene-wide buffers (the DoF offsets of targets) name the scene.
+    Attribute path = isa<SceneOp>(symbol)
+                         ? Attribute(FlatSymbolRefAttr::get(
+                               ctx, cast<SceneOp>(symbol).getSymName()))
+                         : Attribute(getScenePath(symbol));
+    roles.push_back(ArrayAttr::get(ctx, {StringAttr::get(ctx, kind), path}));
     return arg;
   }
 
@@ -117,6 +121,8 @@ private:
         // Scene and mesh attributes have one instance: a broadcast.
         Value at = getOwningEntity(decl) == owner ? index : constIndex(b, 0);
         result = evaluate(b, decl, at);
+      } else if (auto dof = dyn_cast<DofIndexOp>(op)) {
+        result = dofNumbers(b, dof, owner, index);
       } else if (auto join = dyn_cast<JoinOp>(op)) {
         result = evaluateJoin(b, join, index);
       } else if (auto unionOp = dyn_cast<UnionOp>(op)) {
@@ -134,6 +140,40 @@ private:
       values[op.getResult(0)] = *result;
     }
     llvm_unreachable("verified attribute regions end in yasps.yield");
+  }
+
+  /// offset(T) + i*rc + e + 1 for the entries e of target T at instance i;
+  /// the targets' offsets come in the "dof_offsets" buffer (i64, one per
+  /// target of yasps.minimize, in order).
+  FailureOr<ScalarMatrix> dofNumbers(OpBuilder &b, DofIndexOp dof,
+                                     Operation *owner, Value index) {
+    Location loc = dof.getLoc();
+    Operation *decl = lookupInScene(scene, dof.getTarget(), &tables);
+    int64_t position = -1, k = 0;
+    for (auto minimize : scene.getBodyBlock().getOps<MinimizeOp>())
+      for (auto target : minimize.getTargets().getAsRange<SymbolRefAttr>()) {
+        if (position < 0 && lookupInScene(scene, target, &tables) == decl)
+          position = k;
+        ++k;
+      }
+    if (position < 0)
+      return dof.emitOpError() << "names no minimisation target";
+    Value offsets = buffer("dof_offsets", scene, b.getI64Type());
+    Value raw = memref::LoadOp::create(b, loc, offsets,
+                                       ValueRange{constIndex(b, position)});
+    Value first = arith::IndexCastOp::create(b, loc, b.getIndexType(), raw);
+    Value at = getOwningEntity(decl) == owner ? index : constIndex(b, 0);
+    MatrixType type = dof.getMatrixType();
+    int64_t entries = type.getNumElements();
+    Value base = arith::AddIOp::create(b, loc, first, offset(b, at, entries));
+    ScalarMatrix out{type.getRows(), type.getCols(), {}};
+    for (int64_t e = 0; e < entries; ++e) {
+      Value number = arith::IndexCastOp::create(b, loc, b.getI64Type(),
+                                                add(b, base, e + 1));
+      out.values.push_back(
+          arith::SIToFPOp::create(b, loc, type.getElementType(), number));
+    }
+    return out;
   }
 
   /// Row l of the result is the source at the l-th connected instance.

@@ -1765,3 +1765,57 @@ yasps.scene @s {
   // expected-error @+1 {{energy data attribute @m::@p::@e is registered twice}}
   yasps.energy @m::@p::@e
 }
+
+// -----
+
+// DoF numbers of an attribute that is not a minimisation target.
+yasps.scene @s {
+  yasps.mesh @m {
+    yasps.primitive @v(2) {
+      yasps.data_attr @x : !yasps.mat<3x1xf64>
+      yasps.data_attr @y : !yasps.mat<3x1xf64>
+      yasps.attr @i : !yasps.mat<3x1xf64> {
+        // expected-error @+1 {{data attribute @m::@v::@y is not a minimisation target (yasps.minimize), so its entries have no DoF numbers}}
+        %i = yasps.dof_index @m::@v::@y : !yasps.mat<3x1xf64>
+        yasps.yield %i : !yasps.mat<3x1xf64>
+      }
+    }
+  }
+  yasps.minimize [@m::@v::@x]
+}
+
+// -----
+
+// DoF numbers come as a column of the target's entries.
+yasps.scene @s {
+  yasps.mesh @m {
+    yasps.primitive @v(2) {
+      yasps.data_attr @x : !yasps.mat<3x2xf64>
+      yasps.attr @i : !yasps.mat<3x2xf64> {
+        // expected-error @+1 {{the DoF numbers of data attribute @m::@v::@x ('!yasps.mat<3x2xf64>') form a '!yasps.mat<6x1xf64>', not a '!yasps.mat<3x2xf64>'}}
+        %i = yasps.dof_index @m::@v::@x : !yasps.mat<3x2xf64>
+        yasps.yield %i : !yasps.mat<3x2xf64>
+      }
+    }
+  }
+  yasps.minimize [@m::@v::@x]
+}
+
+// -----
+
+// DoF numbers of a target on another primitive need a JOIN.
+yasps.scene @s {
+  yasps.mesh @m {
+    yasps.primitive @v(2) {
+      yasps.data_attr @x : !yasps.mat<3x1xf64>
+    }
+    yasps.primitive @e(1) {
+      yasps.attr @i : !yasps.mat<3x1xf64> {
+        // expected-error @+1 {{numbers the DoFs of data attribute @m::@v::@x of primitive @m::@v, which is not on the lineage of primitive @m::@e}}
+        %i = yasps.dof_index @m::@v::@x : !yasps.mat<3x1xf64>
+        yasps.yield %i : !yasps.mat<3x1xf64>
+      }
+    }
+  }
+  yasps.minimize [@m::@v::@x]
+}

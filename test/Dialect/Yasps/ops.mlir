@@ -16,6 +16,12 @@ yasps.scene @structure {
     yasps.primitive @v(4) {
       // CHECK: yasps.data_attr @x : !yasps.mat<3x1xf64>
       yasps.data_attr @x : !yasps.mat<3x1xf64>
+      // CHECK: yasps.attr @dofs : !yasps.mat<3x1xf64> {
+      // CHECK-NEXT: yasps.dof_index @m::@v::@x : !yasps.mat<3x1xf64>
+      yasps.attr @dofs : !yasps.mat<3x1xf64> {
+        %0 = yasps.dof_index @m::@v::@x : !yasps.mat<3x1xf64>
+        yasps.yield %0 : !yasps.mat<3x1xf64>
+      }
       // CHECK: yasps.const_attr @mass : !yasps.mat<1x1xf64>
       yasps.const_attr @mass : !yasps.mat<1x1xf64>
     }

@@ -122,8 +122,9 @@ TANGENT(ProjectOp) {
       *this, "PSD projection applies to derivatives, not before them");
 }
 
-// Constants, comparisons and stopped gradients.
+// Constants, DoF numbers, comparisons and stopped gradients.
 TANGENT(ConstantOp) { return Value(); }
+TANGENT(DofIndexOp) { return Value(); }
 TANGENT(IdentityOp) { return Value(); }
 TANGENT(CmpOp) { return Value(); }
 TANGENT(StopGradientOp) { return Value(); }

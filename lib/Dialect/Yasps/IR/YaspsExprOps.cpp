@@ -69,6 +69,36 @@ LogicalResult ReadOp::verifySymbolUses(SymbolTableCollection &tables) {
   return success();
 }
 
+LogicalResult DofIndexOp::verifySymbolUses(SymbolTableCollection &tables) {
+  SceneOp scene = getEnclosingScene(*this);
+  Operation *decl = lookupInScene(scene, getTarget(), &tables);
+  if (!isAttributeDecl(decl))
+    return emitOpError() << getTarget() << " does not name an attribute"
+                         << where(*this);
+  bool isTarget = false;
+  for (auto minimize : scene.getBodyBlock().getOps<MinimizeOp>())
+    for (auto target : minimize.getTargets().getAsRange<SymbolRefAttr>())
+      isTarget |= lookupInScene(scene, target, &tables) == decl;
+  if (!isTarget)
+    return emitOpError() << describe(decl)
+                         << " is not a minimisation target (yasps.minimize), "
+                            "so its entries have no DoF numbers"
+                         << where(*this);
+  MatrixType declared = getAttributeType(decl);
+  MatrixType expected = declared.withShape(declared.getNumElements(), 1);
+  if (getMatrixType() != expected)
+    return emitOpError() << "the DoF numbers of " << describe(decl) << " ("
+                         << declared << ") form a " << expected << ", not a "
+                         << getMatrixType() << where(*this);
+  Operation *owner = getOwningEntity(*this);
+  Operation *declOwner = getOwningEntity(decl);
+  if (!isOnLineageOf(declOwner, owner))
+    return emitOpError() << "numbers the DoFs of " << describe(decl) << " of "
+                         << describe(declOwner) << ", which is not on the "
+                         << "lineage of " << describe(owner) << where(*this);
+  return success();
+}
+
 LogicalResult JoinOp::verifySymbolUses(SymbolTableCollection &tables) {
   Operation *owner = getOwningEntity(*this);
   auto primitive = dyn_cast_or_null<PrimitiveOp>(owner);

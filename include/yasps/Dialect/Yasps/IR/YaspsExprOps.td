@@ -66,6 +66,31 @@ def Yasps_ReadOp : Yasps_ExprOp<"read", [
   let assemblyFormat = "$attribute attr-dict `:` type($result)";
 }
 
+def Yasps_DofIndexOp : Yasps_ExprOp<"dof_index", [
+    DeclareOpInterfaceMethods<SymbolUserOpInterface>]> {
+  let summary = "global DoF numbers of a minimisation target's entries";
+  let description = [{
+    For the current instance `i` of a minimisation target `T` (an attribute
+    of `r x c` entries listed in `yasps.minimize`), the `(r*c) x 1` column of
+    its entries' global DoF numbers, counted from 1: `offset(T) + i*r*c + e
+    + 1` for column-major entry `e`, where `offset(T)` is the first DoF of
+    `T` in the layout of the Newton system (targets one after another,
+    paper appendix A.1), given to the kernel at run time. Zero is left for
+    the padding of UNION slots, so that index attributes built from this
+    op (`yasps-generate-indices`) are the 1-based placement indices of
+    paper appendix A.3. The path is read like `yasps.read`'s: a target of
+    the owner, or of its mesh or scene (instance 0). Indices are exact in
+    the float type up to its integer precision (2^53 for f64).
+
+    ```mlir
+    %i = yasps.dof_index @bunny::@vertices::@position : !yasps.mat<3x1xf64>
+    ```
+  }];
+  let arguments = (ins SymbolRefAttr:$target);
+  let results = (outs Yasps_Mat:$result);
+  let assemblyFormat = "$target attr-dict `:` type($result)";
+}
+
 def Yasps_JoinOp : Yasps_ExprOp<"join", [
     DeclareOpInterfaceMethods<SymbolUserOpInterface>]> {
   let summary = "gathers an attribute through a connectivity (JOIN)";

@@ -86,6 +86,28 @@ def YaspsDifferentiate : Pass<"yasps-differentiate", "::mlir::ModuleOp"> {
   let dependentDialects = ["::mlir::yasps::YaspsDialect"];
 }
 
+def YaspsGenerateIndices : Pass<"yasps-generate-indices", "::mlir::ModuleOp"> {
+  let summary = "Placement indices of energies' local parameters as attributes";
+  let description = [{
+    For every energy `E` that `yasps-differentiate` gave derivatives, adds
+    `@E__dofs : !yasps.mat<n x 1>`: for each of the n local parameters of
+    `@E__grad`, its global DoF number counted from 1, or 0 for the zero
+    padding of UNION slots (paper appendix A.3). It is computed from the
+    same IR as the derivatives, by kernels, following `yasps.params`:
+
+    - a target read is `yasps.dof_index` of the target;
+    - a JOIN slot gathers the source's `@S__dofs` through the connectivity
+      and takes the slot's row;
+    - a UNION slot reads `yasps.union @name__udofs<w>`, every member's
+      `@name__dofs` padded with zeros to the slot's width w.
+
+    A source's `@S__dofs` (on its own entity, built from its `@S__jac`'s
+    parameters) is shared by every energy that gathers it. Run after
+    `yasps-differentiate`.
+  }];
+  let dependentDialects = ["::mlir::yasps::YaspsDialect"];
+}
+
 def YaspsCountOps : Pass<"yasps-count-ops", "::mlir::ModuleOp"> {
   let summary = "Annotate generated kernels with their arithmetic op counts";
   let description = [{
