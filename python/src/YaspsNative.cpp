@@ -25,6 +25,7 @@
 #include "yasps/Dialect/Yasps/Transforms/Passes.h"
 #include "yasps/Runtime/CpuKernel.h"
 #include "yasps/Runtime/GlobalSystem.h"
+#include "yasps/Runtime/LocalCompression.h"
 #include "yasps/Runtime/ThreadPool.h"
 #include "yasps/Target/CPU/CpuCompiler.h"
 #include "yasps/Target/GPU/GpuCompiler.h"
@@ -471,6 +472,64 @@ private:
   std::unique_ptr<::yasps::runtime::GlobalSystem> system;
 };
 
+/// A NumPy array that owns `values`.
+template <typename T>
+nb::ndarray<nb::numpy, T> ownedArray(std::vector<T> &&values,
+                                     std::vector<size_t> shape) {
+  auto *heap = new std::vector<T>(std::move(values));
+  nb::capsule owner(
+      heap, [](void *p) noexcept { delete static_cast<std::vector<T> *>(p); });
+  return nb::ndarray<nb::numpy, T>(heap->data(), shape.size(), shape.data(),
+                                   owner);
+}
+
+using DofArray =
+    nb::ndarray<int64_t, nb::ndim<2>, nb::c_contig, nb::device::cpu>;
+using MatrixBatch =
+    nb::ndarray<double, nb::ndim<3>, nb::c_contig, nb::device::cpu>;
+
+/// The local Hessians compressed by DoF (paper 7.2), grouped by size: a
+/// list of (k, instances, matrices (m, k, k)).
+nb::list compressLocalHessians(DofArray dofs, MatrixBatch hessians) {
+  int64_t count = dofs.shape(0), n = dofs.shape(1);
+  if (hessians.shape(0) != size_t(count) || hessians.shape(1) != size_t(n) ||
+      hessians.shape(2) != size_t(n))
+    throw std::invalid_argument("hessians must be (count, n, n) for DoF maps "
+                                "of (count, n)");
+  std::vector<::yasps::runtime::CompressedBatch> batches;
+  {
+    nb::gil_scoped_release release;
+    batches = ::yasps::runtime::compressLocalHessians(count, n, dofs.data(),
+                                                      hessians.data());
+  }
+  nb::list out;
+  for (auto &batch : batches) {
+    size_t m = batch.instances.size(), k = size_t(batch.size);
+    out.append(
+        nb::make_tuple(batch.size, ownedArray(std::move(batch.instances), {m}),
+                       ownedArray(std::move(batch.matrices), {m, k, k})));
+  }
+  return out;
+}
+
+/// Writes projected compressed matrices back to (count, n, n) `out`.
+void expandLocalHessians(
+    DofArray dofs, int64_t k,
+    nb::ndarray<int64_t, nb::ndim<1>, nb::c_contig, nb::device::cpu> instances,
+    MatrixBatch projected, MatrixBatch out) {
+  int64_t count = dofs.shape(0), n = dofs.shape(1);
+  if (out.shape(0) != size_t(count) || out.shape(1) != size_t(n) ||
+      out.shape(2) != size_t(n) || projected.shape(0) != instances.shape(0) ||
+      projected.shape(1) != size_t(k) || projected.shape(2) != size_t(k))
+    throw std::invalid_argument("expand_local_hessians: inconsistent shapes");
+  ::yasps::runtime::CompressedBatch batch;
+  batch.size = k;
+  batch.instances.assign(instances.data(),
+                         instances.data() + instances.shape(0));
+  ::yasps::runtime::expandLocalHessians(count, n, dofs.data(), batch,
+                                        projected.data(), out.data());
+}
+
 } // namespace
 
 NB_MODULE(_yasps_native, m) {
@@ -517,6 +576,14 @@ NB_MODULE(_yasps_native, m) {
           },
           nb::arg("attribute"),
           "(rows, cols) of each instance's value computed by a kernel")
+      .def(
+          "projection",
+          [](const CpuLibrary &self, const std::string &attribute) {
+            return self.kernel(attribute).projection;
+          },
+          nb::arg("attribute"),
+          "How a projected Hessian's kernel projects: 'full', 'reduced', "
+          "'separate', or '' for other kernels")
       .def(
           "op_counts",
           [](const CpuLibrary &self, const std::string &attribute) {
@@ -599,6 +666,16 @@ NB_MODULE(_yasps_native, m) {
         "Compiles GPU kernels (cubins per chip, PTX of the newest) for the "
         "attributes of the IR's scene; needs the CUDA toolkit's ptxas, not "
         "a GPU.");
+  m.def("compress_local_hessians", &compressLocalHessians, nb::arg("dofs"),
+        nb::arg("hessians"),
+        "Local Hessians with repeated DoFs merged and padding dropped "
+        "(paper 7.2), grouped by compressed size k: [(k, instances, "
+        "matrices (m, k, k))]");
+  m.def("expand_local_hessians", &expandLocalHessians, nb::arg("dofs"),
+        nb::arg("k"), nb::arg("instances"), nb::arg("projected"),
+        nb::arg("out"),
+        "Writes compressed (projected) matrices back to (count, n, n), each "
+        "entry at the first parameter of its DoF");
   m.def("compile_cpu", &compileCpu, nb::arg("ir"), nb::arg("attributes"),
         nb::arg("cache_dir") = "", nb::arg("opt_level") = 3,
         nb::arg("name") = "<yasps>", nb::arg("pre_pipeline") = "",

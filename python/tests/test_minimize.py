@@ -6,7 +6,7 @@ import pytest
 
 import yasps
 from yasps import energies as E
-from yasps.minimize import assemble
+from yasps.minimize import DofLayout, assemble
 
 from conftest import box_mesh
 
@@ -193,7 +193,6 @@ def test_separate_reduced_hessians_match_the_formed_products():
 def test_generated_placement_indices_match_the_parameter_locations():
     """@E__dofs kernels (yasps-generate-indices) give every local parameter
     its global DoF, -1 for UNION padding, as ParamSlot.locations says."""
-    from yasps.minimize import DofLayout
     s, pp, *_ = mixed_scene([[0, 3], [1, 4], [2, 3], [4, 1]])
     layout = DofLayout(s.minimizeTargets)
     padded = 0
@@ -209,3 +208,81 @@ def test_generated_placement_indices_match_the_parameter_locations():
             padded += want.count(-1)
     # Free vertices in 12-wide UNION slots leave 9 padded entries each.
     assert padded > 0
+
+
+def pendulum_pairs_scene():
+    """Pairs over a UNION of pendulum bobs (2 angles, nonlinear: full
+    projection; padded to 3) and free points (3 coordinates), including a
+    bob paired with itself (repeated DoFs)."""
+    rng = np.random.default_rng(0)
+    s = yasps.scene("compressed")
+    m = s.addMesh("m")
+    bob = m.addPrimitive("bob", numInstances=3)
+    th = bob.addAttribute("theta", rows=2)
+    th.updateValue(rng.uniform(-1, 1, (3, 2)))
+    a, b = th[0], th[1]
+    bob.addAttribute("pos", computed_attribute=yasps.vstack(
+        [a.sin() + b.sin(), -(a.cos() + b.cos())]))
+    pts = m.addPrimitive("pts", numInstances=2)
+    x = pts.addAttribute("x", rows=3)
+    x.updateValue(rng.normal(size=(2, 3)))
+    pts.addAttribute("pos", computed_attribute=yasps.vstack([x[0], x[1]]))
+    u = m.addPrimitiveUnion("all", [bob, pts])
+    u.addAttribute("pos")
+    pairs = m.addPrimitive("pairs", numInstances=4)
+    c = pairs.addConnectivity("p2a", u, [[0, 0], [0, 3], [1, 2], [3, 4]], 2)
+    g = pairs.addAttribute("g", through=c, source=u["pos"])
+    d = g.row(0) - g.row(1)
+    s.addEnergy(pairs.addAttribute("e", computed_attribute=(d.dot(d) - 0.3) ** 2
+                                   + 0.1 * g.row(0)[1] * g.row(0)[0]))
+    s.addEnergy(bob.addAttribute("reg", computed_attribute=0.5 * th.squaredNorm()))
+    s.addEnergy(pts.addAttribute("reg", computed_attribute=0.5 * x.squaredNorm()))
+    s.addMinimizeTarget([th, x])
+    return s
+
+
+def compressed_reference(s):
+    """The global Hessian with every local Hessian merged by DoF, padding
+    dropped, then clamp-projected (paper 7.2), with NumPy."""
+    size = DofLayout(s.minimizeTargets).size
+    ref = np.zeros((size, size))
+    for energy in s.energies:
+        d = s.energyDerivatives(energy)
+        dofs = d.dofs()
+        for i in range(dofs.shape[0]):
+            unique = [v for v in dict.fromkeys(dofs[i].tolist()) if v >= 0]
+            S = np.zeros((dofs.shape[1], len(unique)))
+            for a, v in enumerate(dofs[i]):
+                if v >= 0:
+                    S[a, unique.index(v)] = 1
+            w, V = np.linalg.eigh(S.T @ d.hessian[i] @ S)
+            ref[np.ix_(unique, unique)] += V @ np.diag(np.maximum(w, 0)) @ V.T
+    return ref
+
+
+def test_local_compression_before_projection():
+    s = pendulum_pairs_scene()
+    pairs = s.energies[0]
+    from yasps.evaluate import _compressed_sizes, _projectors
+    sizes = _compressed_sizes(s.energyDerivatives(pairs).dofs())
+    # Self pair: 2 angles; bob-point 5; bob-bob 4; point-point 6 (of 6).
+    np.testing.assert_array_equal(sizes, [2, 5, 4, 6])
+    system, _ = assemble(s)
+    H = np.zeros(system.size ** 2)
+    system.dense(H)
+    H = H.reshape(system.size, -1)
+    ref = compressed_reference(s)
+    np.testing.assert_allclose(H, ref, rtol=0, atol=1e-12 * np.abs(ref).max())
+    # One projection kernel per compressed size met (6 x 6 is the fused
+    # kernel's size but is met too, in the same energy).
+    assert {(2, "clamp"), (4, "clamp"), (5, "clamp"), (6, "clamp")} <= set(_projectors)
+    # Without compression, the self pair is projected before its repeated
+    # DoFs are merged: a different (still PSD) matrix.
+    yasps.config.compress_local_hessians = False
+    try:
+        system, _ = assemble(s)
+    finally:
+        yasps.config.compress_local_hessians = True
+    H2 = np.zeros(system.size ** 2)
+    system.dense(H2)
+    assert np.abs(H2.reshape(system.size, -1) - ref).max() > 1e-6 * np.abs(ref).max()

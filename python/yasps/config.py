@@ -13,6 +13,10 @@
   (paper 7.2, 10.9). Saves memory when the parameters far outnumber the
   inner variables (e.g. vertices driven by many cage points); costs some
   arithmetic during assembly. Off by default.
+- ``compress_local_hessians``: before a full (not reduced-space) projection
+  in assembly, merge the rows and columns of parameters that share a DoF
+  and drop UNION padding, then project the k x k matrix with a kernel
+  compiled for that size (paper 7.2). On by default.
 """
 
 from __future__ import annotations
@@ -34,3 +38,4 @@ cache_dir: Optional[str] = _default_cache_dir()
 num_threads: int = 0
 opt_level: int = 3
 separate_reduced_hessians: bool = False
+compress_local_hessians: bool = True

@@ -279,6 +279,56 @@ class LocalDerivatives:
         return out
 
 
+def _compressed_sizes(dofs: np.ndarray) -> np.ndarray:
+    """Distinct DoFs >= 0 per row of a DoF map."""
+    d = np.sort(dofs, axis=1)
+    first = np.ones_like(d, dtype=bool)
+    first[:, 1:] = d[:, 1:] != d[:, :-1]
+    return (first & (d >= 0)).sum(axis=1)
+
+
+_projectors: Dict[Tuple[int, str], tuple] = {}
+
+
+def _projector(k: int, method: str):
+    """A kernel projecting k x k symmetric matrices by ``method``, compiled
+    the first time this size is met (paper 7.2) and cached."""
+    key = (k, method)
+    if key not in _projectors:
+        s = Scene(f"yasps_project_{k}_{method}")
+        p = s.addMesh("m").addPrimitive("p", numInstances=1)
+        h = p.addAttribute("h", rows=k, cols=k)
+        p.addAttribute("proj", computed_attribute=h.project(method))
+        library, _ = _compile(emit_scene(s), ["@m::@p::@proj"], s)
+        _projectors[key] = (library, "@m::@p::@proj")
+    return _projectors[key]
+
+
+def _project_compressed(dofs: np.ndarray, hess: np.ndarray, method: str,
+                        threads: int) -> np.ndarray:
+    """Projected local Hessians, each projected as the k x k matrix it adds
+    to the global system (repeated DoFs merged, padding dropped) and written
+    back at the first parameter of each DoF."""
+    native = compiler._module()
+    count, n = dofs.shape
+    out = np.zeros((count, n, n))
+    hess = np.ascontiguousarray(hess)
+    for k, instances, matrices in native.compress_local_hessians(dofs, hess):
+        if k == 0:
+            continue
+        library, path = _projector(int(k), method)
+        projected = np.empty(matrices.size)
+        # Symmetric matrices: row- and column-major storage agree.
+        given = {"out": projected,
+                 "attr": np.ascontiguousarray(matrices).reshape(-1)}
+        library.launch(path, len(instances),
+                       [given[kind] for kind, _ in dict(library.kernels)[path]],
+                       threads)
+        native.expand_local_hessians(dofs, int(k), instances,
+                                     projected.reshape(matrices.shape), out)
+    return out
+
+
 def energy_derivatives(scene: Scene, energy: Attribute, threads: int = None,
                        assembly_only: bool = False) -> LocalDerivatives:
     """Local gradients and Hessians of a registered energy, per instance.
@@ -301,7 +351,11 @@ def energy_derivatives(scene: Scene, energy: Attribute, threads: int = None,
                                 scene.name)[0])
     projected = [base + "__ij", base + "__hess_inner_proj"] if separate \
         else [base + "__hess_proj"]
-    paths = [base + "__grad"] + ([] if assembly_only else [base + "__hess"]) \
+    # Assembly may compress full projections (paper 7.2): it then needs the
+    # unprojected Hessian instead of the projected one.
+    compress = assembly_only and not separate and config.compress_local_hessians
+    paths = [base + "__grad"] + \
+        ([base + "__hess"] if compress or not assembly_only else []) \
         + projected + [base + "__dofs"]
     try:
         library, _ = _compile(ir, paths, scene, pipeline)
@@ -329,7 +383,18 @@ def energy_derivatives(scene: Scene, energy: Attribute, threads: int = None,
         # 1-based in the kernel, 0 for padding; exact integers in f64.
         return run(base + "__dofs")[:, :, 0].astype(np.int64) - 1
 
-    results = {path[len(base) + 2:]: run(path) for path in paths[:-1]}
+    if compress and library.projection(base + "__hess_proj") == "full":
+        d = dofs()
+        if (_compressed_sizes(d) < d.shape[1]).any():
+            hess = run(base + "__hess")
+            method = next(m for e, _, m in scene._energies if e is energy)
+            return LocalDerivatives(
+                energy, None, run(base + "__grad")[:, :, 0], None,
+                _project_compressed(d, hess, method, workers), params,
+                dofs=lambda: d)
+    wanted = [p for p in paths[:-1] if not (assembly_only and compress
+                                            and p == base + "__hess")]
+    results = {path[len(base) + 2:]: run(path) for path in wanted}
     value = None if assembly_only else compute(energy, threads).value[:, 0, 0]
     return LocalDerivatives(energy, value, results["grad"][:, :, 0],
                             results.get("hess"), results.get("hess_proj"),

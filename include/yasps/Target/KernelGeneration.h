@@ -23,7 +23,7 @@ namespace mlir::yasps {
 
 /// What one buffer argument of a kernel holds.
 struct KernelArgument {
-  std::string kind; ///< "out", "attr", "conn" or "offsets"
+  std::string kind; ///< "out", "attr", "conn", "offsets" or "dof_offsets"
   std::string path; ///< scene-relative symbol path, e.g. "@m::@v::@x"
 };
 
@@ -34,6 +34,9 @@ struct KernelDescription {
   std::vector<KernelArgument> arguments;
   /// Rows and columns of each instance's value in the output buffer.
   int64_t rows = 0, cols = 0;
+  /// For projected Hessians, `yasps.projection` ("full", "reduced" or
+  /// "separate"); empty otherwise.
+  std::string projection;
   /// For derivative attributes, their local parameters (`yasps.params`),
   /// each as its printed fields, e.g. {"join", "@m::@t::@t2v", "2",
   /// "@m::@v::@x"}.

@@ -334,6 +334,9 @@ LogicalResult LowerToLoopsPass::lowerAttribute(SceneOp scene,
   // the kernel for the runtime.
   if (Attribute params = decl->getAttr("yasps.params"))
     func->setAttr("yasps.params", params);
+  // And projected Hessians how they are projected (full, reduced, ...).
+  if (Attribute projection = decl->getAttr("yasps.projection"))
+    func->setAttr("yasps.projection", projection);
   return success();
 }
 

@@ -99,6 +99,8 @@ std::vector<KernelDescription> mlir::yasps::describeKernels(ModuleOp kernels) {
       kernel.rows = shape[0];
       kernel.cols = shape[1];
     }
+    if (auto projection = func->getAttrOfType<StringAttr>("yasps.projection"))
+      kernel.projection = projection.str();
     if (auto counts = func->getAttrOfType<DictionaryAttr>("yasps.op_counts"))
       for (NamedAttribute entry : counts)
         kernel.opCounts[entry.getName().str()] =
