@@ -27,7 +27,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "python"))
 
 import yasps  # noqa: E402
 from yasps import energies as E  # noqa: E402
-from yasps.sim import box_tet_mesh, newton  # noqa: E402
+from yasps.sim import ImplicitEuler, box_tet_mesh  # noqa: E402
 
 DT = 0.01
 GRAVITY = np.array([0.0, 0.0, -9.81])
@@ -82,14 +82,14 @@ def stay_above_ground(x: np.ndarray, p: np.ndarray) -> float:
 def simulate(frames: int, cells: int, verbose: bool = True,
              on_frame=None):
     s, x, x_hat = build(cells)
-    v = np.zeros_like(x.value)
+    stepper = ImplicitEuler(s, x, x_hat, DT, gravity=GRAVITY,
+                            velocity_tolerance=1e-2,
+                            step_bound=stay_above_ground)
     history = []
     start = time.perf_counter()
     for frame in range(frames):
-        previous = x.value
-        x_hat.updateValue(previous + DT * v + DT * DT * GRAVITY[None, :, None])
-        report = newton(s, x, tolerance=1e-2 * DT, step_bound=stay_above_ground)
-        v = (x.value - previous) / DT
+        report = stepper.step()
+        v = stepper.velocity
         lowest = float(x.value[:, 2, 0].min())
         history.append({"lowest": lowest, "speed": float(np.abs(v).max()),
                         "energies": report.energies,

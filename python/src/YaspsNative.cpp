@@ -33,6 +33,7 @@
 #include <nanobind/nanobind.h>
 #include <nanobind/ndarray.h>
 #include <nanobind/stl/map.h>
+#include <nanobind/stl/optional.h>
 #include <nanobind/stl/pair.h>
 #include <nanobind/stl/string.h>
 #include <nanobind/stl/tuple.h>
@@ -370,12 +371,20 @@ public:
     std::copy(d.begin(), d.end(), out.data());
   }
 
+  using MaskArray =
+      nb::ndarray<uint8_t, nb::ndim<1>, nb::c_contig, nb::device::cpu>;
+
   nb::tuple solve(DoubleArray out, double tolerance, int64_t maxIterations,
-                  unsigned threads) const {
+                  unsigned threads, std::optional<MaskArray> fixed) const {
     check(out, size_t(size()));
     ::yasps::runtime::PcgOptions options;
     options.relativeTolerance = tolerance;
     options.maxIterations = maxIterations;
+    std::vector<uint8_t> mask;
+    if (fixed) {
+      mask.assign(fixed->data(), fixed->data() + fixed->shape(0));
+      options.fixedDofs = &mask;
+    }
     ::yasps::runtime::PcgResult result;
     {
       nb::gil_scoped_release release;
@@ -711,7 +720,9 @@ NB_MODULE(_yasps_native, m) {
            nb::arg("threads") = 0)
       .def("solve", &PySystem::solve, nb::arg("out"), nb::arg("tolerance"),
            nb::arg("max_iterations"), nb::arg("threads") = 0,
-           "PCG on H x = g into out; returns (iterations, relative residual, "
+           nb::arg("fixed") = nb::none(),
+           "PCG on H x = g into out; `fixed` (uint8 per DoF) excludes DoFs, "
+           "whose solution is 0; returns (iterations, relative residual, "
            "converged)");
 
   m.def("attribute_params", &attributeParams, nb::arg("ir"),

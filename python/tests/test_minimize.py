@@ -286,3 +286,24 @@ def test_local_compression_before_projection():
     H2 = np.zeros(system.size ** 2)
     system.dense(H2)
     assert np.abs(H2.reshape(system.size, -1) - ref).max() > 1e-6 * np.abs(ref).max()
+
+
+def test_fixed_dofs_are_excluded_from_the_solve():
+    s = soft_box()
+    x = s.minimizeTargets[0]
+    n = x.owner.numInstances
+    fixed = np.zeros((n, 3, 1), dtype=bool)
+    fixed[0] = True          # a whole vertex
+    fixed[2, 1, 0] = True    # one coordinate of another
+    (dx,) = s.minimizeEnergy(tolerance=1e-12, fixed=[fixed])
+    assert (dx[fixed] == 0).all()
+    g, H = dense_reference(s)
+    free = ~fixed.reshape(-1)
+    want = np.linalg.solve(H[np.ix_(free, free)], g[free])
+    np.testing.assert_allclose(dx.reshape(-1)[free], want, rtol=1e-8,
+                               atol=1e-10 * np.abs(want).max())
+    # A mask of instances fixes all their entries.
+    (dx,) = s.minimizeEnergy(tolerance=1e-12, fixed=[np.arange(n) < 2])
+    assert (dx[:2] == 0).all() and np.abs(dx[2:]).max() > 0
+    with pytest.raises(ValueError, match="fixed mask of .* has shape"):
+        s.minimizeEnergy(fixed=[np.zeros(3, dtype=bool)])

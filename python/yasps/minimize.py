@@ -146,19 +146,49 @@ def assemble(scene, threads: Optional[int] = None,
     return system, layout
 
 
+def fixed_dof_mask(layout: DofLayout, fixed) -> Optional[np.ndarray]:
+    """The per-DoF uint8 mask of ``fixed``: one entry per target (in
+    ``addMinimizeTarget``'s order), each None, a boolean mask of its
+    instances (N,) or of its entries (N, rows, cols)."""
+    if fixed is None:
+        return None
+    if len(fixed) != len(layout.targets):
+        raise ValueError(f"minimizeEnergy: fixed has {len(fixed)} entries but "
+                         f"there are {len(layout.targets)} targets")
+    parts = []
+    for target, mask in zip(layout.targets, fixed):
+        n, r, c = target.owner.numInstances, target.rows, target.cols
+        if mask is None:
+            parts.append(np.zeros(n * r * c, dtype=np.uint8))
+            continue
+        mask = np.asarray(mask, dtype=bool)
+        if mask.shape == (n,):
+            mask = np.broadcast_to(mask[:, None, None], (n, r, c))
+        if mask.shape != (n, r, c):
+            raise ValueError(
+                f"minimizeEnergy: the fixed mask of {target.describe()} has "
+                f"shape {mask.shape}; expected ({n},) or ({n}, {r}, {c})")
+        # DoFs are column-major within an instance.
+        parts.append(np.transpose(mask, (0, 2, 1)).reshape(-1).astype(np.uint8))
+    return np.ascontiguousarray(np.concatenate(parts)) if parts else None
+
+
 def minimize_energy(scene, tolerance: float = 1e-6, maxIterations: int = 1000,
-                    threads: Optional[int] = None) -> List[np.ndarray]:
-    """Solves H dx = g for the assembled projected Hessian and gradient."""
+                    threads: Optional[int] = None,
+                    fixed: Optional[list] = None) -> List[np.ndarray]:
+    """Solves H dx = g for the assembled projected Hessian and gradient,
+    with dx = 0 at the ``fixed`` DoFs (see fixed_dof_mask)."""
     if not (tolerance >= 0):
         raise ValueError(f"minimizeEnergy: tolerance must be >= 0, got {tolerance}")
     timings: Dict[str, float] = {}
     report: Dict[str, object] = {}
     system, layout = assemble(scene, threads, timings, report)
+    mask = fixed_dof_mask(layout, fixed)
     x = np.zeros(system.size)
     start = time.perf_counter()
     iterations, residual, converged = system.solve(
         x, float(tolerance), int(maxIterations),
-        config.num_threads if threads is None else threads)
+        config.num_threads if threads is None else threads, mask)
     timings["solve"] = time.perf_counter() - start
     info = {"iterations": int(iterations), "relativeResidual": float(residual),
             "converged": bool(converged), "seconds": timings, **report}

@@ -348,18 +348,22 @@ class Scene(Entity):
         return energy_derivatives(self, energy, threads)
 
     def minimizeEnergy(self, tolerance: float = 1e-6, maxIterations: int = 1000,
-                       threads: Optional[int] = None) -> list:
+                       threads: Optional[int] = None,
+                       fixed: Optional[list] = None) -> list:
         """Assembles the gradient g and PSD-projected Hessian H of all
         energies and solves ``H dx = g`` with block-Jacobi PCG (relative
         tolerance ``tolerance``). Returns one ``(N, rows, cols)`` array per
         minimisation target, in the order given to ``addMinimizeTarget``;
         the Newton step is ``-dx`` (paper 4.8). ``lastSolve`` holds the
         iteration count, the residual and the seconds spent on derivatives,
-        indices, assembly and the solve (the paper's Fig. 20 breakdown). Raises :class:`yasps.SolverError` if
+        indices, assembly and the solve (the paper's Fig. 20 breakdown).
+        ``fixed`` excludes DoFs from the solve (their ``dx`` is 0): one entry
+        per target, None or a boolean mask of its instances ``(N,)`` or
+        entries ``(N, rows, cols)``. Raises :class:`yasps.SolverError` if
         PCG does not converge."""
         from .minimize import minimize_energy
 
-        return minimize_energy(self, tolerance, maxIterations, threads)
+        return minimize_energy(self, tolerance, maxIterations, threads, fixed)
 
     # ------------------------------------------------------------------ IR
 
