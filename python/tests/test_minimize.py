@@ -307,3 +307,56 @@ def test_fixed_dofs_are_excluded_from_the_solve():
     assert (dx[:2] == 0).all() and np.abs(dx[2:]).max() > 0
     with pytest.raises(ValueError, match="fixed mask of .* has shape"):
         s.minimizeEnergy(fixed=[np.zeros(3, dtype=bool)])
+
+
+def cloth_patch(n: int = 3):
+    """An n x n grid of vertices: Baraff-Witkin triangles, dihedral hinges
+    across the interior edges, inertia; slightly crumpled."""
+    u, v = np.meshgrid(np.arange(n), np.arange(n), indexing="ij")
+    rest = np.stack([u.ravel(), v.ravel(), np.zeros(n * n)], axis=1) * 0.1
+    idx = lambda i, j: i * n + j  # noqa: E731
+    tris, hinges = [], []
+    for i in range(n - 1):
+        for j in range(n - 1):
+            a, b, c, d = idx(i, j), idx(i + 1, j), idx(i, j + 1), idx(i + 1, j + 1)
+            tris += [[a, b, d], [a, d, c]]
+            hinges.append([a, d, b, c])              # the cell's diagonal
+            if i + 1 < n - 1:
+                hinges.append([b, d, a, idx(i + 2, j + 1)])
+    tris, hinges = np.array(tris), np.array(hinges)
+    s = yasps.scene("cloth")
+    m = s.addMesh("cloth")
+    vv = m.addPrimitive("v", numInstances=n * n)
+    x = vv.addAttribute("x", rows=3)
+    x.updateValue(rest + rng.normal(scale=0.01, size=rest.shape))
+    xh = vv.addConstant("x_hat", rows=3)
+    xh.updateValue(rest)
+    t = m.addPrimitive("t", numInstances=len(tris))
+    duv = np.stack([rest[tris][:, k, :2] - rest[tris][:, 0, :2] for k in (1, 2)], axis=2)
+    t.addConstant("inv", rows=2, cols=2).updateValue(np.linalg.inv(duv))
+    corners = t.addAttribute("c", through=t.addConnectivity("t2v", vv, tris, 3), source=x)
+    s.addEnergy(t.addAttribute("bw", computed_attribute=E.baraff_witkin(
+        corners, t["inv"], 0.005, 100.0, 10.0)))
+    h = m.addPrimitive("h", numInstances=len(hinges))
+    hx = h.addAttribute("c", through=h.addConnectivity("h2v", vv, hinges, 4), source=x)
+    s.addEnergy(h.addAttribute("bend", computed_attribute=E.dihedral_bending(hx, 0.1, 0.01)))
+    s.addEnergy(vv.addAttribute("inertia", computed_attribute=E.inertia(x, xh, 0.01)))
+    s.addMinimizeTarget([x])
+    return s
+
+
+def test_assembly_and_solve_on_a_cloth_patch():
+    s = cloth_patch()
+    system, _ = assemble(s)
+    g_ref, H_ref = dense_reference(s)
+    g = np.zeros(system.size)
+    system.gradient(g)
+    H = np.zeros(system.size ** 2)
+    system.dense(H)
+    np.testing.assert_allclose(g, g_ref, rtol=1e-12, atol=1e-12 * np.abs(g_ref).max())
+    np.testing.assert_allclose(H.reshape(system.size, -1), H_ref, rtol=1e-11,
+                               atol=1e-11 * np.abs(H_ref).max())
+    (dx,) = s.minimizeEnergy(tolerance=1e-12)
+    want = np.linalg.solve(H_ref, g_ref)
+    np.testing.assert_allclose(dx.reshape(-1), want, rtol=1e-8,
+                               atol=1e-8 * np.abs(want).max())

@@ -177,11 +177,20 @@ static inline void timesTransposedBlock(const double *data, const double *x,
       y[j] += data[i * C + j] * x[i];
 }
 
+// The block shapes of vertex (3) and affine-body (12) DoF groups get
+// unrolled products; other shapes use the generic loops, which add the
+// terms in the same order.
+#define YASPS_FOR_BLOCK_SHAPES(CASE)                                           \
+  CASE(3, 3) CASE(3, 12) CASE(12, 3) CASE(12, 12)
+
 // y_r += B x_c for a stored block B (rows x cols).
 static inline void addProduct(const double *data, std::int64_t rows,
                               std::int64_t cols, const double *x, double *y) {
-  if (rows == 3 && cols == 3)
-    return timesBlock<3, 3>(data, x, y);
+#define YASPS_PRODUCT_CASE(R, C)                                               \
+  if (rows == R && cols == C)                                                  \
+    return timesBlock<R, C>(data, x, y);
+  YASPS_FOR_BLOCK_SHAPES(YASPS_PRODUCT_CASE)
+#undef YASPS_PRODUCT_CASE
   for (std::int64_t i = 0; i < rows; ++i) {
     double sum = 0.0;
     for (std::int64_t j = 0; j < cols; ++j)
@@ -194,8 +203,11 @@ static inline void addProduct(const double *data, std::int64_t rows,
 static inline void addTransposedProduct(const double *data, std::int64_t rows,
                                         std::int64_t cols, const double *x,
                                         double *y) {
-  if (rows == 3 && cols == 3)
-    return timesTransposedBlock<3, 3>(data, x, y);
+#define YASPS_TRANSPOSED_CASE(R, C)                                            \
+  if (rows == R && cols == C)                                                  \
+    return timesTransposedBlock<R, C>(data, x, y);
+  YASPS_FOR_BLOCK_SHAPES(YASPS_TRANSPOSED_CASE)
+#undef YASPS_TRANSPOSED_CASE
   for (std::int64_t i = 0; i < rows; ++i)
     for (std::int64_t j = 0; j < cols; ++j)
       y[j] += data[i * cols + j] * x[i];
