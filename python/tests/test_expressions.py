@@ -59,6 +59,7 @@ def cases(p):
         (yasps.hstack([v, w, a]), "yasps.concat horizontal", (3, 5)),
         (a.determinant(), "yasps.det", (1, 1)),
         (a.inverse(), "yasps.inverse", (3, 3)),
+        (a.cofactor(), "yasps.cofactor", (3, 3)),
         (a.trace(), "yasps.trace", (1, 1)),
         (a.norm(), "yasps.norm", (1, 1)),
         (v.squaredNorm(), "yasps.squared_norm", (1, 1)),

@@ -346,6 +346,12 @@ class Attribute:
         self._square("inverse")
         return self._new("inverse", (self,), self._rows, self._cols)
 
+    def cofactor(self) -> "Attribute":
+        """The cofactor matrix (signed minors): the derivative of the
+        determinant, ``det(A) A^-T`` for invertible A."""
+        self._square("cofactor")
+        return self._new("cofactor", (self,), self._rows, self._cols)
+
     def trace(self) -> "Attribute":
         self._square("trace")
         return self._new("trace", (self,), 1, 1)

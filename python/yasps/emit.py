@@ -18,7 +18,7 @@ _INDENT = "  "
 
 # Ops printed as `yasps.<op> %a : T` and `yasps.<op> %a, %b : T`.
 _UNARY_SAME = {"neg", "sqrt", "log", "exp", "sin", "cos", "abs",
-               "stop_gradient", "inverse"}
+               "stop_gradient", "inverse", "cofactor"}
 _BINARY_SAME = {"add", "sub", "elementwise_mul", "atan2", "min", "max", "cross"}
 _TO_SCALAR = {"det", "trace", "norm", "squared_norm", "sum"}
 

@@ -45,16 +45,20 @@ yasps.scene @s {
 
 // -----
 
-// Matrix-level rules: the derivative of det(A) stays in terms of det and
-// inverse, not a scalar expansion. A direct read of the target gives 4
-// parameters (column-major entries); the Hessian of det on 2x2 is constant
-// structure around the inverse.
+// Matrix-level rules: the derivative of det(A) is <cofactor(A), A'>, which
+// stays polynomial (no inverse). A direct read of the target gives 4
+// parameters (column-major entries); the Hessian of det on 2x2 is constant:
+// the cofactors of the unit directions fold away.
 
 // CHECK-LABEL: yasps.attr @d__jac : !yasps.mat<1x4xf64> attributes {yasps.params = {{\[\[}}"read", @m::@p::@a]]}
 // CHECK: %[[A:.*]] = yasps.read @m::@p::@a
-// CHECK-DAG: yasps.det %[[A]]
-// CHECK-DAG: yasps.inverse %[[A]]
-// CHECK: yasps.trace
+// CHECK: %[[C:.*]] = yasps.cofactor %[[A]]
+// CHECK: yasps.dot %[[C]]
+// CHECK-NOT: yasps.inverse
+// CHECK: yasps.attr @d__jac__jac : !yasps.mat<4x4xf64>
+// CHECK-NOT: yasps.read
+// CHECK-NOT: yasps.cofactor
+// CHECK: yasps.yield
 yasps.scene @s {
   yasps.mesh @m {
     yasps.primitive @p(1) {

@@ -345,6 +345,17 @@ mlir::yasps::lowerToScalars(OpBuilder &b, Operation *op,
             llvm::to_vector(llvm::seq<int64_t>(0, lhs().rows));
         return ScalarMatrix{1, 1, {s.det(lhs(), all, all)}};
       })
+      .Case([&](CofactorOp) -> FailureOr<ScalarMatrix> {
+        const ScalarMatrix &m = lhs();
+        if (m.rows > 4)
+          return matrixTooLarge("cofactor matrix");
+        ScalarMatrix out = makeMatrix(type);
+        for (int64_t c = 0; c < m.cols; ++c)
+          for (int64_t r = 0; r < m.rows; ++r)
+            out.values.push_back(m.rows == 1 ? s.constant(1.0)
+                                             : s.cofactor(m, r, c));
+        return out;
+      })
       .Case([&](InverseOp) -> FailureOr<ScalarMatrix> {
         const ScalarMatrix &m = lhs();
         if (m.rows > 4)

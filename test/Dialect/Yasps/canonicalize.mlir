@@ -19,6 +19,16 @@ yasps.scene @s {
         yasps.yield %tt : !yasps.mat<3x2xf64>
       }
 
+      // The cofactor matrix of a constant is a constant (signed 2x2 minors).
+      // CHECK-LABEL: yasps.attr @cofactor_of_constant
+      // CHECK-NEXT: %[[C:.*]] = yasps.constant dense<{{\[\[}}-1.000000e+00, -2.000000e+00, 1.000000e+00], [-1.000000e+00, 2.000000e+00, -1.000000e+00], [1.000000e+00, 0.000000e+00, -1.000000e+00]]>
+      // CHECK-NEXT: yasps.yield %[[C]]
+      yasps.attr @cofactor_of_constant : !yasps.mat<3x3xf64> {
+        %a = yasps.constant dense<[[1.0, 1.0, 1.0], [1.0, 0.0, 1.0], [0.0, 1.0, 2.0]]> : tensor<3x3xf64>
+        %c = yasps.cofactor %a : !yasps.mat<3x3xf64>
+        yasps.yield %c : !yasps.mat<3x3xf64>
+      }
+
       // CHECK-LABEL: yasps.attr @scale_by_one
       // CHECK-NEXT: %[[X:.*]] = yasps.read @m::@p::@x
       // CHECK-NEXT: yasps.yield %[[X]]

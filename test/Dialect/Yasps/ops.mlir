@@ -136,6 +136,8 @@ yasps.scene @expressions {
         %det = yasps.det %hc : !yasps.mat<3x3xf64>
         // CHECK: yasps.inverse %{{.*}} : !yasps.mat<3x3xf64>
         %inv = yasps.inverse %hc : !yasps.mat<3x3xf64>
+        // CHECK: yasps.cofactor %{{.*}} : !yasps.mat<3x3xf64>
+        %cof = yasps.cofactor %hc : !yasps.mat<3x3xf64>
         // CHECK: yasps.trace %{{.*}} : !yasps.mat<3x3xf64>
         %tr = yasps.trace %inv : !yasps.mat<3x3xf64>
         // CHECK: yasps.norm %{{.*}} : !yasps.mat<6x1xf64>

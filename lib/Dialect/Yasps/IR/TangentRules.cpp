@@ -245,13 +245,60 @@ TANGENT(DivOp) {
 
 // Matrix functions, kept at the matrix level.
 // det(A)' = det(A) trace(A^-1 A')
+// det(A)' = <cof(A), A'>: polynomial in A, so that second derivatives of
+// determinants need no inverse (paper 10.5 keeps them in terms of det and
+// the inverse; the cofactor form is what hand-derived code uses).
 TANGENT(DetOp) {
   if (!tangents[0])
     return Value();
   TangentBuilder t(builder, getLoc());
   MatrixType type = TangentBuilder::typeOf(getOperand());
-  Value inv = InverseOp::create(builder, getLoc(), type, getOperand());
-  return t.scale(t.trace(t.matmul(inv, tangents[0])), getResult());
+  if (type.getRows() == 1)
+    return tangents[0];
+  Value cof = CofactorOp::create(builder, getLoc(), type, getOperand());
+  return t.dot(cof, tangents[0]);
+}
+// 2x2: cof is linear, cof(A)' = cof(A'). 3x3: the columns of cof(A) are
+// a2 x a3, a3 x a1, a1 x a2 (a_j the columns of A), so by the product rule
+// column j is a'_k x a_l + a_k x a'_l. Larger: cof = det A^-T.
+TANGENT(CofactorOp) {
+  if (!tangents[0])
+    return Value();
+  TangentBuilder t(builder, getLoc());
+  Location loc = getLoc();
+  MatrixType type = getMatrixType();
+  int64_t n = type.getRows();
+  Value a = getOperand(), da = tangents[0];
+  if (n == 1)
+    return Value();
+  if (n == 2)
+    return CofactorOp::create(builder, loc, type, da).getResult();
+  if (n == 3) {
+    MatrixType column = type.withShape(3, 1);
+    auto col = [&](Value m, int64_t j) -> Value {
+      return ColOp::create(builder, loc, column, m,
+                           builder.getI64IntegerAttr(j));
+    };
+    auto cross = [&](Value x, Value y) -> Value {
+      return CrossOp::create(builder, loc, x, y);
+    };
+    SmallVector<Value> columns;
+    for (int64_t j = 0; j < 3; ++j) {
+      int64_t k = (j + 1) % 3, l = (j + 2) % 3;
+      columns.push_back(
+          t.add(cross(col(da, k), col(a, l)), cross(col(a, k), col(da, l))));
+    }
+    return ConcatOp::create(builder, loc, type, ConcatAxis::horizontal, columns)
+        .getResult();
+  }
+  // cof = det A^-T: cof' = det (tr(A^-1 A') A^-T - (A^-1 A' A^-1)^T).
+  Value inv = InverseOp::create(builder, loc, type, a);
+  Value det = DetOp::create(builder, loc, type.getScalarType(), a);
+  Value invDa = t.matmul(inv, da);
+  Value first =
+      t.scale(TransposeOp::create(builder, loc, type, inv), t.trace(invDa));
+  Value second = TransposeOp::create(builder, loc, type, t.matmul(invDa, inv));
+  return t.scale(t.sub(first, second), det);
 }
 // (A^-1)' = -A^-1 A' A^-1
 TANGENT(InverseOp) {

@@ -280,6 +280,9 @@ LogicalResult TraceOp::verify() {
 LogicalResult InverseOp::verify() {
   return verifySquare(*this, getMatrixType());
 }
+LogicalResult CofactorOp::verify() {
+  return verifySquare(*this, getMatrixType());
+}
 LogicalResult ProjectOp::verify() {
   return verifySquare(*this, getMatrixType());
 }

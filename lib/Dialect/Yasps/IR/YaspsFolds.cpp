@@ -194,6 +194,44 @@ OpFoldResult TransposeOp::fold(FoldAdaptor adaptor) {
   return toAttr(getMatrixType(), out);
 }
 
+OpFoldResult CofactorOp::fold(FoldAdaptor adaptor) {
+  // Constant operands (the unit directions of derivatives) fold to
+  // constants; up to 3x3, where the minors are at most 2x2.
+  std::optional<ConstMatrix> m = asConstMatrix(adaptor.getOperand());
+  if (!m || m->rows > 3)
+    return {};
+  const llvm::fltSemantics &semantics = m->values.front().getSemantics();
+  auto entry = [&](int64_t r, int64_t c) {
+    APFloat v = m->at(r, c);
+    bool losesInfo = false;
+    v.convert(APFloat::IEEEdouble(), APFloat::rmNearestTiesToEven, &losesInfo);
+    return v.convertToDouble();
+  };
+  int64_t n = m->rows;
+  SmallVector<APFloat> out;
+  for (int64_t r = 0; r < n; ++r)
+    for (int64_t c = 0; c < n; ++c) {
+      double value = 1.0;
+      if (n == 2) {
+        value = entry(1 - r, 1 - c);
+      } else if (n == 3) {
+        int64_t r0 = (r + 1) % 3, r1 = (r + 2) % 3;
+        int64_t c0 = (c + 1) % 3, c1 = (c + 2) % 3;
+        // Cyclic indices give the signed minor directly.
+        value = entry(r0, c0) * entry(r1, c1) - entry(r0, c1) * entry(r1, c0);
+      }
+      if (n == 2 && (r + c) % 2)
+        value = -value;
+      if (value == 0.0)
+        value = 0.0; // no negative zeros in folded structure
+      APFloat v(value);
+      bool losesInfo = false;
+      v.convert(semantics, APFloat::rmNearestTiesToEven, &losesInfo);
+      out.push_back(v);
+    }
+  return toAttr(getMatrixType(), out);
+}
+
 OpFoldResult StopGradientOp::fold(FoldAdaptor adaptor) {
   // Derivatives of constants are zero anyway, and one stop is enough.
   if (adaptor.getOperand())

@@ -426,6 +426,27 @@ def Yasps_InverseOp : Yasps_ExprOp<"inverse", [SameOperandsAndResultType]> {
   let hasVerifier = 1;
 }
 
+def Yasps_CofactorOp : Yasps_ExprOp<"cofactor", [SameOperandsAndResultType]> {
+  let summary = "cofactor matrix of a square matrix";
+  let description = [{
+    The matrix C of signed minors, `C_ij = (-1)^(i+j) M_ij`: the derivative
+    of the determinant, `det(A)' = <C, A'>`, and `C = det(A) A^-T` where A
+    is invertible. It is polynomial in A (for 3x3 its columns are cross
+    products of A's columns), so derivatives of determinants through it
+    stay polynomial: the second derivative of a 3x3 determinant is linear
+    in the entries, as in hand-derived code.
+
+    ```mlir
+    %c = yasps.cofactor %f : !yasps.mat<3x3xf64>
+    ```
+  }];
+  let arguments = (ins Yasps_Mat:$operand);
+  let results = (outs Yasps_Mat:$result);
+  let assemblyFormat = "$operand attr-dict `:` type($result)";
+  let hasFolder = 1;
+  let hasVerifier = 1;
+}
+
 def Yasps_ProjectOp : Yasps_ExprOp<"project", [SameOperandsAndResultType]> {
   let summary = "projection of a symmetric matrix to positive semi-definite";
   let description = [{
