@@ -161,28 +161,38 @@ struct CpuLibrary {
   }
 };
 
-CpuLibrary compileCpu(const std::string &ir,
-                      const std::vector<std::string> &attributes,
-                      const std::string &cacheDir, unsigned optLevel,
-                      const std::string &bufferName,
-                      const std::string &prePipeline) {
+/// Parses and verifies `ir`, then returns `compile(module)`'s library; its
+/// error, with the diagnostics collected meanwhile, becomes an IRError.
+template <typename Compile>
+auto compileVerified(const std::string &ir, const std::string &bufferName,
+                     Compile compile) {
   std::lock_guard<std::mutex> guard(getLock());
   llvm::SourceMgr sourceMgr;
   DiagnosticCollector diagnostics(getContext(), sourceMgr);
   OwningOpRef<ModuleOp> module =
       parseVerified(ir, bufferName, sourceMgr, diagnostics);
-  mlir::yasps::CpuCompileOptions options;
-  options.cacheDir = cacheDir;
-  options.optLevel = optLevel;
-  CpuLibrary result;
-  auto library = mlir::yasps::compileCpuKernels(*module, attributes, options,
-                                                &result.stats, prePipeline);
+  auto library = compile(*module);
   if (!library) {
     std::string message = llvm::toString(library.takeError());
     std::string collected = diagnostics.take();
     throw IRError(collected.empty() ? message : collected + message);
   }
-  result.library = *library;
+  return *library;
+}
+
+CpuLibrary compileCpu(const std::string &ir,
+                      const std::vector<std::string> &attributes,
+                      const std::string &cacheDir, unsigned optLevel,
+                      const std::string &bufferName,
+                      const std::string &prePipeline) {
+  mlir::yasps::CpuCompileOptions options;
+  options.cacheDir = cacheDir;
+  options.optLevel = optLevel;
+  CpuLibrary result;
+  result.library = compileVerified(ir, bufferName, [&](ModuleOp module) {
+    return mlir::yasps::compileCpuKernels(module, attributes, options,
+                                          &result.stats, prePipeline);
+  });
   return result;
 }
 
@@ -198,24 +208,15 @@ GpuLibrary compileGpu(const std::string &ir,
                       const std::string &cacheDir,
                       const std::string &bufferName,
                       const std::string &prePipeline) {
-  std::lock_guard<std::mutex> guard(getLock());
-  llvm::SourceMgr sourceMgr;
-  DiagnosticCollector diagnostics(getContext(), sourceMgr);
-  OwningOpRef<ModuleOp> module =
-      parseVerified(ir, bufferName, sourceMgr, diagnostics);
   mlir::yasps::GpuCompileOptions options;
   options.chips = chips;
   options.keepPtx = keepPtx;
   options.cacheDir = cacheDir;
   GpuLibrary result;
-  auto library = mlir::yasps::compileGpuKernels(*module, attributes, options,
-                                                &result.stats, prePipeline);
-  if (!library) {
-    std::string message = llvm::toString(library.takeError());
-    std::string collected = diagnostics.take();
-    throw IRError(collected.empty() ? message : collected + message);
-  }
-  result.library = *library;
+  result.library = compileVerified(ir, bufferName, [&](ModuleOp module) {
+    return mlir::yasps::compileGpuKernels(module, attributes, options,
+                                          &result.stats, prePipeline);
+  });
   return result;
 }
 
@@ -521,6 +522,15 @@ nb::list compressLocalHessians(DofArray dofs, MatrixBatch hessians) {
   return out;
 }
 
+/// The compressed size of every instance of a DoF map (count, n).
+nb::ndarray<nb::numpy, int64_t> compressedSizes(DofArray dofs) {
+  int64_t count = dofs.shape(0), n = dofs.shape(1);
+  std::vector<int64_t> sizes(static_cast<size_t>(count));
+  for (int64_t i = 0; i < count; ++i)
+    sizes[i] = ::yasps::runtime::compressedSize(n, dofs.data() + i * n);
+  return ownedArray(std::move(sizes), {size_t(count)});
+}
+
 /// Writes projected compressed matrices back to (count, n, n) `out`.
 void expandLocalHessians(
     DofArray dofs, int64_t k,
@@ -680,6 +690,8 @@ NB_MODULE(_yasps_native, m) {
         "Local Hessians with repeated DoFs merged and padding dropped "
         "(paper 7.2), grouped by compressed size k: [(k, instances, "
         "matrices (m, k, k))]");
+  m.def("compressed_sizes", &compressedSizes, nb::arg("dofs"),
+        "Distinct DoFs >= 0 of each row of a DoF map (count, n)");
   m.def("expand_local_hessians", &expandLocalHessians, nb::arg("dofs"),
         nb::arg("k"), nb::arg("instances"), nb::arg("projected"),
         nb::arg("out"),

@@ -39,6 +39,15 @@ def dense_reference(scene):
     return g, H
 
 
+def system_arrays(system):
+    """The assembled gradient and dense Hessian of a runtime system."""
+    g = np.zeros(system.size)
+    system.gradient(g)
+    H = np.zeros(system.size * system.size)
+    system.dense(H)
+    return g, H.reshape(system.size, system.size)
+
+
 def soft_box():
     verts, tets = box_mesh(2)
     s = yasps.scene("soft")
@@ -67,11 +76,7 @@ def test_assembly_and_solve_on_a_soft_box():
     s = soft_box()
     system, layout = assemble(s)
     g_ref, H_ref = dense_reference(s)
-    g = np.zeros(system.size)
-    system.gradient(g)
-    H = np.zeros(system.size * system.size)
-    system.dense(H)
-    H = H.reshape(system.size, system.size)
+    g, H = system_arrays(system)
     np.testing.assert_allclose(g, g_ref, rtol=1e-12, atol=1e-12)
     np.testing.assert_allclose(H, H_ref, rtol=1e-12, atol=1e-10 * np.abs(H_ref).max())
     (dx,) = s.minimizeEnergy(tolerance=1e-12)
@@ -139,9 +144,8 @@ def test_mixed_soft_affine_system_and_changing_pairs():
         system, layout = assemble(s, report=report)
         rebuilt.append(report["staticStructureRebuilt"])
         g_ref, H_ref = dense_reference(s)
-        H = np.zeros(system.size ** 2)
-        system.dense(H)
-        np.testing.assert_allclose(H.reshape(system.size, -1), H_ref, rtol=1e-11,
+        _, H = system_arrays(system)
+        np.testing.assert_allclose(H, H_ref, rtol=1e-11,
                                    atol=1e-11 * np.abs(H_ref).max())
         dxs, dA, dt = s.minimizeEnergy(tolerance=1e-12)
         assert dxs.shape == (3, 3, 1) and dA.shape == (1, 3, 3) and dt.shape == (1, 3, 1)
@@ -267,10 +271,7 @@ def test_local_compression_before_projection():
     sizes = _compressed_sizes(s.energyDerivatives(pairs).dofs())
     # Self pair: 2 angles; bob-point 5; bob-bob 4; point-point 6 (of 6).
     np.testing.assert_array_equal(sizes, [2, 5, 4, 6])
-    system, _ = assemble(s)
-    H = np.zeros(system.size ** 2)
-    system.dense(H)
-    H = H.reshape(system.size, -1)
+    _, H = system_arrays(assemble(s)[0])
     ref = compressed_reference(s)
     np.testing.assert_allclose(H, ref, rtol=0, atol=1e-12 * np.abs(ref).max())
     # One projection kernel per compressed size met (6 x 6 is the fused
@@ -283,9 +284,8 @@ def test_local_compression_before_projection():
         system, _ = assemble(s)
     finally:
         yasps.config.compress_local_hessians = True
-    H2 = np.zeros(system.size ** 2)
-    system.dense(H2)
-    assert np.abs(H2.reshape(system.size, -1) - ref).max() > 1e-6 * np.abs(ref).max()
+    _, H2 = system_arrays(system)
+    assert np.abs(H2 - ref).max() > 1e-6 * np.abs(ref).max()
 
 
 def test_fixed_dofs_are_excluded_from_the_solve():
@@ -349,12 +349,9 @@ def test_assembly_and_solve_on_a_cloth_patch():
     s = cloth_patch()
     system, _ = assemble(s)
     g_ref, H_ref = dense_reference(s)
-    g = np.zeros(system.size)
-    system.gradient(g)
-    H = np.zeros(system.size ** 2)
-    system.dense(H)
+    g, H = system_arrays(system)
     np.testing.assert_allclose(g, g_ref, rtol=1e-12, atol=1e-12 * np.abs(g_ref).max())
-    np.testing.assert_allclose(H.reshape(system.size, -1), H_ref, rtol=1e-11,
+    np.testing.assert_allclose(H, H_ref, rtol=1e-11,
                                atol=1e-11 * np.abs(H_ref).max())
     (dx,) = s.minimizeEnergy(tolerance=1e-12)
     want = np.linalg.solve(H_ref, g_ref)

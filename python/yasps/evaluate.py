@@ -280,11 +280,9 @@ class LocalDerivatives:
 
 
 def _compressed_sizes(dofs: np.ndarray) -> np.ndarray:
-    """Distinct DoFs >= 0 per row of a DoF map."""
-    d = np.sort(dofs, axis=1)
-    first = np.ones_like(d, dtype=bool)
-    first[:, 1:] = d[:, 1:] != d[:, :-1]
-    return (first & (d >= 0)).sum(axis=1)
+    """Distinct DoFs >= 0 per row of a DoF map (the runtime's count)."""
+    return compiler._module().compressed_sizes(
+        np.ascontiguousarray(dofs, dtype=np.int64))
 
 
 _projectors: Dict[Tuple[int, str], tuple] = {}
@@ -351,12 +349,13 @@ def energy_derivatives(scene: Scene, energy: Attribute, threads: int = None,
                                 scene.name)[0])
     projected = [base + "__ij", base + "__hess_inner_proj"] if separate \
         else [base + "__hess_proj"]
+    evaluated = [base + "__grad"] + \
+        ([] if assembly_only else [base + "__hess"]) + projected
     # Assembly may compress full projections (paper 7.2): it then needs the
     # unprojected Hessian instead of the projected one.
     compress = assembly_only and not separate and config.compress_local_hessians
-    paths = [base + "__grad"] + \
-        ([base + "__hess"] if compress or not assembly_only else []) \
-        + projected + [base + "__dofs"]
+    paths = evaluated + ([base + "__hess"] if compress else []) \
+        + [base + "__dofs"]
     try:
         library, _ = _compile(ir, paths, scene, pipeline)
     except native.IRError as err:
@@ -367,7 +366,6 @@ def energy_derivatives(scene: Scene, energy: Attribute, threads: int = None,
     resolver = _ParamResolver(scene, ir)
     params = [ParamSlot(f[0], f, owner, resolver)
               for f in library.params(paths[0])]
-    n = sum(p.width for p in params)
     count = owner.numInstances
     workers = config.num_threads if threads is None else threads
 
@@ -383,20 +381,22 @@ def energy_derivatives(scene: Scene, energy: Attribute, threads: int = None,
         # 1-based in the kernel, 0 for padding; exact integers in f64.
         return run(base + "__dofs")[:, :, 0].astype(np.int64) - 1
 
+    indices = dofs
     if compress and library.projection(base + "__hess_proj") == "full":
-        d = dofs()
-        if (_compressed_sizes(d) < d.shape[1]).any():
+        known = dofs()
+        if (_compressed_sizes(known) < known.shape[1]).any():
             hess = run(base + "__hess")
             method = next(m for e, _, m in scene._energies if e is energy)
             return LocalDerivatives(
                 energy, None, run(base + "__grad")[:, :, 0], None,
-                _project_compressed(d, hess, method, workers), params,
-                dofs=lambda: d)
-    wanted = [p for p in paths[:-1] if not (assembly_only and compress
-                                            and p == base + "__hess")]
-    results = {path[len(base) + 2:]: run(path) for path in wanted}
+                _project_compressed(known, hess, method, workers), params,
+                dofs=lambda: known)
+        # Nothing to compress: the fused kernel projects; the indices are
+        # kept rather than computed again.
+        indices = lambda: known  # noqa: E731
+    results = {path[len(base) + 2:]: run(path) for path in evaluated}
     value = None if assembly_only else compute(energy, threads).value[:, 0, 0]
     return LocalDerivatives(energy, value, results["grad"][:, :, 0],
                             results.get("hess"), results.get("hess_proj"),
                             params, results.get("ij"),
-                            results.get("hess_inner_proj"), dofs)
+                            results.get("hess_inner_proj"), indices)

@@ -41,7 +41,17 @@ Mapping mappingOf(std::int64_t n, const std::int64_t *dofs) {
 
 std::int64_t yasps::runtime::compressedSize(std::int64_t n,
                                             const std::int64_t *dofs) {
-  return static_cast<std::int64_t>(mappingOf(n, dofs).first.size());
+  // Counted in place: this runs on every instance of every assembly.
+  std::int64_t distinct = 0;
+  for (std::int64_t a = 0; a < n; ++a) {
+    if (dofs[a] < 0)
+      continue;
+    bool seen = false;
+    for (std::int64_t b = 0; b < a && !seen; ++b)
+      seen = dofs[b] == dofs[a];
+    distinct += !seen;
+  }
+  return distinct;
 }
 
 std::vector<CompressedBatch>

@@ -23,13 +23,6 @@ using yasps::runtime::ThreadPool;
 namespace {
 using Coord = std::pair<std::int64_t, std::int64_t>;
 
-BlockLayout layoutOf(const std::vector<std::int64_t> &sizes) {
-  BlockLayout layout{{0}};
-  for (std::int64_t s : sizes)
-    layout.blockOffset.push_back(layout.blockOffset.back() + s);
-  return layout;
-}
-
 /// A random problem: local blocks at random coordinates (both triangles,
 /// repeats), assembled both into the matrix and into a dense reference that
 /// adds each off-diagonal block and its transpose.
@@ -48,7 +41,7 @@ RandomAssembly makeAssembly(std::mt19937 &rng, std::int64_t numBlocks,
   const std::int64_t shapes[] = {3, 12, 9};
   for (std::int64_t i = 0; i < numBlocks; ++i)
     sizes.push_back(shapes[pickSize(rng)]);
-  a.layout = layoutOf(sizes);
+  a.layout = BlockLayout::fromSizes(sizes);
   std::int64_t n = a.layout.blockOffset.back();
   a.dense.assign(static_cast<std::size_t>(n * n), 0.0);
   std::uniform_int_distribution<std::int64_t> pickBlock(0, numBlocks - 1);
@@ -91,7 +84,7 @@ void expectNear(const std::vector<double> &actual,
 
 TEST(BlockSparseMatrix, NormalisesAndDeduplicatesByShape) {
   // Blocks of 3, 12, 9 and 3 DoFs.
-  BlockLayout layout = layoutOf({3, 12, 9, 3});
+  BlockLayout layout = BlockLayout::fromSizes({3, 12, 9, 3});
   std::vector<Coord> coords = {{1, 0}, {0, 1}, {2, 2}, {3, 0}, {0, 0},
                                {2, 1}, {0, 3}, {3, 3}, {1, 2}, {2, 3}};
   std::vector<BlockSlot> slots;
@@ -149,7 +142,7 @@ TEST(BlockSparseMatrix, RejectsBadLayoutsAndCoordinates) {
                std::invalid_argument);
   EXPECT_THROW(BlockSparseMatrix(BlockLayout{{0, 3, 2}}, {}),
                std::invalid_argument);
-  BlockLayout layout = layoutOf({3, 3});
+  BlockLayout layout = BlockLayout::fromSizes({3, 3});
   EXPECT_THROW(BlockSparseMatrix(layout, {{0, 2}}), std::invalid_argument);
   EXPECT_THROW(BlockSparseMatrix(layout, {{-1, 0}}), std::invalid_argument);
   BlockSparseMatrix m(layout, {{0, 1}});
@@ -224,7 +217,7 @@ TEST(BlockSparseMatrix, MultipliesLikeTheDenseMatrix) {
 }
 
 TEST(BlockSparseMatrix, ExtractsDiagonalBlocks) {
-  BlockLayout layout = layoutOf({3, 12, 9});
+  BlockLayout layout = BlockLayout::fromSizes({3, 12, 9});
   // Block 1 has no diagonal block stored.
   BlockSparseMatrix m(layout, {{0, 0}, {2, 2}, {0, 1}, {1, 2}});
   for (std::size_t k = 0; k < m.values().size(); ++k)

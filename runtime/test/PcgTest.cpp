@@ -26,13 +26,6 @@ using yasps::runtime::ThreadPool;
 namespace {
 using Coord = std::pair<std::int64_t, std::int64_t>;
 
-BlockLayout layoutOf(const std::vector<std::int64_t> &sizes) {
-  BlockLayout layout{{0}};
-  for (std::int64_t s : sizes)
-    layout.blockOffset.push_back(layout.blockOffset.back() + s);
-  return layout;
-}
-
 /// A random symmetric positive definite block system: 50 blocks of 3 and 4
 /// of 12, random off-diagonal blocks, and diagonal blocks that make it
 /// strictly diagonally dominant, barely (so CG needs several iterations).
@@ -40,7 +33,7 @@ BlockSparseMatrix randomSpd(std::mt19937 &rng, bool offDiagonal = true) {
   std::vector<std::int64_t> sizes(50, 3);
   for (std::size_t k : {5u, 17u, 30u, 44u})
     sizes[k] = 12;
-  BlockLayout layout = layoutOf(sizes);
+  BlockLayout layout = BlockLayout::fromSizes(sizes);
   std::int64_t numBlocks = layout.numBlocks();
   std::uniform_int_distribution<std::int64_t> pickBlock(0, numBlocks - 1);
   std::uniform_real_distribution<double> value(-1.0, 1.0);

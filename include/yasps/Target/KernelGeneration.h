@@ -71,6 +71,11 @@ std::vector<KernelDescription> describeKernels(ModuleOp kernels);
 /// A SHA-256 hex digest of `kernels` (generic form) and `extra`.
 std::string hashKernels(ModuleOp kernels, llvm::StringRef extra);
 
+/// Has `write` write a cache file under a temporary name, then renames it
+/// to `path`, so that concurrent processes never read a partial file.
+void storeAtomically(const std::string &path,
+                     llvm::function_ref<void(llvm::StringRef)> write);
+
 } // namespace mlir::yasps
 
 #endif // YASPS_TARGET_KERNELGENERATION_H

@@ -36,8 +36,6 @@
 #include "llvm/Support/TargetSelect.h"
 #include "llvm/TargetParser/Host.h"
 
-#include <unistd.h>
-
 #include <chrono>
 #include <map>
 #include <mutex>
@@ -173,16 +171,6 @@ loadObject(const std::string &path, std::vector<CpuKernel> kernels) {
     kernel.packed = address->toPtr<void (*)(void **)>();
   }
   return std::make_shared<ObjectLibrary>(std::move(*jit), std::move(kernels));
-}
-
-/// Writes `write`'s file under a temporary name, then renames it into place
-/// so that concurrent processes never read a partial object.
-void storeAtomically(const std::string &path,
-                     llvm::function_ref<void(StringRef)> write) {
-  std::string tmp = path + ".tmp." + std::to_string(::getpid());
-  write(tmp);
-  if (llvm::sys::fs::rename(tmp, path))
-    llvm::sys::fs::remove(tmp);
 }
 
 } // namespace

@@ -8,7 +8,10 @@
 #include "mlir/Dialect/Func/IR/FuncOps.h"
 #include "mlir/Pass/PassRegistry.h"
 #include "mlir/Transforms/Passes.h"
+#include "llvm/Support/FileSystem.h"
 #include "llvm/Support/SHA256.h"
+
+#include <unistd.h>
 
 using namespace mlir;
 using namespace mlir::yasps;
@@ -120,4 +123,12 @@ std::string mlir::yasps::hashKernels(ModuleOp kernels, StringRef extra) {
   std::array<uint8_t, 32> hash = llvm::SHA256::hash(llvm::ArrayRef(
       reinterpret_cast<const uint8_t *>(text.data()), text.size()));
   return llvm::toHex(hash, /*LowerCase=*/true);
+}
+
+void mlir::yasps::storeAtomically(const std::string &path,
+                                  llvm::function_ref<void(StringRef)> write) {
+  std::string tmp = path + ".tmp." + std::to_string(::getpid());
+  write(tmp);
+  if (llvm::sys::fs::rename(tmp, path))
+    llvm::sys::fs::remove(tmp);
 }

@@ -36,8 +36,6 @@
 #include "llvm/Support/MemoryBuffer.h"
 #include "llvm/Support/Path.h"
 
-#include <unistd.h>
-
 #include <algorithm>
 #include <chrono>
 
@@ -185,20 +183,13 @@ loadCached(const std::string &dir, const std::string &key,
 void storeCached(const std::string &dir, const std::string &key,
                  const std::vector<GpuBinary> &binaries) {
   llvm::sys::fs::create_directories(dir);
-  for (const GpuBinary &binary : binaries) {
-    std::string path = cachePath(dir, key, binary);
-    std::string tmp = path + ".tmp." + std::to_string(::getpid());
-    std::error_code ec;
-    {
+  for (const GpuBinary &binary : binaries)
+    storeAtomically(cachePath(dir, key, binary), [&](StringRef tmp) {
+      std::error_code ec;
       llvm::raw_fd_ostream os(tmp, ec);
-      if (ec)
-        continue;
-      os << binary.bytes;
-    }
-    // Renamed into place so that concurrent processes never read a part.
-    if (llvm::sys::fs::rename(tmp, path))
-      llvm::sys::fs::remove(tmp);
-  }
+      if (!ec)
+        os << binary.bytes;
+    });
 }
 
 } // namespace

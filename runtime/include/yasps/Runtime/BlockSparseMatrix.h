@@ -34,6 +34,14 @@ class ThreadPool;
 struct BlockLayout {
   std::vector<std::int64_t> blockOffset;
 
+  /// The layout of consecutive blocks of the given sizes.
+  static BlockLayout fromSizes(const std::vector<std::int64_t> &sizes) {
+    BlockLayout layout{{0}};
+    for (std::int64_t size : sizes)
+      layout.blockOffset.push_back(layout.blockOffset.back() + size);
+    return layout;
+  }
+
   std::int64_t numBlocks() const {
     return static_cast<std::int64_t>(blockOffset.size()) - 1;
   }
