@@ -289,8 +289,12 @@ print(r.stats["from_disk"], r.stats["from_memory"])
     assert len(list((tmp_path / "cache").glob("*.o"))) == 1
 
 
+@pytest.mark.parametrize("lanes", [1, 0, 3])
 @pytest.mark.parametrize("n", [1, 2, 3, 6, 9, 12, 24])
-def test_projection_matches_numpy_eigh(n):
+def test_projection_matches_numpy_eigh(n, lanes, monkeypatch):
+    # One instance at a time, the host's SIMD width, and an odd lane count;
+    # 60 instances leave a partial last tile.
+    monkeypatch.setattr(yasps.config, "projection_lanes", lanes)
     count = 60
     s = yasps.scene("proj")
     prim = s.addMesh("m").addPrimitive("p", numInstances=count)

@@ -7,6 +7,11 @@
 - ``num_threads``: threads used to evaluate kernels on the CPU; 0 uses every
   core (or ``YASPS_NUM_THREADS`` if set).
 - ``opt_level``: LLVM optimisation level of CPU kernels (0-3).
+- ``projection_lanes``: CPU kernels with a PSD projection eigen-decompose
+  this many instances' matrices at once, one per SIMD lane (the QL
+  iteration is a chain of dependent square roots and divisions, and lanes
+  keep several chains in flight). 0, the default, uses the host's vector
+  width in doubles (8 with AVX-512, else 4); 1 projects one at a time.
 - ``separate_reduced_hessians``: where the reduced-space projection applies
   (paper 5.4), keep each local Hessian as its factors, the inner map J and
   the projected inner Hessian P, and form J^T P J only while assembling
@@ -37,5 +42,6 @@ def _default_cache_dir() -> Optional[str]:
 cache_dir: Optional[str] = _default_cache_dir()
 num_threads: int = 0
 opt_level: int = 3
+projection_lanes: int = 0
 separate_reduced_hessians: bool = False
 compress_local_hessians: bool = True

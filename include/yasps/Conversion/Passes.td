@@ -37,12 +37,15 @@ def YaspsLowerToLoops : Pass<"yasps-lower-to-loops", "::mlir::ModuleOp"> {
                "Scene-relative paths of the attributes to evaluate "
                "(e.g. @mesh::@prim::@attr); empty means every energy">,
     Option<"sceneName", "scene", "std::string", /*default=*/"\"\"",
-           "The scene to compile (default: the module's only scene)">
+           "The scene to compile (default: the module's only scene)">,
+    Option<"projectionLanes", "projection-lanes", "int64_t", /*default=*/"1",
+           "Instances whose PSD projections run together in vector lanes "
+           "(1: one at a time; CPU kernels use the SIMD width)">
   ];
   let dependentDialects = [
     "::mlir::arith::ArithDialect", "::mlir::func::FuncDialect",
     "::mlir::math::MathDialect", "::mlir::memref::MemRefDialect",
-    "::mlir::scf::SCFDialect"
+    "::mlir::scf::SCFDialect", "::mlir::vector::VectorDialect"
   ];
 }
 

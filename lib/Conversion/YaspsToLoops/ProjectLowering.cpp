@@ -27,25 +27,25 @@ using namespace mlir::yasps;
 static SmallVector<Value> eigenProjection(OpBuilder &builder, Location loc,
                                           ProjectionMethod method,
                                           ArrayRef<Value> sym, int64_t n,
-                                          FloatType type) {
-  ImperativeBuilder b{builder, loc, type};
+                                          FloatType type, int64_t lanes) {
+  ImperativeBuilder b{builder, loc, type, lanes};
   Value z = b.buffer({n, n}), d = b.buffer({n}), out = b.buffer({n, n});
   for (int64_t r = 0; r < n; ++r)
     for (int64_t c = 0; c < n; ++c)
       b.put(sym[r * n + c], z, b.idx(r), b.idx(c));
   emitSymmetricEigen(b, z, d, n);
 
-  // Sum from the positive side when most eigenvalues are negative.
-  Value negatives = b.variable(builder.getIndexType());
-  b.set(negatives, b.idx(0));
+  // Sum from the positive side when most eigenvalues are negative (counted
+  // in floats, which lanes keep per problem).
+  Value negatives = b.variable();
+  b.set(negatives, b.cst(0.0));
   b.forRange(0, n, [&](Value i) {
     Value isNeg = b.lt(b.at(d, i), b.cst(0.0));
-    b.ifThen(isNeg,
-             [&] { b.set(negatives, b.iadd(b.get(negatives), b.idx(1))); });
+    b.set(negatives,
+          b.add(b.get(negatives), b.select(isNeg, b.cst(1.0), b.cst(0.0))));
   });
   Value fromPositive =
-      b.icmp(arith::CmpIPredicate::ugt,
-             b.iadd(b.get(negatives), b.get(negatives)), b.idx(n));
+      b.gt(b.add(b.get(negatives), b.get(negatives)), b.cst(double(n)));
   bool isAbs = method == ProjectionMethod::abs;
   // clamp: P = H - sum_neg l vv^T = sum_pos l vv^T;
   // abs:   P = H - 2 sum_neg l vv^T = -H + 2 sum_pos l vv^T.
@@ -80,8 +80,8 @@ static SmallVector<Value> eigenProjection(OpBuilder &builder, Location loc,
 /// True (i1) if the symmetric matrix `sym` (row-major) is positive definite:
 /// every pivot of its LDL^T factorisation is positive (NaN is not).
 static Value isPositiveDefinite(OpBuilder &b, Location loc, ArrayRef<Value> sym,
-                                int64_t n, FloatType type) {
-  ImperativeBuilder j{b, loc, type};
+                                int64_t n, FloatType type, int64_t lanes) {
+  ImperativeBuilder j{b, loc, type, lanes};
   SmallVector<Value> d(n), l(n * n);
   Value all;
   for (int64_t c = 0; c < n; ++c) {
@@ -109,8 +109,12 @@ ScalarMatrix mlir::yasps::lowerProjection(OpBuilder &b, Location loc,
   if (method == ProjectionMethod::none)
     return in;
   int64_t n = in.rows;
-  auto type = cast<FloatType>(in.values.front().getType());
-  ImperativeBuilder j{b, loc, type};
+  // Vector entries hold one problem per lane (see ImperativeBuilder).
+  Type valueType = in.values.front().getType();
+  auto vectorType = dyn_cast<VectorType>(valueType);
+  int64_t lanes = vectorType ? vectorType.getNumElements() : 1;
+  auto type = cast<FloatType>(getElementTypeOrSelf(valueType));
+  ImperativeBuilder j{b, loc, type, lanes};
   // The symmetric part of the input (Hessians are symmetric up to rounding).
   SmallVector<Value> sym(n * n);
   for (int64_t r = 0; r < n; ++r)
@@ -120,9 +124,9 @@ ScalarMatrix mlir::yasps::lowerProjection(OpBuilder &b, Location loc,
                            : j.mul(j.cst(0.5), j.add(in.at(r, c), in.at(c, r)));
   // Most local Hessians are already positive definite: an LDL^T test (n^3/3
   // operations) skips the eigen-decomposition for them.
-  Value definite = isPositiveDefinite(b, loc, sym, n, type);
-  SmallVector<Type> resultTypes(n * n, type);
-  auto ifOp = scf::IfOp::create(b, loc, resultTypes, definite,
+  Value definite = isPositiveDefinite(b, loc, sym, n, type, lanes);
+  SmallVector<Type> resultTypes(n * n, valueType);
+  auto ifOp = scf::IfOp::create(b, loc, resultTypes, j.all(definite),
                                 /*withElseRegion=*/true);
   {
     OpBuilder::InsertionGuard guard(b);
@@ -133,7 +137,13 @@ ScalarMatrix mlir::yasps::lowerProjection(OpBuilder &b, Location loc,
         same.push_back(sym[r * n + c]);
     scf::YieldOp::create(b, loc, same);
     b.setInsertionPointToStart(ifOp.elseBlock());
-    scf::YieldOp::create(b, loc, eigenProjection(b, loc, method, sym, n, type));
+    SmallVector<Value> projected =
+        eigenProjection(b, loc, method, sym, n, type, lanes);
+    // Lanes that are definite keep their matrix.
+    if (lanes > 1)
+      for (int64_t k = 0; k < n * n; ++k)
+        projected[k] = j.select(definite, same[k], projected[k]);
+    scf::YieldOp::create(b, loc, projected);
   }
   ScalarMatrix result{n, n, {}};
   result.values.append(ifOp.getResults().begin(), ifOp.getResults().end());

@@ -177,16 +177,31 @@ void EigenEmitter::diagonalise() {
       // The first negligible subdiagonal entry at or after l splits off the
       // block l..m, which QL then diagonalises.
       Value tol = b.mul(b.cst(eps), b.get(tst1));
-      b.set(m, at);
-      b.doWhile([&] {
-        Value mv = b.get(m);
-        Value more = b.both(b.icmp(arith::CmpIPredicate::ult, mv, idx(n - 1)),
-                            b.gt(b.abs(b.at(e, mv)), tol));
-        b.ifThen(more, [&] { b.set(m, b.iadd(mv, idx(1))); });
-        return more;
-      });
-      Value mEnd = b.get(m);
-      b.ifThen(b.icmp(arith::CmpIPredicate::ugt, mEnd, at), [&] {
+      // m, the end of the block, differs between lanes: it is kept as a
+      // float (`mLanes`), the sweep runs to the largest one and each
+      // rotation applies where i < m.
+      Value mEnd, mLanes, active;
+      if (b.lanes > 1) {
+        mLanes = b.cst(double(n - 1));
+        for (int64_t j = n - 2; j >= l; --j)
+          mLanes = b.select(
+              b.fcmp(arith::CmpFPredicate::OLE, b.abs(b.at(e, idx(j))), tol),
+              b.cst(double(j)), mLanes);
+        mEnd = b.floatAsIndex(b.laneMax(mLanes));
+        active = b.gt(mLanes, b.cst(double(l)));
+      } else {
+        b.set(m, at);
+        b.doWhile([&] {
+          Value mv = b.get(m);
+          Value more = b.both(b.icmp(arith::CmpIPredicate::ult, mv, idx(n - 1)),
+                              b.gt(b.abs(b.at(e, mv)), tol));
+          b.ifThen(more, [&] { b.set(m, b.iadd(mv, idx(1))); });
+          return more;
+        });
+        mEnd = b.get(m);
+        active = b.icmp(arith::CmpIPredicate::ugt, mEnd, at);
+      }
+      b.ifThen(active, [&] {
         b.set(iter, idx(0));
         b.doWhile([&] {
           b.set(iter, b.iadd(b.get(iter), idx(1)));
@@ -206,7 +221,15 @@ void EigenEmitter::diagonalise() {
           b.set(f, b.add(b.get(f), shift));
 
           // The implicit QL sweep from m-1 down to l.
-          b.set(p, b.at(d, mEnd));
+          if (b.lanes > 1) {
+            Value dm = b.cst(0.0);
+            for (int64_t j = l + 1; j < n; ++j)
+              dm =
+                  b.select(b.eq(mLanes, b.cst(double(j))), b.at(d, idx(j)), dm);
+            b.set(p, dm);
+          } else {
+            b.set(p, b.at(d, mEnd));
+          }
           b.set(c, b.cst(1.0));
           b.set(c2, b.cst(1.0));
           b.set(c3, b.cst(1.0));
@@ -214,32 +237,38 @@ void EigenEmitter::diagonalise() {
           b.set(s2, b.cst(0.0));
           Value el1 = b.at(e, next);
           b.forDown(at, mEnd, [&](Value i) {
-            Value i1 = b.iadd(i, idx(1));
-            Value ci = b.get(c), si = b.get(s), pi = b.get(p);
-            b.set(c3, b.get(c2));
-            b.set(c2, ci);
-            b.set(s2, si);
-            Value ei = b.at(e, i), di = b.at(d, i);
-            Value gi = b.mul(ci, ei);
-            Value hi = b.mul(ci, pi);
-            Value r = b.hypot(pi, ei);
-            b.put(b.mul(si, r), e, i1);
-            // r = 0 only when p = e_i = 0: the identity rotation.
-            Value zero = b.eq(r, b.cst(0.0));
-            Value inv = b.div(b.cst(1.0), b.select(zero, b.cst(1.0), r));
-            Value sn = b.mul(ei, inv);
-            Value cn = b.select(zero, b.cst(1.0), b.mul(pi, inv));
-            b.set(s, sn);
-            b.set(c, cn);
-            b.set(p, b.sub(b.mul(cn, di), b.mul(sn, gi)));
-            b.put(b.add(hi, b.mul(sn, b.add(b.mul(cn, gi), b.mul(sn, di)))), d,
-                  i1);
-            // Rotate eigenvector rows i and i+1 of z.
-            b.forRange(0, n, [&](Value k) {
-              Value zi = b.at(z, i, k), zi1 = b.at(z, i1, k);
-              b.put(b.add(b.mul(sn, zi), b.mul(cn, zi1)), z, i1, k);
-              b.put(b.sub(b.mul(cn, zi), b.mul(sn, zi1)), z, i, k);
-            });
+            auto rotate = [&] {
+              Value i1 = b.iadd(i, idx(1));
+              Value ci = b.get(c), si = b.get(s), pi = b.get(p);
+              b.set(c3, b.get(c2));
+              b.set(c2, ci);
+              b.set(s2, si);
+              Value ei = b.at(e, i), di = b.at(d, i);
+              Value gi = b.mul(ci, ei);
+              Value hi = b.mul(ci, pi);
+              Value r = b.hypot(pi, ei);
+              b.put(b.mul(si, r), e, i1);
+              // r = 0 only when p = e_i = 0: the identity rotation.
+              Value zero = b.eq(r, b.cst(0.0));
+              Value inv = b.div(b.cst(1.0), b.select(zero, b.cst(1.0), r));
+              Value sn = b.mul(ei, inv);
+              Value cn = b.select(zero, b.cst(1.0), b.mul(pi, inv));
+              b.set(s, sn);
+              b.set(c, cn);
+              b.set(p, b.sub(b.mul(cn, di), b.mul(sn, gi)));
+              b.put(b.add(hi, b.mul(sn, b.add(b.mul(cn, gi), b.mul(sn, di)))),
+                    d, i1);
+              // Rotate eigenvector rows i and i+1 of z.
+              b.forRange(0, n, [&](Value k) {
+                Value zi = b.at(z, i, k), zi1 = b.at(z, i1, k);
+                b.put(b.add(b.mul(sn, zi), b.mul(cn, zi1)), z, i1, k);
+                b.put(b.sub(b.mul(cn, zi), b.mul(sn, zi1)), z, i, k);
+              });
+            };
+            if (b.lanes > 1)
+              b.ifThen(b.lt(b.indexAsFloat(i), mLanes), rotate);
+            else
+              rotate();
           });
           // el1 / dl1 first: el1 * e_l underflows for matrices near the
           // smallest normal numbers, where the quotient is of order one.

@@ -8,14 +8,25 @@
 // instances, UNIONs decode the union index and evaluate the member's
 // attribute in an scf.if chain.
 //
+// With `projection-lanes` W > 1, a kernel whose value goes through one PSD
+// projection runs its instances in tiles of W: the body is emitted twice,
+// once to store each instance's matrix to be projected into a scratch
+// buffer and once to finish each instance with its projected matrix, and
+// between them one eigen-decomposition works on all W matrices at once in
+// vector lanes. The QL iteration is a chain of dependent square roots and
+// divisions; lanes keep W chains in flight. What each copy of the body does
+// not need is dead code that LLVM removes.
+//
 //===----------------------------------------------------------------------===//
 
 #include "yasps/Conversion/Passes.h"
 
+#include "ImperativeBuilder.h"
 #include "yasps/Conversion/YaspsToLoops/ScalarLowering.h"
 #include "yasps/Dialect/Yasps/IR/Yasps.h"
 
 #include "mlir/AsmParser/AsmParser.h"
+#include "mlir/Dialect/Vector/IR/VectorOps.h"
 
 namespace mlir::yasps {
 #define GEN_PASS_DEF_YASPSLOWERTOLOOPS
@@ -80,6 +91,18 @@ public:
 
   ArrayAttr getRoles() { return ArrayAttr::get(func.getContext(), roles); }
 
+  /// Forgets computed values (before emitting the body again elsewhere).
+  void resetScopes() {
+    scopes.clear();
+    scopes.emplace_back();
+  }
+
+  /// When set, lowers `yasps.project` instead of the scalar eigensolver
+  /// (returning std::nullopt leaves it to the scalar lowering).
+  std::function<std::optional<ScalarMatrix>(OpBuilder &, ProjectOp,
+                                            const ScalarMatrix &)>
+      projectHook;
+
 private:
   Value constIndex(OpBuilder &b, int64_t value) {
     return arith::ConstantIndexOp::create(b, func.getLoc(), value);
@@ -133,7 +156,11 @@ private:
         SmallVector<ScalarMatrix> operands;
         for (Value operand : op.getOperands())
           operands.push_back(values.lookup(operand));
-        result = lowerToScalars(b, &op, operands, symbolicZeros);
+        std::optional<ScalarMatrix> hooked;
+        if (auto project = dyn_cast<ProjectOp>(op); project && projectHook)
+          hooked = projectHook(b, project, operands.front());
+        result = hooked ? FailureOr<ScalarMatrix>(*hooked)
+                        : lowerToScalars(b, &op, operands, symbolicZeros);
       }
       if (failed(result))
         return failure();
@@ -266,6 +293,130 @@ private:
   SmallVector<DenseMap<std::pair<Operation *, Value>, ScalarMatrix>> scopes{1};
 };
 
+enum class Batching { Done, NotApplicable, Failed };
+
+/// Emits into `loop` (a parallel loop over tiles of `lanes` instances) the
+/// lane-batched kernel body described at the top of this file.
+/// NotApplicable, with the loop left to be erased, when the value does not
+/// go through exactly one projection at the top level of the body; Failed
+/// when evaluation reported an error.
+Batching emitBatchedProjection(KernelEmitter &emitter, Operation *decl,
+                               Value out, scf::ParallelOp loop, Value end,
+                               int64_t lanes) {
+  Location loc = decl->getLoc();
+  OpBuilder b = OpBuilder::atBlockTerminator(loop.getBody());
+  Value tile = loop.getInductionVars()[0];
+  Value zero = arith::ConstantIndexOp::create(b, loc, 0);
+  Value one = arith::ConstantIndexOp::create(b, loc, 1);
+  Value count = arith::MinUIOp::create(
+      b, loc, arith::ConstantIndexOp::create(b, loc, lanes),
+      arith::SubIOp::create(b, loc, end, tile));
+  auto type = cast<FloatType>(getAttributeType(decl).getElementType());
+  auto laneType = VectorType::get({lanes}, type);
+  // Scratch of the matrices before and after projection, lanes innermost.
+  Value before, after;
+  int64_t entries = 0;
+  std::optional<ProjectionMethod> method;
+  int64_t projections = 0;
+  Block *laneBody = nullptr;
+  Operation *laneLoopOp = nullptr;
+  Value lane;
+  auto laneLoop = [&](auto body) {
+    auto forOp = scf::ForOp::create(b, loc, zero, count, one);
+    OpBuilder inner = OpBuilder::atBlockTerminator(forOp.getBody());
+    laneBody = forOp.getBody();
+    laneLoopOp = forOp;
+    lane = forOp.getInductionVar();
+    return body(inner, arith::AddIOp::create(inner, loc, tile, lane));
+  };
+
+  // 1. Every instance stores the matrix it projects.
+  emitter.resetScopes();
+  emitter.projectHook =
+      [&](OpBuilder &ib, ProjectOp project,
+          const ScalarMatrix &in) -> std::optional<ScalarMatrix> {
+    if (project.getMethod() == ProjectionMethod::none)
+      return std::nullopt;
+    // Only one projection, evaluated once per instance, is batched.
+    if (projections++ > 0 || ib.getInsertionBlock() != laneBody)
+      return std::nullopt;
+    method = project.getMethod();
+    entries = in.values.size();
+    ImperativeBuilder alloc{ib, loc, type, lanes};
+    before = alloc.buffer({entries});
+    after = alloc.buffer({entries});
+    for (auto [k, v] : llvm::enumerate(in.values))
+      memref::StoreOp::create(
+          ib, loc, v, before,
+          ValueRange{arith::ConstantIndexOp::create(ib, loc, k), lane});
+    ScalarMatrix zeros{in.rows, in.cols, {}};
+    Value zeroValue =
+        arith::ConstantOp::create(ib, loc, ib.getFloatAttr(type, 0));
+    zeros.values.assign(entries, zeroValue);
+    return zeros;
+  };
+  bool evaluated = laneLoop([&](OpBuilder &inner, Value instance) {
+    return succeeded(emitter.evaluate(inner, decl, instance));
+  });
+  emitter.projectHook = nullptr;
+  if (!evaluated)
+    return Batching::Failed;
+  if (projections != 1 || !method)
+    return Batching::NotApplicable;
+  {
+    // Lanes past the end of the last tile project zeros (cheap, and never
+    // uninitialised memory).
+    OpBuilder::InsertionGuard guard(b);
+    b.setInsertionPoint(laneLoopOp);
+    Value zeros = arith::ConstantOp::create(
+        b, loc, DenseElementsAttr::get(laneType, b.getFloatAttr(type, 0)));
+    for (int64_t k = 0; k < entries; ++k)
+      vector::StoreOp::create(
+          b, loc, zeros, before,
+          ValueRange{arith::ConstantIndexOp::create(b, loc, k), zero});
+  }
+
+  // 2. One projection of all lanes.
+  int64_t n = 0;
+  while (n * n < entries)
+    ++n;
+  ScalarMatrix lanesIn{n, n, {}};
+  for (int64_t k = 0; k < entries; ++k)
+    lanesIn.values.push_back(vector::LoadOp::create(
+        b, loc, laneType, before,
+        ValueRange{arith::ConstantIndexOp::create(b, loc, k), zero}));
+  ScalarMatrix projected = lowerProjection(b, loc, *method, lanesIn);
+  for (auto [k, v] : llvm::enumerate(projected.values))
+    vector::StoreOp::create(
+        b, loc, v, after,
+        ValueRange{arith::ConstantIndexOp::create(b, loc, k), zero});
+
+  // 3. Every instance finishes with its projected matrix.
+  emitter.resetScopes();
+  emitter.projectHook =
+      [&](OpBuilder &ib, ProjectOp project,
+          const ScalarMatrix &in) -> std::optional<ScalarMatrix> {
+    if (project.getMethod() == ProjectionMethod::none)
+      return std::nullopt;
+    ScalarMatrix result{in.rows, in.cols, {}};
+    for (int64_t k = 0; k < entries; ++k)
+      result.values.push_back(memref::LoadOp::create(
+          ib, loc, after,
+          ValueRange{arith::ConstantIndexOp::create(ib, loc, k), lane}));
+    return result;
+  };
+  bool finished = laneLoop([&](OpBuilder &inner, Value instance) {
+    FailureOr<ScalarMatrix> value = emitter.evaluate(inner, decl, instance);
+    if (failed(value))
+      return false;
+    emitter.store(inner, out, *value, instance);
+    return true;
+  });
+  emitter.projectHook = nullptr;
+  emitter.resetScopes();
+  return finished ? Batching::Done : Batching::Failed;
+}
+
 std::string kernelName(SymbolRefAttr path) {
   std::string name = "yasps_eval_" + path.getRootReference().str();
   for (FlatSymbolRefAttr nested : path.getNestedReferences())
@@ -311,18 +462,37 @@ LogicalResult LowerToLoopsPass::lowerAttribute(SceneOp scene,
                         /*symbolicZeros=*/decl->hasAttr("yasps.params"));
   Value out = emitter.buffer("out", decl, type.getElementType());
   Value one = arith::ConstantIndexOp::create(b, loc, 1);
+  auto ret = func::ReturnOp::create(b, loc);
+  b.setInsertionPoint(ret);
   // The loop is created first and filled afterwards so that code generated
   // for the body can reach the enclosing function (e.g. for scratch buffers).
-  auto loop = scf::ParallelOp::create(b, loc, ValueRange{entry->getArgument(0)},
-                                      ValueRange{entry->getArgument(1)},
-                                      ValueRange{one});
-  func::ReturnOp::create(b, loc);
-  OpBuilder body = OpBuilder::atBlockTerminator(loop.getBody());
-  Value instance = loop.getInductionVars()[0];
-  FailureOr<ScalarMatrix> value = emitter.evaluate(body, decl, instance);
-  if (failed(value))
-    return failure();
-  emitter.store(body, out, *value, instance);
+  bool batched = false;
+  if (projectionLanes > 1) {
+    Value lanes = arith::ConstantIndexOp::create(b, loc, projectionLanes);
+    auto loop = scf::ParallelOp::create(
+        b, loc, ValueRange{entry->getArgument(0)},
+        ValueRange{entry->getArgument(1)}, ValueRange{lanes});
+    Batching result = emitBatchedProjection(
+        emitter, decl, out, loop, entry->getArgument(1), projectionLanes);
+    if (result == Batching::Failed)
+      return failure();
+    batched = result == Batching::Done;
+    if (!batched) {
+      loop.erase();
+      emitter.resetScopes();
+    }
+  }
+  if (!batched) {
+    auto loop = scf::ParallelOp::create(
+        b, loc, ValueRange{entry->getArgument(0)},
+        ValueRange{entry->getArgument(1)}, ValueRange{one});
+    OpBuilder body = OpBuilder::atBlockTerminator(loop.getBody());
+    Value instance = loop.getInductionVars()[0];
+    FailureOr<ScalarMatrix> value = emitter.evaluate(body, decl, instance);
+    if (failed(value))
+      return failure();
+    emitter.store(body, out, *value, instance);
+  }
 
   func.setType(builder.getFunctionType(entry->getArgumentTypes(), {}));
   func->setAttr("yasps.kernel_of", path);

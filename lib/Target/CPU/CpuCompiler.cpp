@@ -12,6 +12,7 @@
 #include "mlir/Conversion/MemRefToLLVM/MemRefToLLVM.h"
 #include "mlir/Conversion/Passes.h"
 #include "mlir/Conversion/UBToLLVM/UBToLLVM.h"
+#include "mlir/Conversion/VectorToLLVM/ConvertVectorToLLVM.h"
 #include "mlir/Dialect/ControlFlow/IR/ControlFlow.h"
 #include "mlir/Dialect/Func/IR/FuncOps.h"
 #include "mlir/Dialect/Index/IR/IndexDialect.h"
@@ -20,6 +21,7 @@
 #include "mlir/Dialect/MemRef/IR/MemRef.h"
 #include "mlir/Dialect/SCF/IR/SCF.h"
 #include "mlir/Dialect/UB/IR/UBOps.h"
+#include "mlir/Dialect/Vector/IR/VectorOps.h"
 #include "mlir/ExecutionEngine/ExecutionEngine.h"
 #include "mlir/ExecutionEngine/OptUtils.h"
 #include "mlir/Pass/PassManager.h"
@@ -56,13 +58,14 @@ void mlir::yasps::registerCpuCompilerDialects(DialectRegistry &registry) {
   registry.insert<YaspsDialect, arith::ArithDialect, cf::ControlFlowDialect,
                   func::FuncDialect, index::IndexDialect, LLVM::LLVMDialect,
                   math::MathDialect, memref::MemRefDialect, scf::SCFDialect,
-                  ub::UBDialect>();
+                  ub::UBDialect, vector::VectorDialect>();
   arith::registerConvertArithToLLVMInterface(registry);
   cf::registerConvertControlFlowToLLVMInterface(registry);
   registerConvertFuncToLLVMInterface(registry);
   index::registerConvertIndexToLLVMInterface(registry);
   registerConvertMathToLLVMInterface(registry);
   registerConvertMemRefToLLVMInterface(registry);
+  vector::registerConvertVectorToLLVMInterface(registry);
   ub::registerConvertUBToLLVMInterface(registry);
   registerBuiltinDialectTranslation(registry);
   registerLLVMDialectTranslation(registry);
@@ -121,6 +124,19 @@ std::vector<CpuKernel> cpuKernels(std::vector<KernelDescription> described) {
   }
   return kernels;
 }
+
+} // namespace
+
+int64_t mlir::yasps::hostDoubleLanes() {
+  llvm::StringMap<bool> features = llvm::sys::getHostCPUFeatures();
+  if (features.lookup("avx512f"))
+    return 8;
+  if (features.lookup("avx") || features.lookup("neon"))
+    return 4;
+  return 2;
+}
+
+namespace {
 
 std::string hostDescription() {
   std::string text = llvm::sys::getHostCPUName().str();
@@ -185,7 +201,9 @@ mlir::yasps::compileCpuKernels(ModuleOp module,
   Clock::time_point start = Clock::now();
 
   // 1. Kernel functions in upstream dialects.
-  auto generated = generateLoopKernels(module, attributes, prePipeline);
+  int64_t lanes =
+      options.projectionLanes > 0 ? options.projectionLanes : hostDoubleLanes();
+  auto generated = generateLoopKernels(module, attributes, prePipeline, lanes);
   if (!generated)
     return generated.takeError();
   OwningOpRef<ModuleOp> kernels = std::move(*generated);

@@ -57,10 +57,9 @@ llvm::Error mlir::yasps::runPasses(
   return llvm::Error::success();
 }
 
-llvm::Expected<OwningOpRef<ModuleOp>>
-mlir::yasps::generateLoopKernels(ModuleOp module,
-                                 const std::vector<std::string> &attributes,
-                                 StringRef prePipeline) {
+llvm::Expected<OwningOpRef<ModuleOp>> mlir::yasps::generateLoopKernels(
+    ModuleOp module, const std::vector<std::string> &attributes,
+    StringRef prePipeline, int64_t projectionLanes) {
   OwningOpRef<ModuleOp> kernels(cast<ModuleOp>(module->clone()));
   if (llvm::Error err =
           runPasses(*kernels, "kernel generation failed", [&](PassManager &pm) {
@@ -70,6 +69,7 @@ mlir::yasps::generateLoopKernels(ModuleOp module,
             YaspsLowerToLoopsOptions lowerOptions;
             lowerOptions.attributes.assign(attributes.begin(),
                                            attributes.end());
+            lowerOptions.projectionLanes = projectionLanes;
             pm.addPass(createYaspsLowerToLoops(lowerOptions));
             pm.addPass(createYaspsStripScenes());
             pm.addPass(createCanonicalizerPass());
