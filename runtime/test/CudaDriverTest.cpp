@@ -6,6 +6,7 @@
 //===----------------------------------------------------------------------===//
 
 #include "yasps/Runtime/CudaMemory.h"
+#include "yasps/Runtime/GpuLaunch.h"
 
 #include <gtest/gtest.h>
 
@@ -114,6 +115,78 @@ TEST(CudaDriver, FormatsSizes) {
   EXPECT_EQ(formatBytes(512), "512 bytes");
   EXPECT_EQ(formatBytes(1536), "1.50 KiB");
   EXPECT_EQ(formatBytes(std::size_t(12) << 20), "12.0 MiB");
+}
+
+TEST(GpuLaunch, PicksTheDevicesCubinElsePtx) {
+  std::string bytes = "x";
+  std::vector<GpuImage> images = {{"sm_80", "cubin", &bytes},
+                                  {"sm_90", "cubin", &bytes},
+                                  {"sm_90", "ptx", &bytes}};
+  EXPECT_EQ(selectGpuImage(images, "sm_80").format, "cubin");
+  EXPECT_EQ(selectGpuImage(images, "sm_90").chip, "sm_90");
+  EXPECT_EQ(selectGpuImage(images, "sm_90").format, "cubin");
+  EXPECT_EQ(selectGpuImage(images, "sm_120").format, "ptx");
+  try {
+    selectGpuImage(images, "sm_75");
+    FAIL() << "an sm_75 device got a binary";
+  } catch (const CudaError &error) {
+    EXPECT_STREQ(error.what(),
+                 "no GPU binary runs on this device (sm_75): the kernels were "
+                 "compiled to sm_80 cubin, sm_90 cubin, sm_90 ptx");
+  }
+}
+
+TEST(GpuLaunch, ParametersFollowTheRecordedAbi) {
+  // begin, end, a constant, then buffer argument 3 and buffer argument 2.
+  std::vector<GpuParam> params = {{GpuParam::Kind::Constant, -1, 128},
+                                  {GpuParam::Kind::Index, 0, 0},
+                                  {GpuParam::Kind::Index, 1, 0},
+                                  {GpuParam::Kind::Buffer, 3, 0},
+                                  {GpuParam::Kind::Buffer, 2, 0}};
+  std::vector<GpuBufferArg> buffers = {{0x1000, 40}, {0x2000, 7}};
+  GpuLaunchParams values(params, buffers, 5, 300);
+  std::vector<std::uint64_t> expected = {
+      128, 5, 300, 0x2000, 0x2000, 0, 7, 1, 0x1000, 0x1000, 0, 40, 1};
+  EXPECT_EQ(values.values(), expected);
+  for (size_t i = 0; i < expected.size(); ++i)
+    EXPECT_EQ(*static_cast<std::uint64_t *>(values.pointers()[i]), expected[i]);
+  std::vector<GpuParam> bad = {{GpuParam::Kind::Buffer, 4, 0}};
+  EXPECT_THROW(GpuLaunchParams(bad, buffers, 0, 1), std::invalid_argument);
+}
+
+TEST(GpuLaunch, LaunchesOneThreadPerInstance) {
+  auto driver = fakeDriver(0);
+  void *fake = dlopen(YASPS_FAKE_CUDA, RTLD_NOW | RTLD_LOCAL);
+  auto expect =
+      reinterpret_cast<void (*)(int)>(dlsym(fake, "fakeCudaExpectParams"));
+  auto last = reinterpret_cast<const char *(*)(const char **, unsigned *,
+                                               std::uint64_t *)>(
+      dlsym(fake, "fakeCudaLastLaunch"));
+  CudaContext context(*driver, 0);
+  CudaModule module(context, std::string(".version 8.0\n.target sm_90"));
+  EXPECT_THROW(module.function("missing"), CudaError);
+  cu::Function kernel = module.function("yasps_eval_m__p__x_kernel");
+  DeviceBuffer out(context, 300 * sizeof(double));
+  expect(7);
+  launchGpuKernel(context, kernel,
+                  {{GpuParam::Kind::Index, 0, 0},
+                   {GpuParam::Kind::Index, 1, 0},
+                   {GpuParam::Kind::Buffer, 2, 0}},
+                  {{out.pointer(), 300}}, 0, 300, 128);
+  const char *image = nullptr;
+  unsigned dims[6];
+  std::uint64_t values[7];
+  EXPECT_STREQ(last(&image, dims, values), "yasps_eval_m__p__x_kernel");
+  EXPECT_STREQ(image, ".version 8.0\n.target sm_90");
+  // ceil(300 / 128) = 3 blocks of 128 threads.
+  EXPECT_EQ(std::vector<unsigned>(dims, dims + 6),
+            std::vector<unsigned>({3, 1, 1, 128, 1, 1}));
+  EXPECT_EQ(std::vector<std::uint64_t>(values, values + 7),
+            std::vector<std::uint64_t>(
+                {0, 300, out.pointer(), out.pointer(), 0, 300, 1}));
+  EXPECT_THROW(launchGpuKernel(context, kernel, {}, {}, 0, 1, 0),
+               std::invalid_argument);
+  dlclose(fake);
 }
 
 TEST(CudaDriver, ThisMachineEitherHasAUsableDriverOrSaysWhy) {

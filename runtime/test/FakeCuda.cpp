@@ -5,7 +5,9 @@
 // machines without a GPU. `fakeCudaSetMode` picks the behaviour: 0 a
 // healthy driver with one "Fake GPU" (compute capability 9.0, 8 GiB, of
 // which 1 GiB is free), 1 a cuInit that fails with CUDA_ERROR_NO_DEVICE,
-// 2 a driver without devices.
+// 2 a driver without devices. Modules load any image; launches are not
+// run but recorded (`fakeCudaLastLaunch`), with as many 8-byte parameters
+// as `fakeCudaExpectParams` said.
 //
 //===----------------------------------------------------------------------===//
 
@@ -13,13 +15,33 @@
 #include <cstdlib>
 #include <cstring>
 
+#include <cstdint>
+#include <string>
+#include <vector>
+
 namespace {
 int mode = 0;
 constexpr std::size_t kGiB = std::size_t(1) << 30;
+int expectedParams = 0;
+std::string loadedImage, functionName;
+unsigned lastDims[6];
+std::vector<std::uint64_t> lastParams;
 } // namespace
 
 extern "C" {
 void fakeCudaSetMode(int m) { mode = m; }
+void fakeCudaExpectParams(int n) { expectedParams = n; }
+/// The last launch: its kernel's name, its module's image, grid and block
+/// sizes (6 values) and parameters (`expectedParams` values).
+const char *fakeCudaLastLaunch(const char **image, unsigned *dims,
+                               std::uint64_t *params) {
+  *image = loadedImage.c_str();
+  for (int i = 0; i < 6; ++i)
+    dims[i] = lastDims[i];
+  for (std::size_t i = 0; i < lastParams.size(); ++i)
+    params[i] = lastParams[i];
+  return functionName.c_str();
+}
 
 int cuGetErrorName(int error, const char **name) {
   switch (error) {
@@ -109,12 +131,30 @@ int cuMemcpyDtoH_v2(void *dst, unsigned long long src, std::size_t n) {
   std::memcpy(dst, reinterpret_cast<void *>(src), n);
   return 0;
 }
-// Modules and launches are not faked: they need a real device.
-int cuModuleLoadData(void **, const void *) { return 200; }
+int cuModuleLoadData(void **module, const void *image) {
+  static int token;
+  loadedImage = static_cast<const char *>(image);
+  *module = &token;
+  return 0;
+}
 int cuModuleUnload(void *) { return 0; }
-int cuModuleGetFunction(void **, void *, const char *) { return 500; }
-int cuLaunchKernel(void *, unsigned, unsigned, unsigned, unsigned, unsigned,
-                   unsigned, unsigned, void *, void **, void **) {
-  return 1;
+int cuModuleGetFunction(void **function, void *, const char *name) {
+  static int token;
+  if (std::string(name) == "missing")
+    return 500; // CUDA_ERROR_NOT_FOUND
+  functionName = name;
+  *function = &token;
+  return 0;
+}
+int cuLaunchKernel(void *, unsigned gx, unsigned gy, unsigned gz, unsigned bx,
+                   unsigned by, unsigned bz, unsigned, void *, void **params,
+                   void **) {
+  unsigned dims[6] = {gx, gy, gz, bx, by, bz};
+  for (int i = 0; i < 6; ++i)
+    lastDims[i] = dims[i];
+  lastParams.clear();
+  for (int i = 0; i < expectedParams; ++i)
+    lastParams.push_back(*static_cast<std::uint64_t *>(params[i]));
+  return 0;
 }
 }
