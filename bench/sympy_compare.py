@@ -1,18 +1,22 @@
 #!/usr/bin/env python3
-"""Symbolic differentiation: yasps against SymPy on stable Neo-Hookean.
+"""Symbolic differentiation: yasps against SymPy on every benchmark energy.
 
-For the stable Neo-Hookean energy of a tet in its 12 vertex coordinates
-(and in the 9 entries of F), prints the time each system takes to derive the
-gradient and Hessian symbolically, and the multiplications and additions of
-the resulting code: SymPy's after its `cse`, yasps' Hessian kernel after
-canonicalisation and CSE (`yasps-count-ops`). The paper reports 500 ms for
-yasps and 11 s for SymPy, and 4x SymPy's multiplies for its own code.
+For each energy of bench/energy_cases.py (inertia with gravity, mass-spring,
+stable Neo-Hookean on positions and on F, Baraff-Witkin cloth, dihedral
+bending, the IPC barrier on point-point, point-edge, point-triangle and
+edge-edge distances, ABD orthogonality, a pendulum in angles), prints the
+time each system takes to derive the gradient and Hessian symbolically, and
+the multiplications and additions of the resulting code: SymPy's after its
+`cse`, yasps' Hessian kernel after canonicalisation and CSE
+(`yasps-count-ops`). The paper reports 500 ms for yasps and 11 s for SymPy
+on stable Neo-Hookean, and 4x SymPy's multiplies for its own code.
 
-Then, on positions, the run time of the code: SymPy's CSE'd gradient and
-Hessian printed as C (`ccode`, a loop over instances in the generated file),
-compiled with `gcc -O3 -march=native`, loaded with ctypes and called once
-for N random tets, against yasps' gradient and Hessian kernels on the same
-tets, one thread, after checking that both agree. Needs gcc.
+Then the run time of the code: SymPy's CSE'd gradient and Hessian printed
+as C (`ccode`, a loop over instances in the generated file), compiled with
+`gcc -O3 -march=native`, loaded with ctypes and called once for N random
+instances, against yasps' gradient and Hessian kernels on the same
+instances, one thread, after checking that both agree. SymPy sees the
+barrier's active branch only (every sampled pair is on it). Needs gcc.
 
     python3 bench/sympy_compare.py [--count 20000] [--repeat 5]
 """
@@ -22,12 +26,13 @@ from __future__ import annotations
 import argparse
 import ctypes
 import os
+import re
 import subprocess
 import sys
 import tempfile
 import time
 from pathlib import Path
-from typing import Callable, List, Optional, Sequence, Tuple
+from typing import Callable, Dict, List, Sequence, Tuple
 
 os.environ.setdefault("YASPS_CACHE_DIR", tempfile.mkdtemp(prefix="yasps-bench-"))
 HERE = Path(__file__).resolve().parent
@@ -36,32 +41,25 @@ sys.path.insert(0, str(HERE.parent / "python"))
 import numpy as np  # noqa: E402
 import sympy as sp  # noqa: E402
 
-import yasps  # noqa: E402
+from energy_cases import CASES, Case, SympyOps, YaspsEnergy, check_agrees  # noqa: E402
 from timing import median  # noqa: E402
-from yasps import compiler, energies as E  # noqa: E402
+from yasps import compiler  # noqa: E402
 from yasps.emit import emit_scene  # noqa: E402
-from yasps.evaluate import _buffer, _compile, DIFFERENTIATION_PIPELINE  # noqa: E402
-from yasps.values import from_column_major  # noqa: E402
-
-MU, LAM = 1.0, 10.0
-
-
-def sympy_snh(F):
-    ic = sum(F[i, j] ** 2 for i in range(3) for j in range(3))
-    J = F.det()
-    alpha = 1 + sp.Rational(3, 4) * MU / LAM
-    return MU / 2 * (ic - 3) - MU / 2 * sp.log(ic + 1) + LAM / 2 * (J - alpha) ** 2
-
+from yasps.evaluate import DIFFERENTIATION_PIPELINE  # noqa: E402
 
 #: SymPy's CSE result: (temporary, expression) pairs, then the gradient's
 #: and the row-major Hessian's expressions in those temporaries.
 Cse = Tuple[List[Tuple[sp.Symbol, sp.Expr]], List[sp.Expr]]
+#: Named C input arrays and the symbols of one instance's entries.
+Inputs = List[Tuple[str, Sequence[sp.Symbol]]]
 
 
 def sympy_derivatives(energy: sp.Expr, variables: Sequence[sp.Symbol]
                       ) -> Tuple[float, Cse]:
     """SymPy's gradient and full Hessian of ``energy`` after ``cse`` (its
-    temporaries named t0, t1, ...), and the seconds this took."""
+    temporaries named t0, t1, ...), and the seconds this took, starting from
+    an empty SymPy cache."""
+    sp.core.cache.clear_cache()
     t0 = time.perf_counter()
     grad = [sp.diff(energy, v) for v in variables]
     hess = [sp.diff(g, v) for g in grad for v in variables]
@@ -74,76 +72,40 @@ def sympy_counts(cse: Cse) -> Tuple[int, int]:
     replacements, reduced = cse
     ops = sum(sp.count_ops(e, visual=True).subs(sp.Symbol("NEG"), 0)
               for e in [r for _, r in replacements] + reduced)
-    counts = {str(k): int(v) for k, v in ops.as_coefficients_dict().items()}
+    counts = {str(k): int(v) for k, v in sp.sympify(ops).as_coefficients_dict().items()}
     mul = counts.get("MUL", 0) + counts.get("POW", 0)
     add = counts.get("ADD", 0) + counts.get("SUB", 0)
     return mul, add
 
 
-def yasps_counts(scene_builder):
-    s, attr = scene_builder()
-    owner = attr.owner
-    base = "::".join("@" + n for n in owner.path + [attr.name])
-    ir = emit_scene(s)
+def yasps_counts(energy: YaspsEnergy) -> Tuple[float, float, int, int]:
+    """yasps' symbolic differentiation time (with canonicalisation and
+    CSE), the time to compile the Hessian kernel from scratch (no cache),
+    and that kernel's multiplications and additions."""
+    ir = emit_scene(energy.scene)
     native = compiler._module()
     t0 = time.perf_counter()
     compiler.run_pipeline(ir, DIFFERENTIATION_PIPELINE + ",canonicalize,cse")
     symbolic = time.perf_counter() - t0
     t0 = time.perf_counter()
-    library = native.compile_cpu(ir, [base + "__hess"], "", 3, "b",
+    library = native.compile_cpu(ir, [energy.path("hess")], "", 3, "b",
                                  DIFFERENTIATION_PIPELINE)
     total = time.perf_counter() - t0
-    counts = library.op_counts(base + "__hess")
+    counts = library.op_counts(energy.path("hess"))
     return symbolic, total, counts["mul"], counts["add"]
 
 
-def random_tets(count: int, seed: int = 0) -> Tuple[np.ndarray, np.ndarray]:
-    """Corner positions (count, 4, 3) and rest-shape inverses Dm^-1
-    (count, 3, 3) of random non-degenerate tets, drawn as in
-    bench/derivatives.py."""
-    rng = np.random.default_rng(seed)
-    base = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]], float)
-    rest = base[None] + rng.normal(scale=0.05, size=(count, 4, 3))
-    cur = rest @ (np.eye(3) + rng.normal(scale=0.2, size=(count, 3, 3)))
-    dm_inv = np.linalg.inv(np.stack([rest[:, k] - rest[:, 0] for k in (1, 2, 3)], axis=2))
-    return cur, dm_inv
+def sympy_inputs(case: Case) -> Inputs:
+    """Symbols for one instance of ``case``: the parameters ``p`` first,
+    then the per-instance constants ``c0``, ``c1``, ..."""
+    arrays = case.instances(1)
+    names = ["p"] + [f"c{j}" for j in range(len(arrays) - 1)]
+    return [(name, sp.symbols(f"{name}{'' if name == 'p' else '_'}0:{a.shape[1]}"))
+            for name, a in zip(names, arrays)]
 
 
-def snh_on_positions(corners: Optional[np.ndarray] = None,
-                     dm_inv: Optional[np.ndarray] = None):
-    """Stable Neo-Hookean of tets in their vertex positions: one tet without
-    values, or one per entry of ``corners`` (N, 4, 3) with ``dm_inv``."""
-    count = 1 if corners is None else len(corners)
-    s = yasps.scene("snh")
-    m = s.addMesh("m")
-    v = m.addPrimitive("v", numInstances=4 * count)
-    t = m.addPrimitive("t", numInstances=count)
-    x = v.addAttribute("x", rows=3)
-    conn = t.addConnectivity("t2v", v, np.arange(4 * count).reshape(count, 4), 4)
-    corners_attr = t.addAttribute("c", through=conn, source=x)
-    inv = t.addConstant("inv", rows=3, cols=3)
-    if corners is not None:
-        x.updateValue(corners.reshape(-1, 3))
-        inv.updateValue(dm_inv)
-    attr = t.addAttribute("e", computed_attribute=E.stable_neo_hookean(
-        E.deformation_gradient(corners_attr, inv), MU, LAM, 1.0))
-    s.addEnergy(attr)
-    s.addMinimizeTarget([x])
-    return s, attr
-
-
-def snh_on_F():
-    s = yasps.scene("snhF")
-    t = s.addMesh("m").addPrimitive("t", numInstances=1)
-    F = t.addAttribute("F", rows=3, cols=3)
-    attr = t.addAttribute("e", computed_attribute=E.stable_neo_hookean(F, MU, LAM, 1.0))
-    s.addEnergy(attr)
-    s.addMinimizeTarget([F])
-    return s, attr
-
-
-def c_source(function: str, inputs: Sequence[Tuple[str, Sequence[sp.Symbol]]],
-             cse: Cse, outputs: Sequence[Tuple[str, int]]) -> str:
+def c_source(function: str, inputs: Inputs, cse: Cse,
+             outputs: Sequence[Tuple[str, int]]) -> str:
     """C source of ``void function(long n, const double *in..., double
     *out...)`` that evaluates a CSE result for n instances: input array
     ``name`` holds len(symbols) values per instance, output array ``name``
@@ -166,105 +128,78 @@ def c_source(function: str, inputs: Sequence[Tuple[str, Sequence[sp.Symbol]]],
     return "\n".join(lines + ["  }", "}", ""])
 
 
-def compile_c(source: str, directory: str) -> ctypes.CDLL:
+def compile_c(source: str, path: Path) -> ctypes.CDLL:
     """Compiles C source with ``gcc -O3 -march=native`` into a shared object
-    in ``directory`` and loads it."""
-    path = Path(directory) / "sympy_snh.c"
+    next to ``path`` (the source file) and loads it."""
     path.write_text(source)
     subprocess.run(["gcc", "-O3", "-march=native", "-shared", "-fPIC", "-o",
                     str(path.with_suffix(".so")), str(path), "-lm"], check=True)
     return ctypes.CDLL(str(path.with_suffix(".so")))
 
 
-def yasps_kernels(corners: np.ndarray, dm_inv: np.ndarray
-                  ) -> Tuple[float, Callable[[], None], np.ndarray, np.ndarray]:
-    """yasps' gradient and Hessian kernels of stable Neo-Hookean on these
-    tets: the seconds to compile them, a call that runs both on one thread,
-    and their output buffers (flat, column-major per instance)."""
-    s, attr = snh_on_positions(corners, dm_inv)
-    base = "::".join("@" + n for n in attr.owner.path + [attr.name])
-    paths = [base + "__grad", base + "__hess"]
+def compare_code(case: Case, inputs: Inputs, cse: Cse, count: int, repeat: int,
+                 directory: str) -> Tuple[float, float, float]:
+    """Times SymPy's CSE'd gradient + Hessian of ``case``, compiled as C,
+    against yasps' gradient and Hessian kernels on ``count`` instances,
+    after checking that they agree: gcc's seconds and both times for all
+    instances."""
+    arrays = [np.ascontiguousarray(a) for a in case.instances(count)]
+    n = arrays[0].shape[1]
+    g, h = np.empty((count, n)), np.empty((count, n * n))
     t0 = time.perf_counter()
-    library, _ = _compile(emit_scene(s), paths, s, DIFFERENTIATION_PIPELINE)
-    seconds = time.perf_counter() - t0
-    n = len(corners)
-    outs = [np.empty(n * 12), np.empty(n * 144)]
-    buffers = [[_buffer(s, kind, p, out) for kind, p in dict(library.kernels)[path]]
-               for path, out in zip(paths, outs)]
+    lib = compile_c(c_source("grad_hess", inputs, cse, [("g", n), ("h", n * n)]),
+                    Path(directory) / (re.sub(r"\W+", "_", case.name) + ".c"))
+    c_compile = time.perf_counter() - t0
+    array = np.ctypeslib.ndpointer(np.float64, flags="C_CONTIGUOUS")
+    lib.grad_hess.argtypes = [ctypes.c_long] + [array] * (len(arrays) + 2)
+    lib.grad_hess.restype = None
+    sympy_run: Callable[[], None] = lambda: lib.grad_hess(count, *arrays, g, h)  # noqa: E731
 
-    def run() -> None:
-        for path, b in zip(paths, buffers):
-            library.launch(path, n, b, 1)
-    return seconds, run, outs[0], outs[1]
+    energy = case.build(arrays)
+    _, _, (grad, hess) = energy.kernels(["grad", "hess"])
 
-
-def compare_code(cse: Cse, xs: Sequence[sp.Symbol], ds: Sequence[sp.Symbol],
-                 count: int, repeat: int) -> None:
-    """Times SymPy's CSE'd gradient + Hessian of stable Neo-Hookean on
-    positions, compiled as C, against yasps' kernels on ``count`` tets, after
-    checking that they agree, and prints the table."""
-    corners, dm_inv = random_tets(count)
-    x = np.ascontiguousarray(corners.reshape(count, 12))
-    d = np.ascontiguousarray(dm_inv.reshape(count, 9))  # d0..d8 row-major
-    g, h = np.empty((count, 12)), np.empty((count, 144))
-    with tempfile.TemporaryDirectory(prefix="yasps-sympy-") as tmp:
-        t0 = time.perf_counter()
-        lib = compile_c(c_source("snh_grad_hess", [("x", xs), ("d", ds)], cse,
-                                 [("g", 12), ("h", 144)]), tmp)
-        c_compile = time.perf_counter() - t0
-        array = np.ctypeslib.ndpointer(np.float64, flags="C_CONTIGUOUS")
-        lib.snh_grad_hess.argtypes = [ctypes.c_long] + [array] * 4
-        lib.snh_grad_hess.restype = None
-        sympy_run = lambda: lib.snh_grad_hess(count, x, d, g, h)  # noqa: E731
-        y_compile, yasps_run, y_g, y_h = yasps_kernels(corners, dm_inv)
-        sympy_run()
-        yasps_run()
-        np.testing.assert_allclose(g, y_g.reshape(count, 12), rtol=1e-8,
-                                   atol=1e-8 * np.abs(g).max())
-        np.testing.assert_allclose(h.reshape(count, 12, 12),
-                                   from_column_major(y_h, 12, 12), rtol=1e-8,
-                                   atol=1e-8 * np.abs(h).max())
-        sympy_time = median(sympy_run, repeat)
-        yasps_time = median(yasps_run, repeat)
-    per = 1e9 / count
-    print()
-    print(f"gradient + Hessian of stable Neo-Hookean (x, 12): {count} tets, "
-          f"one thread, median of {repeat}")
-    print(f"{'code':34s}{'compile':>10s}{'per instance':>15s}{'vs yasps':>10s}")
-    print(f"{'SymPy cse, ccode, gcc -O3':34s}{c_compile:9.2f}s"
-          f"{sympy_time * per:13.0f}ns{sympy_time / yasps_time:9.2f}x")
-    print(f"{'yasps __grad + __hess kernels':34s}{y_compile:9.2f}s"
-          f"{yasps_time * per:13.0f}ns{1.0:9.2f}x")
+    def yasps_run() -> None:
+        grad()
+        hess()
+    sympy_run()
+    yasps_run()  # both warm: output pages touched, code loaded
+    check_agrees(g, h, energy.derivatives(), rtol=1e-8)
+    return c_compile, median(sympy_run, repeat), median(yasps_run, repeat)
 
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--count", type=int, default=20000,
-                        help="tets for the run-time comparison")
+                        help="instances for the run-time comparison")
     parser.add_argument("--repeat", type=int, default=5)
     args = parser.parse_args()
-    xs = sp.symbols("x0:12")
-    ds = sp.symbols("d0:9")
-    dm = sp.Matrix(3, 3, ds)
-    P = sp.Matrix(4, 3, xs)
-    Ds = sp.Matrix.hstack(*[(P.row(k) - P.row(0)).T for k in (1, 2, 3)])
-    fs = sp.symbols("f0:9")
-    cases = [
-        ("stable Neo-Hookean (x, 12)", sympy_snh(Ds * dm), xs, snh_on_positions),
-        ("stable Neo-Hookean (F, 9)", sympy_snh(sp.Matrix(3, 3, fs)), fs, snh_on_F),
-    ]
-    print(f"{'energy':30s}{'SymPy diff+cse':>16s}{'yasps diff':>12s}"
-          f"{'yasps +codegen':>16s}{'SymPy mul/add':>15s}{'yasps mul/add':>15s}")
-    results = {}
-    for name, energy, variables, builder in cases:
-        s_time, results[name] = sympy_derivatives(energy, variables)
-        s_mul, s_add = sympy_counts(results[name])
-        y_sym, y_total, y_mul, y_add = yasps_counts(builder)
-        print(f"{name:30s}{s_time:15.2f}s{y_sym:11.2f}s{y_total:15.2f}s"
-              f"{s_mul:8d}/{s_add:<6d}{y_mul:8d}/{y_add:<6d}")
+    ops = SympyOps()
+    print(f"run times: {args.count} instances, one thread, median of "
+          f"{args.repeat}; per instance")
+    print(f"{'energy':34s}{'SymPy diff+cse':>15s}{'yasps diff':>11s}"
+          f"{'+codegen':>9s}{'SymPy mul/add':>15s}{'yasps mul/add':>15s}"
+          f"{'gcc':>7s}{'SymPy C g+H':>13s}{'yasps g+H':>11s}{'SymPy/yasps':>13s}")
+    derived: Dict[object, Tuple[float, Cse]] = {}
+    with tempfile.TemporaryDirectory(prefix="yasps-sympy-") as tmp:
+        for case in CASES:
+            inputs = sympy_inputs(case)
+            # Formulations of one formula (SNH on x and x via F) share
+            # SymPy's result.
+            if case.formula not in derived:
+                energy = case.formula(ops, *[symbols for _, symbols in inputs])
+                derived[case.formula] = sympy_derivatives(energy, inputs[0][1])
+            s_time, cse = derived[case.formula]
+            s_mul, s_add = sympy_counts(cse)
+            y_sym, y_total, y_mul, y_add = yasps_counts(case.build(case.instances(1)))
+            gcc, sympy_time, yasps_time = compare_code(
+                case, inputs, cse, args.count, args.repeat, tmp)
+            per = 1e9 / args.count
+            print(f"{case.name:34s}{s_time:14.2f}s{y_sym:10.2f}s{y_total:8.2f}s"
+                  f"{s_mul:9d}/{s_add:<5d}{y_mul:9d}/{y_add:<5d}{gcc:6.2f}s"
+                  f"{sympy_time * per:11.0f}ns{yasps_time * per:9.0f}ns"
+                  f"{sympy_time / yasps_time:12.2f}x", flush=True)
     print("(yasps counts are of the Hessian kernel, which also computes the "
           "energy; SymPy's cover the gradient and Hessian expressions)")
-    compare_code(results[cases[0][0]], xs, ds, args.count, args.repeat)
 
 
 if __name__ == "__main__":
