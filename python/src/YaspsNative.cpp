@@ -7,6 +7,8 @@
 //
 //===----------------------------------------------------------------------===//
 
+#include "GpuRuntimeBindings.h"
+
 #include "mlir/AsmParser/AsmParser.h"
 #include "mlir/IR/Diagnostics.h"
 #include "mlir/IR/MLIRContext.h"
@@ -556,6 +558,7 @@ NB_MODULE(_yasps_native, m) {
   m.doc() = "Bindings over the yasps MLIR compiler (parse, verify, passes).";
 
   nb::exception<IRError>(m, "IRError", PyExc_ValueError);
+  ::yasps::python::bindGpuRuntime(m);
 
   m.def(
       "verify",

@@ -18,16 +18,17 @@ See docs/python.md for the guide and the API reference.
 from . import config
 from .attribute import (Attribute, concat, constant, hstack, identity, select,
                         vstack, zeros)
+from .backend import BackendError, backend, gpu_status
 from .errors import (IRError, LineageError, SceneError, ShapeError,
                      ValueUpdateError, YaspsError)
 from .minimize import SolverError
 from .scene import Connectivity, Entity, Mesh, Primitive, PrimitiveUnion, Scene, scene
 
 __all__ = [
-    "Attribute", "Connectivity", "config", "Entity", "IRError", "LineageError", "Mesh",
+    "Attribute", "BackendError", "backend", "Connectivity", "config", "Entity", "IRError", "LineageError", "Mesh",
     "Primitive", "PrimitiveUnion", "Scene", "SceneError", "ShapeError",
     "SolverError",
-    "ValueUpdateError", "YaspsError", "concat", "constant", "hstack",
+    "ValueUpdateError", "YaspsError", "concat", "constant", "gpu_status", "hstack",
     "identity", "scene", "select", "vstack", "zeros",
 ]
 

@@ -9,6 +9,8 @@ Shapes and owners are known eagerly: a mistake raises where it is made.
 
 from __future__ import annotations
 
+import itertools
+
 import numbers
 import os
 import sys
@@ -49,6 +51,10 @@ def _is_scalar(value: Any) -> bool:
     return isinstance(value, numbers.Real) and not isinstance(value, bool)
 
 
+
+#: Versions of stored values: each updateValue gets a new one.
+_value_versions = itertools.count(1)
+
 class Attribute:
     """A symbolic per-instance matrix attribute.
 
@@ -71,6 +77,8 @@ class Attribute:
         self._params = params or {}
         self._name = name
         self._values: Optional[np.ndarray] = None  # flat, column-major
+        # Changes with every new value, so that copies (on a GPU) notice.
+        self._version = 0
         self._loc = _user_location()
 
     # ------------------------------------------------------------------ info
@@ -150,6 +158,7 @@ class Attribute:
         count = self._owner.numInstances
         self._values = _values.to_column_major(
             values, count, self._rows, self._cols, self.describe())
+        self._version = next(_value_versions)
         return self
 
     @property
@@ -175,6 +184,7 @@ class Attribute:
 
     def _invalidate_values(self) -> None:
         self._values = None
+        self._version = next(_value_versions)
 
     # ------------------------------------------------------------ operations
 

@@ -7,6 +7,10 @@
 - ``num_threads``: threads used to evaluate kernels on the CPU; 0 uses every
   core (or ``YASPS_NUM_THREADS`` if set).
 - ``opt_level``: LLVM optimisation level of CPU kernels (0-3).
+- ``backend``: ``"auto"`` (the GPU when one is usable, else the CPU),
+  ``"cpu"`` or ``"gpu"``; from the environment variable ``YASPS_BACKEND``,
+  else ``"auto"``. ``yasps.backend()`` names the active one (see
+  ``yasps.backend`` module).
 - ``projection_lanes``: CPU kernels with a PSD projection eigen-decompose
   this many instances' matrices at once, one per SIMD lane (the QL
   iteration is a chain of dependent square roots and divisions, and lanes
@@ -42,6 +46,7 @@ def _default_cache_dir() -> Optional[str]:
 cache_dir: Optional[str] = _default_cache_dir()
 num_threads: int = 0
 opt_level: int = 3
+backend: str = os.environ.get("YASPS_BACKEND", "auto").strip().lower() or "auto"
 projection_lanes: int = 0
 separate_reduced_hessians: bool = False
 compress_local_hessians: bool = True

@@ -13,6 +13,7 @@ from typing import Dict, List, Tuple
 import numpy as np
 
 from . import compiler, config
+from .backend import backend
 from .attribute import Attribute
 from .emit import emit_scene
 from .errors import SceneError, ValueUpdateError
@@ -126,13 +127,18 @@ def compute(attr: Attribute, threads: int = None) -> ComputedValue:
     else:
         path = "::".join("@" + n for n in owner.path + [attr.name])
     ir = emit_scene(scene, locations=True, extra=extra)
+    count = owner.numInstances
+    if backend() == "gpu":
+        out, stats = _compute_on_gpu(scene, ir, path, count,
+                                     count * target.rows * target.cols)
+        return ComputedValue(attr, from_column_major(
+            out, target.rows, target.cols, copy=False), stats)
     native = compiler._module()
     try:
         library, stats = _compile(ir, [path], scene)
     except native.IRError as err:
         raise compiler.IRError(str(err)) from None
     arguments = dict(library.kernels)[path]
-    count = owner.numInstances
     out = np.empty(count * target.rows * target.cols, dtype=np.float64)
     buffers = [_buffer(scene, kind, p, out) for kind, p in arguments]
     library.launch(path, count, buffers,
@@ -140,6 +146,34 @@ def compute(attr: Attribute, threads: int = None) -> ComputedValue:
     # A view of the fresh output buffer: no copy, nobody else holds it.
     return ComputedValue(attr, from_column_major(out, target.rows, target.cols,
                                                  copy=False), stats)
+
+
+def _compute_on_gpu(scene: Scene, ir: str, path: str, count: int,
+                    size: int) -> Tuple[np.ndarray, dict]:
+    """Runs the kernel of ``path`` on ``count`` instances on the GPU
+    session's device and copies its ``size`` output values back."""
+    from .gpu_runtime import session
+
+    gpu = session()
+    kernels = gpu.kernels(ir, path, scene.name)
+    kernel = kernels.kernel(path)
+    native = compiler._module()
+    out = native.gpu_allocate(gpu.device, size)
+    buffers = []
+    uploads = len(gpu.uploads)
+    for kind, p in kernel.arguments:
+        if kind == "out":
+            buffers.append(out)
+            continue
+        source = _resolve(scene, p) if kind in ("attr", "conn") else None
+        buffers.append(gpu.copy_of(kind, p, source,
+                                   _buffer(scene, kind, p, None)))
+    gpu.launch(kernels, path, count, buffers)
+    host = np.empty(size, dtype=np.float64)
+    out.download(host)
+    stats = dict(kernels.stats, backend="gpu", device=gpu.chip,
+                 uploaded=gpu.uploads[uploads:])
+    return host, stats
 
 
 #: Passes that turn energies into their local derivatives (docs/passes.md).

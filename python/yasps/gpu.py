@@ -8,8 +8,8 @@ toolkit's ``ptxas`` but no GPU or driver::
     kernels = yasps.gpu.compile_scene(scene)
     cubin = kernels.binaries[("sm_90", "cubin")]
 
-Launching the kernels on a device (the CUDA runtime backend) is not part of
-yasps yet: see docs/gpu.md.
+``yasps.gpu_runtime`` loads and launches them on a device (the GPU backend of
+``Attribute.compute()``, see ``yasps.backend``).
 """
 
 from __future__ import annotations
@@ -88,13 +88,20 @@ def compile_scene(scene, attributes: Optional[Sequence[str]] = None,
     Raises ``compiler.IRError`` if lowering or ptxas fails."""
     paths = list(attributes) if attributes is not None \
         else scene_kernel_paths(scene)
-    native = compiler._module()
-    ir = emit_scene(scene, locations=True)
     pipeline = DIFFERENTIATION_PIPELINE if scene.minimizeTargets else ""
+    return compile_ir(emit_scene(scene, locations=True), paths, scene.name,
+                      pipeline, chips, keep_ptx)
+
+
+def compile_ir(ir: str, paths: Sequence[str], name: str, pipeline: str = "",
+               chips: Sequence[str] = DEFAULT_CHIPS,
+               keep_ptx: bool = True) -> GpuKernels:
+    """``compile_scene`` for IR that is already emitted (``name`` labels
+    diagnostics)."""
+    native = compiler._module()
     try:
-        library = native.compile_gpu(ir, paths, list(chips), keep_ptx,
-                                     config.cache_dir or "", scene.name,
-                                     pipeline)
+        library = native.compile_gpu(ir, list(paths), list(chips), keep_ptx,
+                                     config.cache_dir or "", name, pipeline)
     except native.IRError as err:
         raise compiler.IRError(str(err)) from None
     kernels = [GpuKernel(k["attribute"], k["name"], k["threads_per_block"],

@@ -1,0 +1,138 @@
+"""The GPU backend: backend selection, the driver's status, device copies
+that are uploaded only when their values change, and (on a machine with a
+usable GPU) compute() on the GPU against the CPU.
+
+Without a GPU the host side still runs against the runtime's stand-in
+driver library (runtime/test/FakeCuda.cpp, which records launches instead of
+running them), in a subprocess so that this process keeps its real driver
+status."""
+
+import os
+import shutil
+import subprocess
+import sys
+import textwrap
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from conftest import REPO, running_example
+
+import yasps
+
+STATUS = yasps.gpu_status()
+needs_gpu = pytest.mark.skipif(
+    not STATUS.usable, reason=f"no usable GPU: {STATUS.reason}")
+no_gpu = pytest.mark.skipif(
+    STATUS.usable, reason="this machine has a usable GPU")
+HAS_PTXAS = shutil.which("ptxas", path="/usr/local/cuda/bin:/usr/bin") \
+    is not None
+FAKE_DRIVER = Path(os.environ.get("YASPS_BUILD_DIR", REPO / "build")) / \
+    "runtime" / "test" / "libYaspsFakeCuda.so"
+
+
+def run_python(script: str, **env: str) -> str:
+    """Runs ``script`` in a fresh interpreter with ``env`` added; returns its
+    stdout (and fails with its stderr if it fails)."""
+    result = subprocess.run(
+        [sys.executable, "-c", textwrap.dedent(script)],
+        env=dict(os.environ, PYTHONPATH=str(REPO / "python"), **env),
+        capture_output=True, text=True)
+    assert result.returncode == 0, result.stderr
+    return result.stdout
+
+
+@no_gpu
+def test_without_a_gpu_the_cpu_is_used_and_gpu_says_why(monkeypatch):
+    assert yasps.backend() == "cpu"
+    assert STATUS.reason and STATUS.devices == ()
+    monkeypatch.setattr(yasps.config, "backend", "gpu")
+    with pytest.raises(yasps.BackendError, match="cannot be used: .*libcuda"):
+        yasps.backend()
+    monkeypatch.setattr(yasps.config, "backend", "cpu")
+    assert yasps.backend() == "cpu"
+    monkeypatch.setattr(yasps.config, "backend", "tpu")
+    with pytest.raises(yasps.BackendError, match="unknown backend 'tpu'"):
+        yasps.backend()
+
+
+def test_environment_variable_chooses_the_backend():
+    out = run_python("""
+        import yasps
+        print(yasps.config.backend, yasps.backend())
+    """, YASPS_BACKEND="CPU")
+    assert out.split() == ["cpu", "cpu"]
+
+
+@pytest.mark.skipif(not FAKE_DRIVER.exists(),
+                    reason=f"the stand-in driver {FAKE_DRIVER} is not built")
+@pytest.mark.skipif(not HAS_PTXAS, reason="the CUDA toolkit (ptxas) is not "
+                    "installed")
+def test_device_copies_are_uploaded_only_when_values_change():
+    out = run_python("""
+        import numpy as np, yasps
+        assert yasps.backend() == "gpu", yasps.gpu_status()
+        assert yasps.gpu_status().devices == (("Fake GPU", "sm_90", 8 << 30),)
+        s = yasps.scene("g")
+        m = s.addMesh("m")
+        v = m.addPrimitive("v", numInstances=4)
+        e = m.addPrimitive("e", numInstances=2)
+        x = v.addAttribute("x", rows=3, cols=1)
+        x.updateValue(np.arange(12.0).reshape(4, 3))
+        conn = e.addConnectivity("e2v", v, [[0, 1], [2, 3]], 2)
+        ends = e.addAttribute("ends", through=conn, source=x)
+        length = e.addAttribute("length",
+                                computed_attribute=(ends.row(1) - ends.row(0)).norm())
+        def uploads():
+            r = length.compute()
+            assert r.stats["backend"] == "gpu" and r.stats["device"] == "sm_90"
+            assert r.value.shape == (2, 1, 1)
+            return sorted(k for k, _ in r.stats["uploaded"])
+        print(uploads())                # first use: both
+        print(uploads())                # unchanged: nothing
+        x.updateValue(np.ones((4, 3)))  # new values: x only
+        print(uploads())
+        conn.updateConnectivity([[1, 0], [3, 2]])
+        print(uploads())
+        print(uploads())
+    """, YASPS_CUDA_LIBRARY=str(FAKE_DRIVER))
+    assert out.splitlines() == ["['attr', 'conn']", "[]", "['attr']",
+                                "['conn']", "[]"]
+
+
+# --- on a GPU: the same values as the CPU ------------------------------------
+
+def compute_on(backend: str, attribute, monkeypatch) -> np.ndarray:
+    monkeypatch.setattr(yasps.config, "backend", backend)
+    result = attribute.compute()
+    assert result.stats.get("backend", "cpu") == backend
+    return result.value
+
+
+def assert_same_as_cpu(attribute, monkeypatch):
+    cpu = compute_on("cpu", attribute, monkeypatch)
+    gpu = compute_on("gpu", attribute, monkeypatch)
+    scale = max(np.abs(cpu).max(), 1e-300)
+    assert np.abs(gpu - cpu).max() <= 1e-10 * scale
+
+
+@needs_gpu
+def test_running_example_attributes_match_the_cpu(monkeypatch):
+    s = running_example()
+    pos = s.bunnies.vertices["position"]
+    assert_same_as_cpu(pos, monkeypatch)
+    assert_same_as_cpu(s.bunny_affine.tets["positions"], monkeypatch)
+    assert_same_as_cpu((pos.dot(pos) + 1.0).log(), monkeypatch)
+
+
+@needs_gpu
+def test_projection_matches_the_cpu(monkeypatch):
+    rng = np.random.default_rng(3)
+    s = yasps.scene("proj")
+    p = s.addMesh("m").addPrimitive("p", numInstances=1000)
+    h = p.addAttribute("h", rows=12, cols=12)
+    M = rng.normal(size=(1000, 12, 12))
+    h.updateValue(M + np.transpose(M, (0, 2, 1)))
+    for method in ("clamp", "abs"):
+        assert_same_as_cpu(h.project(method), monkeypatch)
