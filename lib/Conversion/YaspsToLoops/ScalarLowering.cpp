@@ -246,6 +246,19 @@ mlir::yasps::lowerToScalars(OpBuilder &b, Operation *op,
       })
       .Case([&](PowOp) {
         return entrywise(type, lhs(), rhs(), [&](Value x, Value y) -> Value {
+          // x^-1 and x^2 are what pow gives for them (a correctly rounded
+          // division and product; LLVM makes the same rewrite), spelled
+          // out so that they are counted and never become a libm call.
+          FloatAttr exponent;
+          if (matchPattern(y, m_Constant(&exponent))) {
+            double e = exponent.getValueAsDouble();
+            if (e == -1.0)
+              return s.div(s.constant(1.0), x);
+            if (e == 2.0)
+              return s.mul(x, x);
+            if (e == 1.0)
+              return x;
+          }
           return math::PowFOp::create(b, loc, x, y);
         });
       })

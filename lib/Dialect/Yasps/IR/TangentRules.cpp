@@ -10,6 +10,7 @@
 #include "yasps/Dialect/Yasps/IR/Yasps.h"
 
 #include "mlir/IR/Builders.h"
+#include "mlir/IR/Matchers.h"
 
 using namespace mlir;
 using namespace mlir::yasps;
@@ -91,11 +92,24 @@ public:
   Location loc;
 };
 
-/// Product rule for a bilinear op f(a, b): f(da, b) + f(a, db).
+/// Product rule for a bilinear op f(a, b): f(da, b) + f(a, db). For a
+/// symmetric f of one value with itself (a square), 2 f(a, da): the two
+/// terms are equal but computed in different orders, which CSE cannot see,
+/// and energies are full of squares.
 template <typename Fn>
-Value productRule(TangentBuilder &t, Value a, Value b, Value da, Value db,
-                  Fn f) {
+Value productRule(TangentBuilder &t, Value a, Value b, Value da, Value db, Fn f,
+                  bool symmetric = false) {
+  if (symmetric && a == b && da == db)
+    return t.scaleBy(da ? f(a, da) : Value(), 2.0);
   return t.add(da ? f(da, b) : Value(), db ? f(a, db) : Value());
+}
+
+/// The value of a constant whose entries are all equal, if `v` is one.
+std::optional<double> splatValue(Value v) {
+  DenseElementsAttr dense;
+  if (!matchPattern(v, m_Constant(&dense)) || !dense.isSplat())
+    return std::nullopt;
+  return dense.getSplatValue<APFloat>().convertToDouble();
 }
 
 FailureOr<Value> notDifferentiable(Operation *op, StringRef why) {
@@ -209,11 +223,15 @@ TANGENT(SelectOp) {
 // Products.
 TANGENT(ElementwiseMulOp) {
   TangentBuilder t(builder, getLoc());
-  return productRule(t, getLhs(), getRhs(), tangents[0], tangents[1],
-                     [&](Value x, Value y) { return t.emul(x, y); });
+  return productRule(
+      t, getLhs(), getRhs(), tangents[0], tangents[1],
+      [&](Value x, Value y) { return t.emul(x, y); }, /*symmetric=*/true);
 }
 TANGENT(ScaleOp) {
   TangentBuilder t(builder, getLoc());
+  // s * s (both 1x1): 2 s s'.
+  if (getLhs() == getRhs() && tangents[0] == tangents[1])
+    return t.scaleBy(t.scale(getLhs(), tangents[0]), 2.0);
   return t.add(t.scale(tangents[0], getRhs()), t.scale(getLhs(), tangents[1]));
 }
 TANGENT(MatmulOp) {
@@ -223,8 +241,9 @@ TANGENT(MatmulOp) {
 }
 TANGENT(DotOp) {
   TangentBuilder t(builder, getLoc());
-  return productRule(t, getLhs(), getRhs(), tangents[0], tangents[1],
-                     [&](Value x, Value y) { return t.dot(x, y); });
+  return productRule(
+      t, getLhs(), getRhs(), tangents[0], tangents[1],
+      [&](Value x, Value y) { return t.dot(x, y); }, /*symmetric=*/true);
 }
 TANGENT(CrossOp) {
   TangentBuilder t(builder, getLoc());
@@ -233,13 +252,16 @@ TANGENT(CrossOp) {
                        return CrossOp::create(builder, getLoc(), x, y);
                      });
 }
-// (a / s)' = a' / s - (a / s) * (s' / s)
+// (a / s)' = a' r - (a / s) (s' r) with r = 1 / s: one division, shared
+// by every direction (CSE), instead of two per direction.
 TANGENT(DivOp) {
+  if (!tangents[0] && !tangents[1])
+    return Value();
   TangentBuilder t(builder, getLoc());
-  Value first = t.div(tangents[0], getRhs());
-  Value second = tangents[1]
-                     ? t.scale(getResult(), t.div(tangents[1], getRhs()))
-                     : Value();
+  Value r = t.reciprocal(getRhs());
+  Value first = t.scale(tangents[0], r);
+  Value second =
+      tangents[1] ? t.scale(getResult(), t.scale(tangents[1], r)) : Value();
   return t.sub(first, second);
 }
 
@@ -307,12 +329,12 @@ TANGENT(InverseOp) {
   TangentBuilder t(builder, getLoc());
   return t.neg(t.matmul(t.matmul(getResult(), tangents[0]), getResult()));
 }
-// |A|' = <A, A'> / |A|
+// |A|' = <A, A'> (1 / |A|), the reciprocal shared by every direction.
 TANGENT(NormOp) {
   if (!tangents[0])
     return Value();
   TangentBuilder t(builder, getLoc());
-  return t.div(t.dot(getOperand(), tangents[0]), getResult());
+  return t.scale(t.dot(getOperand(), tangents[0]), t.reciprocal(getResult()));
 }
 // (|A|^2)' = 2 <A, A'>
 TANGENT(SquaredNormOp) {
@@ -397,6 +419,10 @@ TANGENT(PowOp) {
   TangentBuilder t(builder, getLoc());
   Value base = getBase(), exponent = getExponent();
   MatrixType expType = TangentBuilder::typeOf(exponent);
+  // (1/x)' = -(1/x)^2 x': a product of the result with itself, not a
+  // pow(x, -2) call (reciprocals come from every division, log and norm).
+  if (splatValue(exponent) == -1.0 && !tangents[1])
+    return t.neg(t.emul(t.emul(getResult(), getResult()), tangents[0]));
   Value first;
   if (tangents[0]) {
     Value lowered = t.sub(exponent, t.constant(expType, 1.0));
