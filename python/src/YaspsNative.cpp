@@ -186,11 +186,11 @@ CpuLibrary compileCpu(const std::string &ir,
                       const std::vector<std::string> &attributes,
                       const std::string &cacheDir, unsigned optLevel,
                       const std::string &bufferName,
-                      const std::string &prePipeline, int64_t projectionLanes) {
+                      const std::string &prePipeline, int64_t lanes) {
   mlir::yasps::CpuCompileOptions options;
   options.cacheDir = cacheDir;
   options.optLevel = optLevel;
-  options.projectionLanes = projectionLanes;
+  options.lanes = lanes;
   CpuLibrary result;
   result.library = compileVerified(ir, bufferName, [&](ModuleOp module) {
     return mlir::yasps::compileCpuKernels(module, attributes, options,
@@ -704,11 +704,11 @@ NB_MODULE(_yasps_native, m) {
   m.def("compile_cpu", &compileCpu, nb::arg("ir"), nb::arg("attributes"),
         nb::arg("cache_dir") = "", nb::arg("opt_level") = 3,
         nb::arg("name") = "<yasps>", nb::arg("pre_pipeline") = "",
-        nb::arg("projection_lanes") = 0,
+        nb::arg("lanes") = 0,
         "Compiles CPU kernels for the attributes (scene-relative paths) of "
         "the IR's scene, reusing in-memory and on-disk caches. "
-        "projection_lanes: instances whose PSD projections run together in "
-        "SIMD lanes (0: the host's vector width in doubles; 1: none).");
+        "lanes: instances evaluated together in SIMD lanes (0: the host's "
+        "vector width in doubles; 1: one at a time).");
   m.def("host_double_lanes", &mlir::yasps::hostDoubleLanes,
         "f64 lanes of the host's widest vector registers");
   nb::class_<PySystem>(m, "GlobalSystem",

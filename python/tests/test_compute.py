@@ -294,7 +294,7 @@ print(r.stats["from_disk"], r.stats["from_memory"])
 def test_projection_matches_numpy_eigh(n, lanes, monkeypatch):
     # One instance at a time, the host's SIMD width, and an odd lane count;
     # 60 instances leave a partial last tile.
-    monkeypatch.setattr(yasps.config, "projection_lanes", lanes)
+    monkeypatch.setattr(yasps.config, "simd_lanes", lanes)
     count = 60
     s = yasps.scene("proj")
     prim = s.addMesh("m").addPrimitive("p", numInstances=count)

@@ -349,3 +349,75 @@ def test_reduced_space_projection_of_mixed_barrier():
         assert np.linalg.eigvalsh(R[i]).min() >= -1e-9 * scale
         assert np.linalg.eigvalsh(R[i] - H[i]).min() >= -1e-9 * scale
         assert np.linalg.matrix_rank(R[i], tol=1e-9 * scale) <= 6
+
+
+def test_simd_lanes_give_the_results_of_scalar_kernels(monkeypatch):
+    """CPU kernels evaluate several instances per vector instruction (their
+    leaves staged per instance, the arithmetic and the projection in lanes,
+    full tiles stored through in-register transposes): on a barrier over a
+    UNION of free and affine vertices (gathers, union decoding, reduced-space
+    projection) and on stable Neo-Hookean (full projection), every output
+    equals that of the scalar kernels, for full and partial tiles and for a
+    lane count that is not a power of two."""
+    count = 37  # four tiles of 8 and a partial one
+    s = yasps.scene("lanes")
+    soft = s.addMesh("soft").addPrimitive("v", numInstances=count)
+    xs = soft.addAttribute("x", rows=3, cols=1)
+    xs.updateValue(rng.normal(scale=0.05, size=(count, 3)))
+    rigid = s.addMesh("rigid")
+    bodies = rigid.addPrimitive("body", numInstances=count)
+    A = bodies.addAttribute("A", rows=3, cols=3)
+    A.updateValue(np.eye(3) + rng.normal(scale=0.1, size=(count, 3, 3)))
+    t = bodies.addAttribute("t", rows=3, cols=1)
+    t.updateValue(rng.normal(scale=0.05, size=(count, 3)))
+    verts = rigid.addPrimitive("v", numInstances=count)
+    verts.addConstant("rest", rows=3).updateValue(
+        rng.normal(scale=0.05, size=(count, 3)))
+    v2b = verts.addConnectivity("v2b", bodies, np.arange(count), 1)
+    jA = verts.addAttribute("A", through=v2b, source=A)
+    jt = verts.addAttribute("t", through=v2b, source=t)
+    verts.addAttribute("x", computed_attribute=jA.resize(3, 3) * verts["rest"]
+                       + jt.resize(3, 1))
+    u = s.addMesh("world").addPrimitiveUnion("v", [soft, verts])
+    u.addAttribute("x")
+    pp = s.world.addPrimitive("pp", numInstances=count, isDynamic=True)
+    ends = rng.integers(0, 2 * count, size=(count, 2))
+    ends[:, 1] = (ends[:, 0] + 1 + ends[:, 1] % (2 * count - 1)) % (2 * count)
+    p2v = pp.addConnectivity("p2v", u, ends, 2)
+    x = pp.addAttribute("x", through=p2v, source=u["x"])
+    d2 = E.point_point_distance2(x.row(0), x.row(1))
+    dhat = float(pp.addAttribute("d2", computed_attribute=d2).compute().value.max()) * 2
+    barrier = pp.addAttribute("barrier", computed_attribute=E.ipc_barrier(d2, dhat, 1e3))
+    s.addEnergy(barrier, dynamic_instances=True)
+    s.addMinimizeTarget([xs, A, t])
+
+    rest = np.concatenate([regular_tets()[0]] * 5)  # 20 tets
+    current = rest * 0.6 + rng.normal(scale=0.05, size=rest.shape)
+    s2 = yasps.scene("tets")
+    m = s2.addMesh("m")
+    v = m.addPrimitive("v", numInstances=4 * len(rest))
+    e = m.addPrimitive("e", numInstances=len(rest))
+    x2 = v.addAttribute("x", rows=3, cols=1)
+    x2.updateValue(current.reshape(-1, 3))
+    corners = e.addAttribute("corners", source=x2, through=e.addConnectivity(
+        "e2v", v, np.arange(4 * len(rest)).reshape(-1, 4), 4))
+    dm = np.stack([rest[:, k] - rest[:, 0] for k in (1, 2, 3)], axis=2)
+    dm_inv = e.addConstant("DmInv", rows=3, cols=3)
+    dm_inv.updateValue(np.linalg.inv(dm))
+    snh = e.addAttribute("snh", computed_attribute=E.stable_neo_hookean(
+        E.deformation_gradient(corners, dm_inv), 1.0, 20.0, 1.0))
+    s2.addEnergy(snh)
+    s2.addMinimizeTarget([x2])
+
+    for scene, energy in [(s, barrier), (s2, snh)]:
+        results = {}
+        for lanes in (1, 0, 3):
+            monkeypatch.setattr(yasps.config, "simd_lanes", lanes)
+            d = scene.energyDerivatives(energy, threads=1)
+            results[lanes] = (d.value, d.gradient, d.hessian,
+                              d.projectedHessian, d.dofs())
+        for lanes in (0, 3):
+            for want, got in zip(results[1], results[lanes]):
+                scale = max(np.abs(want).max(), 1.0)
+                np.testing.assert_allclose(got, want, rtol=0,
+                                           atol=1e-12 * scale)

@@ -11,11 +11,11 @@
   ``"cpu"`` or ``"gpu"``; from the environment variable ``YASPS_BACKEND``,
   else ``"auto"``. ``yasps.backend()`` names the active one (see
   ``yasps.backend`` module).
-- ``projection_lanes``: CPU kernels with a PSD projection eigen-decompose
-  this many instances' matrices at once, one per SIMD lane (the QL
-  iteration is a chain of dependent square roots and divisions, and lanes
-  keep several chains in flight). 0, the default, uses the host's vector
-  width in doubles (8 with AVX-512, else 4); 1 projects one at a time.
+- ``simd_lanes``: CPU kernels evaluate this many instances at once, one per
+  SIMD lane: their arithmetic runs on vectors, and a PSD projection's
+  eigensolver works on that many matrices in lockstep. 0, the default, uses
+  the host's vector width in doubles (8 with AVX-512, else 4); 1 evaluates
+  one instance at a time.
 - ``separate_reduced_hessians``: where the reduced-space projection applies
   (paper 5.4), keep each local Hessian as its factors, the inner map J and
   the projected inner Hessian P, and form J^T P J only while assembling
@@ -47,6 +47,6 @@ cache_dir: Optional[str] = _default_cache_dir()
 num_threads: int = 0
 opt_level: int = 3
 backend: str = os.environ.get("YASPS_BACKEND", "auto").strip().lower() or "auto"
-projection_lanes: int = 0
+simd_lanes: int = 0
 separate_reduced_hessians: bool = False
 compress_local_hessians: bool = True

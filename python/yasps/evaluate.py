@@ -99,7 +99,7 @@ _libraries: Dict[tuple, object] = {}
 def _compile(ir: str, paths: List[str], scene: Scene, pipeline: str = ""):
     """The compiled library and how it was obtained (its stats)."""
     key = (ir, tuple(paths), pipeline, config.cache_dir, config.opt_level,
-           config.projection_lanes)
+           config.simd_lanes)
     library = _libraries.get(key)
     if library is not None:
         return library, dict(library.stats, from_memory=True, from_disk=False,
@@ -107,7 +107,7 @@ def _compile(ir: str, paths: List[str], scene: Scene, pipeline: str = ""):
     native = compiler._module()
     library = native.compile_cpu(ir, paths, config.cache_dir or "",
                                  config.opt_level, scene.name, pipeline,
-                                 config.projection_lanes)
+                                 config.simd_lanes)
     _libraries[key] = library
     return library, dict(library.stats)
 

@@ -38,9 +38,10 @@ def YaspsLowerToLoops : Pass<"yasps-lower-to-loops", "::mlir::ModuleOp"> {
                "(e.g. @mesh::@prim::@attr); empty means every energy">,
     Option<"sceneName", "scene", "std::string", /*default=*/"\"\"",
            "The scene to compile (default: the module's only scene)">,
-    Option<"projectionLanes", "projection-lanes", "int64_t", /*default=*/"1",
-           "Instances whose PSD projections run together in vector lanes "
-           "(1: one at a time; CPU kernels use the SIMD width)">
+    Option<"lanes", "lanes", "int64_t", /*default=*/"1",
+           "Instances evaluated together in SIMD lanes: the arithmetic on "
+           "vector<lanes x f64> values (1: one instance at a time, as GPU "
+           "threads do; CPU kernels use the host's vector width)">
   ];
   let dependentDialects = [
     "::mlir::arith::ArithDialect", "::mlir::func::FuncDialect",

@@ -59,11 +59,11 @@ runPasses(ModuleOp module, const std::string &what,
 /// A copy of `module` with loop kernels for `attributes` (scene-relative
 /// paths; empty: every energy). `prePipeline` (a yasps-opt pipeline string,
 /// e.g. "yasps-inline-reads,cse,yasps-differentiate") runs first, for
-/// attributes that passes create. `projectionLanes` > 1 batches PSD
-/// projections of that many instances in vector lanes (CPU kernels).
+/// attributes that passes create. `lanes` > 1 evaluates that many
+/// instances at once in SIMD lanes (CPU kernels).
 llvm::Expected<OwningOpRef<ModuleOp>>
 generateLoopKernels(ModuleOp module, const std::vector<std::string> &attributes,
-                    llvm::StringRef prePipeline, int64_t projectionLanes = 1);
+                    llvm::StringRef prePipeline, int64_t lanes = 1);
 
 /// The kernels' descriptions, read from the functions of
 /// generateLoopKernels.

@@ -12,6 +12,7 @@
 
 #include "mlir/Dialect/Arith/IR/Arith.h"
 #include "mlir/Dialect/Math/IR/Math.h"
+#include "mlir/IR/BuiltinTypes.h"
 #include "mlir/IR/Matchers.h"
 #include "llvm/ADT/TypeSwitch.h"
 
@@ -20,14 +21,22 @@ using namespace mlir::yasps;
 
 namespace {
 
-/// Scalar arithmetic on one element type, at one location.
+/// Scalar arithmetic on one element type, at one location; with `lanes`
+/// > 1 every value is a vector of that many instances and constants are
+/// splats (arith and math ops are the same for both).
 class ScalarBuilder {
 public:
-  ScalarBuilder(OpBuilder &b, Location loc, FloatType type, bool symbolicZeros)
-      : b(b), loc(loc), type(type), symbolicZeros(symbolicZeros) {}
+  ScalarBuilder(OpBuilder &b, Location loc, FloatType type, bool symbolicZeros,
+                int64_t lanes)
+      : b(b), loc(loc), type(type), symbolicZeros(symbolicZeros), lanes(lanes) {
+  }
 
-  Value constant(double value) {
-    return arith::ConstantOp::create(b, loc, b.getFloatAttr(type, value));
+  Value constant(double value) { return constant(APFloat(value)); }
+  Value constant(const APFloat &value) {
+    Attribute attr = b.getFloatAttr(type, value);
+    if (lanes > 1)
+      attr = DenseElementsAttr::get(VectorType::get({lanes}, type), attr);
+    return arith::ConstantOp::create(b, loc, cast<TypedAttr>(attr));
   }
   // In derivative kernels literal zeros and ones are folded symbolically:
   // derivative code is full of products with the 0/1 entries of unit
@@ -129,6 +138,7 @@ public:
   Location loc;
   FloatType type;
   bool symbolicZeros;
+  int64_t lanes;
 };
 
 ScalarMatrix makeMatrix(MatrixType type) {
@@ -176,10 +186,10 @@ arith::CmpFPredicate toArith(CmpPredicate predicate) {
 
 FailureOr<ScalarMatrix>
 mlir::yasps::lowerToScalars(OpBuilder &b, Operation *op,
-                            ArrayRef<ScalarMatrix> operands,
-                            bool symbolicZeros) {
+                            ArrayRef<ScalarMatrix> operands, bool symbolicZeros,
+                            int64_t lanes) {
   auto type = cast<MatrixType>(op->getResult(0).getType());
-  ScalarBuilder s(b, op->getLoc(), type.getElementType(), symbolicZeros);
+  ScalarBuilder s(b, op->getLoc(), type.getElementType(), symbolicZeros, lanes);
   Location loc = op->getLoc();
   auto lhs = [&]() -> const ScalarMatrix & { return operands[0]; };
   auto rhs = [&]() -> const ScalarMatrix & { return operands[1]; };
@@ -199,8 +209,7 @@ mlir::yasps::lowerToScalars(OpBuilder &b, Operation *op,
           for (int64_t r = 0; r < type.getRows(); ++r) {
             const APFloat &v =
                 dense.isSplat() ? values[0] : values[r * type.getCols() + c];
-            out.values.push_back(arith::ConstantOp::create(
-                b, loc, b.getFloatAttr(type.getElementType(), v)));
+            out.values.push_back(s.constant(v));
           }
         return out;
       })
@@ -249,9 +258,9 @@ mlir::yasps::lowerToScalars(OpBuilder &b, Operation *op,
           // x^-1 and x^2 are what pow gives for them (a correctly rounded
           // division and product; LLVM makes the same rewrite), spelled
           // out so that they are counted and never become a libm call.
-          FloatAttr exponent;
-          if (matchPattern(y, m_Constant(&exponent))) {
-            double e = exponent.getValueAsDouble();
+          APFloat exponent(0.0);
+          if (matchPattern(y, m_ConstantFloat(&exponent))) {
+            double e = exponent.convertToDouble();
             if (e == -1.0)
               return s.div(s.constant(1.0), x);
             if (e == 2.0)

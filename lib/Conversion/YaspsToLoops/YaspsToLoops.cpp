@@ -8,14 +8,17 @@
 // instances, UNIONs decode the union index and evaluate the member's
 // attribute in an scf.if chain.
 //
-// With `projection-lanes` W > 1, a kernel whose value goes through one PSD
-// projection runs its instances in tiles of W: the body is emitted twice,
-// once to store each instance's matrix to be projected into a scratch
-// buffer and once to finish each instance with its projected matrix, and
-// between them one eigen-decomposition works on all W matrices at once in
-// vector lanes. The QL iteration is a chain of dependent square roots and
-// divisions; lanes keep W chains in flight. What each copy of the body does
-// not need is dead code that LLVM removes.
+// With `lanes` W > 1 (CPU kernels), instances run in tiles of W, one per
+// SIMD lane. The attribute's arithmetic (its region and those of the
+// computed attributes of the same owner that it reads) is emitted once on
+// vector<Wxf64> values: a first loop over the tile's instances evaluates
+// the region's leaves (stored values, JOINs, UNIONs, DoF numbers: loads and
+// index arithmetic, which differ per instance) and stages them in a buffer
+// with the lanes innermost; the arithmetic then runs on whole vectors, and a
+// last loop stores each lane's result. Straight-line derivative code gets
+// W instances per instruction, and the PSD projection's eigensolver runs W
+// matrices in lockstep (its QL iteration is a chain of dependent square
+// roots and divisions, and lanes keep W chains in flight).
 //
 //===----------------------------------------------------------------------===//
 
@@ -26,7 +29,11 @@
 #include "yasps/Dialect/Yasps/IR/Yasps.h"
 
 #include "mlir/AsmParser/AsmParser.h"
+#include "mlir/IR/Matchers.h"
+
+#include "mlir/Dialect/Math/IR/Math.h"
 #include "mlir/Dialect/Vector/IR/VectorOps.h"
+#include <map>
 
 namespace mlir::yasps {
 #define GEN_PASS_DEF_YASPSLOWERTOLOOPS
@@ -97,11 +104,39 @@ public:
     scopes.emplace_back();
   }
 
-  /// When set, lowers `yasps.project` instead of the scalar eigensolver
-  /// (returning std::nullopt leaves it to the scalar lowering).
-  std::function<std::optional<ScalarMatrix>(OpBuilder &, ProjectOp,
-                                            const ScalarMatrix &)>
-      projectHook;
+  bool hasSymbolicZeros() const { return symbolicZeros; }
+
+  /// The computed attribute of `owner` that `read` reads, or null when the
+  /// read is a leaf (a stored attribute, or another entity's).
+  AttrOp sameOwnerComputed(ReadOp read, Operation *owner) {
+    Operation *decl = lookupInScene(scene, read.getAttribute(), &tables);
+    auto computed = dyn_cast_or_null<AttrOp>(decl);
+    return computed && getOwningEntity(computed) == owner ? computed : AttrOp();
+  }
+
+  /// The value of a leaf of a region of `owner` (a read, a DoF number, a
+  /// JOIN or a UNION) at instance `index`.
+  FailureOr<ScalarMatrix> evaluateLeaf(OpBuilder &b, Operation &op,
+                                       Operation *owner, Value index) {
+    if (auto read = dyn_cast<ReadOp>(op)) {
+      Operation *decl = lookupInScene(scene, read.getAttribute(), &tables);
+      // Scene and mesh attributes have one instance: a broadcast.
+      Value at = getOwningEntity(decl) == owner ? index : constIndex(b, 0);
+      return evaluate(b, decl, at);
+    }
+    if (auto dof = dyn_cast<DofIndexOp>(op))
+      return dofNumbers(b, dof, owner, index);
+    if (auto join = dyn_cast<JoinOp>(op))
+      return evaluateJoin(b, join, index);
+    if (auto unionOp = dyn_cast<UnionOp>(op))
+      return evaluateUnion(b, cast<PrimitiveUnionOp>(owner),
+                           unionOp.getNameAttr(),
+                           cast<MatrixType>(unionOp.getType()), index);
+    return failure();
+  }
+  static bool isLeaf(Operation &op) {
+    return isa<ReadOp, DofIndexOp, JoinOp, UnionOp>(op);
+  }
 
 private:
   Value constIndex(OpBuilder &b, int64_t value) {
@@ -139,28 +174,13 @@ private:
       if (auto yield = dyn_cast<YieldOp>(op))
         return values.lookup(yield.getValue());
       FailureOr<ScalarMatrix> result = failure();
-      if (auto read = dyn_cast<ReadOp>(op)) {
-        Operation *decl = lookupInScene(scene, read.getAttribute(), &tables);
-        // Scene and mesh attributes have one instance: a broadcast.
-        Value at = getOwningEntity(decl) == owner ? index : constIndex(b, 0);
-        result = evaluate(b, decl, at);
-      } else if (auto dof = dyn_cast<DofIndexOp>(op)) {
-        result = dofNumbers(b, dof, owner, index);
-      } else if (auto join = dyn_cast<JoinOp>(op)) {
-        result = evaluateJoin(b, join, index);
-      } else if (auto unionOp = dyn_cast<UnionOp>(op)) {
-        result = evaluateUnion(b, cast<PrimitiveUnionOp>(owner),
-                               unionOp.getNameAttr(),
-                               cast<MatrixType>(unionOp.getType()), index);
+      if (isLeaf(op)) {
+        result = evaluateLeaf(b, op, owner, index);
       } else {
         SmallVector<ScalarMatrix> operands;
         for (Value operand : op.getOperands())
           operands.push_back(values.lookup(operand));
-        std::optional<ScalarMatrix> hooked;
-        if (auto project = dyn_cast<ProjectOp>(op); project && projectHook)
-          hooked = projectHook(b, project, operands.front());
-        result = hooked ? FailureOr<ScalarMatrix>(*hooked)
-                        : lowerToScalars(b, &op, operands, symbolicZeros);
+        result = lowerToScalars(b, &op, operands, symbolicZeros);
       }
       if (failed(result))
         return failure();
@@ -293,128 +313,309 @@ private:
   SmallVector<DenseMap<std::pair<Operation *, Value>, ScalarMatrix>> scopes{1};
 };
 
-enum class Batching { Done, NotApplicable, Failed };
+/// Evaluates an attribute for a tile of instances in SIMD lanes (see the
+/// top of this file).
+class LaneBatch {
+public:
+  LaneBatch(KernelEmitter &emitter, AttrOp decl, int64_t lanes)
+      : emitter(emitter), decl(decl), owner(getOwningEntity(decl)),
+        lanes(lanes) {}
 
-/// Emits into `loop` (a parallel loop over tiles of `lanes` instances) the
-/// lane-batched kernel body described at the top of this file.
-/// NotApplicable, with the loop left to be erased, when the value does not
-/// go through exactly one projection at the top level of the body; Failed
-/// when evaluation reported an error.
-Batching emitBatchedProjection(KernelEmitter &emitter, Operation *decl,
-                               Value out, scf::ParallelOp loop, Value end,
-                               int64_t lanes) {
-  Location loc = decl->getLoc();
-  OpBuilder b = OpBuilder::atBlockTerminator(loop.getBody());
-  Value tile = loop.getInductionVars()[0];
-  Value zero = arith::ConstantIndexOp::create(b, loc, 0);
-  Value one = arith::ConstantIndexOp::create(b, loc, 1);
-  Value count = arith::MinUIOp::create(
-      b, loc, arith::ConstantIndexOp::create(b, loc, lanes),
-      arith::SubIOp::create(b, loc, end, tile));
-  auto type = cast<FloatType>(getAttributeType(decl).getElementType());
-  auto laneType = VectorType::get({lanes}, type);
-  // Scratch of the matrices before and after projection, lanes innermost.
-  Value before, after;
-  int64_t entries = 0;
-  std::optional<ProjectionMethod> method;
-  int64_t projections = 0;
-  Block *laneBody = nullptr;
-  Operation *laneLoopOp = nullptr;
-  Value lane;
-  auto laneLoop = [&](auto body) {
-    auto forOp = scf::ForOp::create(b, loc, zero, count, one);
-    OpBuilder inner = OpBuilder::atBlockTerminator(forOp.getBody());
-    laneBody = forOp.getBody();
-    laneLoopOp = forOp;
-    lane = forOp.getInductionVar();
-    return body(inner, arith::AddIOp::create(inner, loc, tile, lane));
-  };
+  /// Emits the tile's code into `loop` (over tiles starting at its
+  /// induction variable, ending at `end`). Fails, leaving the loop to be
+  /// erased, if the region cannot be evaluated in lanes.
+  LogicalResult emit(scf::ParallelOp loop, Value out, Value end);
 
-  // 1. Every instance stores the matrix it projects.
-  emitter.resetScopes();
-  emitter.projectHook =
-      [&](OpBuilder &ib, ProjectOp project,
-          const ScalarMatrix &in) -> std::optional<ScalarMatrix> {
-    if (project.getMethod() == ProjectionMethod::none)
-      return std::nullopt;
-    // Only one projection, evaluated once per instance, is batched.
-    if (projections++ > 0 || ib.getInsertionBlock() != laneBody)
-      return std::nullopt;
-    method = project.getMethod();
-    entries = in.values.size();
-    ImperativeBuilder alloc{ib, loc, type, lanes};
-    before = alloc.buffer({entries});
-    after = alloc.buffer({entries});
-    for (auto [k, v] : llvm::enumerate(in.values))
-      memref::StoreOp::create(
-          ib, loc, v, before,
-          ValueRange{arith::ConstantIndexOp::create(ib, loc, k), lane});
-    ScalarMatrix zeros{in.rows, in.cols, {}};
-    Value zeroValue =
-        arith::ConstantOp::create(ib, loc, ib.getFloatAttr(type, 0));
-    zeros.values.assign(entries, zeroValue);
-    return zeros;
-  };
-  bool evaluated = laneLoop([&](OpBuilder &inner, Value instance) {
-    return succeeded(emitter.evaluate(inner, decl, instance));
-  });
-  emitter.projectHook = nullptr;
-  if (!evaluated)
-    return Batching::Failed;
-  if (projections != 1 || !method)
-    return Batching::NotApplicable;
-  {
-    // Lanes past the end of the last tile project zeros (cheap, and never
-    // uninitialised memory).
-    OpBuilder::InsertionGuard guard(b);
-    b.setInsertionPoint(laneLoopOp);
-    Value zeros = arith::ConstantOp::create(
-        b, loc, DenseElementsAttr::get(laneType, b.getFloatAttr(type, 0)));
-    for (int64_t k = 0; k < entries; ++k)
-      vector::StoreOp::create(
-          b, loc, zeros, before,
-          ValueRange{arith::ConstantIndexOp::create(b, loc, k), zero});
+  /// Whether the emitted tile is worth it over scalar code. Lanes cost
+  /// staging (a store and a load per leaf entry and per result entry) and
+  /// pay off by the arithmetic done once per tile; kernels that mostly
+  /// write their results (a 9x9 Hessian of a cheap energy) are bound by
+  /// memory either way. Divisions and square roots weigh more (vector units
+  /// do several per instruction); other math functions count nothing (LLVM
+  /// calls libm once per lane). A PSD projection (its QL loop) always pays.
+  /// The threshold comes from bench/simd_lanes.py on the energies of
+  /// bench/energy_cases.py.
+  bool worthwhile(scf::ParallelOp loop);
+
+private:
+  /// Stores a full tile's results (`rows[k]`: entry k of every lane) into
+  /// `out`, instance-major, through in-register transposes.
+  void storeTransposed(OpBuilder &b, ArrayRef<Value> rows, Value out,
+                       Value tile, int64_t entries);
+  /// Numbers the leaves of `attr`'s region and of the same-owner computed
+  /// attributes it reads.
+  void collectLeaves(AttrOp attr);
+  /// `attr`'s value on all lanes, from the staged leaves.
+  FailureOr<ScalarMatrix> evaluateLanes(OpBuilder &b, AttrOp attr);
+  Value index(OpBuilder &b, int64_t value) {
+    return arith::ConstantIndexOp::create(b, decl.getLoc(), value);
   }
 
-  // 2. One projection of all lanes.
-  int64_t n = 0;
-  while (n * n < entries)
-    ++n;
-  ScalarMatrix lanesIn{n, n, {}};
-  for (int64_t k = 0; k < entries; ++k)
-    lanesIn.values.push_back(vector::LoadOp::create(
-        b, loc, laneType, before,
-        ValueRange{arith::ConstantIndexOp::create(b, loc, k), zero}));
-  ScalarMatrix projected = lowerProjection(b, loc, *method, lanesIn);
-  for (auto [k, v] : llvm::enumerate(projected.values))
-    vector::StoreOp::create(
-        b, loc, v, after,
-        ValueRange{arith::ConstantIndexOp::create(b, loc, k), zero});
+  KernelEmitter &emitter;
+  AttrOp decl;
+  Operation *owner;
+  int64_t lanes;
+  SmallVector<Operation *> leaves;
+  DenseMap<Operation *, int64_t> firstSlot; ///< leaf -> staging row
+  DenseMap<std::pair<OperationName, Attribute>, Operation *> leafByKey;
+  int64_t stagedRows = 0;
+  DenseSet<Operation *> walked;
+  DenseMap<Operation *, ScalarMatrix> laneValues; ///< attr -> its lanes
+  std::map<int64_t, APFloat> constantSlots; ///< staging rows known statically
+  DenseMap<int64_t, int64_t> slotAlias;     ///< row -> earlier equal row
+  Value staging;
+};
 
-  // 3. Every instance finishes with its projected matrix.
-  emitter.resetScopes();
-  emitter.projectHook =
-      [&](OpBuilder &ib, ProjectOp project,
-          const ScalarMatrix &in) -> std::optional<ScalarMatrix> {
-    if (project.getMethod() == ProjectionMethod::none)
-      return std::nullopt;
-    ScalarMatrix result{in.rows, in.cols, {}};
-    for (int64_t k = 0; k < entries; ++k)
-      result.values.push_back(memref::LoadOp::create(
-          ib, loc, after,
-          ValueRange{arith::ConstantIndexOp::create(ib, loc, k), lane}));
-    return result;
+void LaneBatch::collectLeaves(AttrOp attr) {
+  if (!walked.insert(attr).second)
+    return;
+  for (Operation &op : attr.getBodyBlock()) {
+    if (auto read = dyn_cast<ReadOp>(op))
+      if (AttrOp inner = emitter.sameOwnerComputed(read, owner)) {
+        collectLeaves(inner);
+        continue;
+      }
+    if (KernelEmitter::isLeaf(op)) {
+      // Leaves have no operands: equal attributes read equal values, and
+      // share a slot (as their scalar code would be merged by CSE).
+      std::pair<OperationName, Attribute> key(op.getName(),
+                                              op.getAttrDictionary());
+      if (auto same = leafByKey.find(key); same != leafByKey.end()) {
+        firstSlot[&op] = firstSlot.lookup(same->second);
+        continue;
+      }
+      leafByKey[key] = &op;
+      firstSlot[&op] = stagedRows;
+      stagedRows +=
+          cast<MatrixType>(op.getResult(0).getType()).getNumElements();
+      leaves.push_back(&op);
+    }
+  }
+}
+
+bool LaneBatch::worthwhile(scf::ParallelOp loop) {
+  int64_t work = 0;
+  bool eigensolver = false;
+  loop.getBody()->walk([&](Operation *op) {
+    if (isa<scf::ForOp>(op) && op->getParentOp() == loop)
+      return WalkResult::skip(); // the per-instance staging loops
+    if (isa<scf::WhileOp>(op))
+      eigensolver = true;
+    if (isa<arith::DivFOp, math::SqrtOp>(op))
+      work += 20;
+    else if (isa<arith::AddFOp, arith::SubFOp, arith::MulFOp, arith::NegFOp,
+                 arith::SelectOp, arith::CmpFOp>(op))
+      work += 1;
+    return WalkResult::advance();
+  });
+  int64_t traffic =
+      stagedRows + cast<MatrixType>(decl.getType()).getNumElements();
+  return eigensolver || work >= 20 * traffic;
+}
+
+FailureOr<ScalarMatrix> LaneBatch::evaluateLanes(OpBuilder &b, AttrOp attr) {
+  if (auto it = laneValues.find(attr); it != laneValues.end())
+    return it->second;
+  Location loc = attr.getLoc();
+  auto laneType = VectorType::get(
+      {lanes}, cast<MatrixType>(attr.getType()).getElementType());
+  DenseMap<Value, ScalarMatrix> values;
+  for (Operation &op : attr.getBodyBlock()) {
+    if (auto yield = dyn_cast<YieldOp>(op)) {
+      ScalarMatrix result = values.lookup(yield.getValue());
+      laneValues[attr] = result;
+      return result;
+    }
+    FailureOr<ScalarMatrix> result = failure();
+    AttrOp inner;
+    if (auto read = dyn_cast<ReadOp>(op))
+      inner = emitter.sameOwnerComputed(read, owner);
+    if (inner) {
+      result = evaluateLanes(b, inner);
+    } else if (KernelEmitter::isLeaf(op)) {
+      auto type = cast<MatrixType>(op.getResult(0).getType());
+      ScalarMatrix staged{type.getRows(), type.getCols(), {}};
+      for (int64_t k = 0; k < type.getNumElements(); ++k) {
+        int64_t slot = firstSlot.lookup(&op) + k;
+        if (auto alias = slotAlias.find(slot); alias != slotAlias.end())
+          slot = alias->second;
+        auto constant = constantSlots.find(slot);
+        staged.values.push_back(
+            constant != constantSlots.end()
+                ? arith::ConstantOp::create(
+                      b, loc,
+                      DenseElementsAttr::get(
+                          laneType, b.getFloatAttr(laneType.getElementType(),
+                                                   constant->second)))
+                      .getResult()
+                : vector::LoadOp::create(
+                      b, loc, laneType, staging,
+                      ValueRange{index(b, slot), index(b, 0)})
+                      .getResult());
+      }
+      result = staged;
+    } else {
+      SmallVector<ScalarMatrix> operands;
+      for (Value operand : op.getOperands())
+        operands.push_back(values.lookup(operand));
+      result =
+          lowerToScalars(b, &op, operands, emitter.hasSymbolicZeros(), lanes);
+    }
+    if (failed(result))
+      return failure();
+    values[op.getResult(0)] = *result;
+  }
+  return failure();
+}
+
+LogicalResult LaneBatch::emit(scf::ParallelOp loop, Value out, Value end) {
+  Location loc = decl.getLoc();
+  OpBuilder b = OpBuilder::atBlockTerminator(loop.getBody());
+  Value tile = loop.getInductionVars()[0];
+  Value count = arith::MinUIOp::create(
+      b, loc, index(b, lanes), arith::SubIOp::create(b, loc, end, tile));
+  MatrixType type = cast<MatrixType>(decl.getType());
+  auto laneType = VectorType::get({lanes}, type.getElementType());
+  collectLeaves(decl);
+  ImperativeBuilder alloc{b, loc, cast<FloatType>(type.getElementType()),
+                          lanes};
+  staging = alloc.buffer({std::max<int64_t>(stagedRows, 1)});
+  Value results = alloc.buffer({type.getNumElements()});
+  auto laneLoop = [&](auto body) {
+    auto forOp = scf::ForOp::create(b, loc, index(b, 0), count, index(b, 1));
+    OpBuilder inner = OpBuilder::atBlockTerminator(forOp.getBody());
+    Value lane = forOp.getInductionVar();
+    return body(inner, lane, arith::AddIOp::create(inner, loc, tile, lane));
   };
-  bool finished = laneLoop([&](OpBuilder &inner, Value instance) {
-    FailureOr<ScalarMatrix> value = emitter.evaluate(inner, decl, instance);
-    if (failed(value))
-      return false;
-    emitter.store(inner, out, *value, instance);
+
+  // Lanes past the end of the last tile compute on zeros: cheap, and never
+  // on uninitialised memory.
+  Value zeros = arith::ConstantOp::create(
+      b, loc,
+      DenseElementsAttr::get(laneType,
+                             b.getFloatAttr(type.getElementType(), 0)));
+  for (int64_t k = 0; k < stagedRows; ++k)
+    vector::StoreOp::create(b, loc, zeros, staging,
+                            ValueRange{index(b, k), index(b, 0)});
+
+  // 1. Each instance stages its leaves (loads, gathers, index arithmetic).
+  emitter.resetScopes();
+  bool staged = laneLoop([&](OpBuilder &inner, Value lane, Value instance) {
+    // All loads first, then all stores: a store between two gathers of the
+    // same values would keep CSE from merging them.
+    SmallVector<ScalarMatrix> values;
+    for (Operation *leaf : leaves) {
+      FailureOr<ScalarMatrix> value =
+          emitter.evaluateLeaf(inner, *leaf, owner, instance);
+      if (failed(value))
+        return false;
+      values.push_back(*value);
+    }
+    DenseMap<Value, int64_t> stagedAt;
+    for (auto [leaf, value] : llvm::zip(leaves, values))
+      for (auto [k, v] : llvm::enumerate(value.values)) {
+        int64_t slot = firstSlot.lookup(leaf) + k;
+        // An entry equal to an earlier one (the same SSA value, e.g. a
+        // coefficient repeated in a gathered Jacobian) reuses its lane
+        // vector, so that products with it are still merged by CSE.
+        if (auto earlier = stagedAt.find(v); earlier != stagedAt.end()) {
+          slotAlias[slot] = earlier->second;
+          continue;
+        }
+        stagedAt[v] = slot;
+        // Constant entries (the structural zeros and ones of gathered
+        // Jacobians) are the same in every lane: they stay constants, so
+        // that the arithmetic folds them as the scalar code does.
+        APFloat constant(0.0);
+        if (matchPattern(v, m_ConstantFloat(&constant))) {
+          constantSlots.try_emplace(slot, constant);
+          continue;
+        }
+        memref::StoreOp::create(inner, loc, v, staging,
+                                ValueRange{index(inner, slot), lane});
+      }
     return true;
   });
-  emitter.projectHook = nullptr;
   emitter.resetScopes();
-  return finished ? Batching::Done : Batching::Failed;
+  if (!staged)
+    return failure();
+
+  // 2. The arithmetic, once for all lanes.
+  FailureOr<ScalarMatrix> value = evaluateLanes(b, decl);
+  if (failed(value))
+    return failure();
+
+  // 3. Each instance stores its result: in a full tile, groups of `lanes`
+  // consecutive entries are transposed in registers (entry-major vectors to
+  // instance-major ones) and stored contiguously; otherwise (the last,
+  // partial tile) lane by lane from the staged results.
+  int64_t entries = type.getNumElements();
+  bool transposable = llvm::isPowerOf2_64(lanes) && entries >= lanes;
+  Value full = arith::CmpIOp::create(b, loc, arith::CmpIPredicate::eq, count,
+                                     index(b, lanes));
+  auto ifFull = scf::IfOp::create(
+      b, loc,
+      transposable
+          ? full
+          : arith::ConstantOp::create(b, loc, b.getBoolAttr(false)).getResult(),
+      /*withElseRegion=*/true);
+  {
+    OpBuilder::InsertionGuard guard(b);
+    b.setInsertionPoint(ifFull.thenBlock()->getTerminator());
+    if (transposable)
+      storeTransposed(b, value->values, out, tile, entries);
+    b.setInsertionPoint(ifFull.elseBlock()->getTerminator());
+    for (auto [k, v] : llvm::enumerate(value->values))
+      vector::StoreOp::create(b, loc, v, results,
+                              ValueRange{index(b, k), index(b, 0)});
+    laneLoop([&](OpBuilder &inner, Value lane, Value instance) {
+      ScalarMatrix result{type.getRows(), type.getCols(), {}};
+      for (int64_t k = 0; k < entries; ++k)
+        result.values.push_back(memref::LoadOp::create(
+            inner, loc, results, ValueRange{index(inner, k), lane}));
+      emitter.store(inner, out, result, instance);
+      return true;
+    });
+  }
+  return success();
+}
+
+void LaneBatch::storeTransposed(OpBuilder &b, ArrayRef<Value> rows, Value out,
+                                Value tile, int64_t entries) {
+  Location loc = decl.getLoc();
+  // out[(tile + lane) * entries + k] = rows[k][lane].
+  Value base = arith::MulIOp::create(b, loc, tile, index(b, entries));
+  auto at = [&](int64_t lane, int64_t k) -> Value {
+    return arith::AddIOp::create(b, loc, base, index(b, lane * entries + k));
+  };
+  int64_t k = 0;
+  for (; k + lanes <= entries; k += lanes) {
+    // Butterfly transpose: at stride s, rows i and i + s swap the
+    // off-diagonal s x s blocks of their 2s x 2s block.
+    SmallVector<Value> r(rows.begin() + k, rows.begin() + k + lanes);
+    for (int64_t stride = 1; stride < lanes; stride *= 2)
+      for (int64_t i = 0; i < lanes; ++i) {
+        if (i & stride)
+          continue;
+        SmallVector<int64_t> low, high;
+        for (int64_t j = 0; j < lanes; ++j) {
+          bool fromB = j & stride;
+          low.push_back(fromB ? lanes + j - stride : j);
+          high.push_back(fromB ? lanes + j : j + stride);
+        }
+        Value a = r[i], c = r[i + stride];
+        r[i] = vector::ShuffleOp::create(b, loc, a, c, low);
+        r[i + stride] = vector::ShuffleOp::create(b, loc, a, c, high);
+      }
+    for (int64_t lane = 0; lane < lanes; ++lane)
+      vector::StoreOp::create(b, loc, r[lane], out, ValueRange{at(lane, k)});
+  }
+  // The remaining entries one by one.
+  for (; k < entries; ++k)
+    for (int64_t lane = 0; lane < lanes; ++lane)
+      memref::StoreOp::create(b, loc,
+                              vector::ExtractOp::create(b, loc, rows[k], lane),
+                              out, ValueRange{at(lane, k)});
 }
 
 std::string kernelName(SymbolRefAttr path) {
@@ -467,16 +668,21 @@ LogicalResult LowerToLoopsPass::lowerAttribute(SceneOp scene,
   // The loop is created first and filled afterwards so that code generated
   // for the body can reach the enclosing function (e.g. for scratch buffers).
   bool batched = false;
-  if (projectionLanes > 1) {
-    Value lanes = arith::ConstantIndexOp::create(b, loc, projectionLanes);
+  auto computed = dyn_cast<AttrOp>(decl);
+  if (lanes > 1 && computed) {
+    Value step = arith::ConstantIndexOp::create(b, loc, lanes);
     auto loop = scf::ParallelOp::create(
         b, loc, ValueRange{entry->getArgument(0)},
-        ValueRange{entry->getArgument(1)}, ValueRange{lanes});
-    Batching result = emitBatchedProjection(
-        emitter, decl, out, loop, entry->getArgument(1), projectionLanes);
-    if (result == Batching::Failed)
-      return failure();
-    batched = result == Batching::Done;
+        ValueRange{entry->getArgument(1)}, ValueRange{step});
+    // A region that cannot run in lanes (an op the lowering rejects) is
+    // emitted one instance at a time below, which reports the error.
+    {
+      ScopedDiagnosticHandler quiet(&getContext(),
+                                    [](Diagnostic &) { return success(); });
+      LaneBatch batch(emitter, computed, lanes);
+      batched = succeeded(batch.emit(loop, out, entry->getArgument(1))) &&
+                batch.worthwhile(loop);
+    }
     if (!batched) {
       loop.erase();
       emitter.resetScopes();

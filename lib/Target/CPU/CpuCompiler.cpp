@@ -201,8 +201,7 @@ mlir::yasps::compileCpuKernels(ModuleOp module,
   Clock::time_point start = Clock::now();
 
   // 1. Kernel functions in upstream dialects.
-  int64_t lanes =
-      options.projectionLanes > 0 ? options.projectionLanes : hostDoubleLanes();
+  int64_t lanes = options.lanes > 0 ? options.lanes : hostDoubleLanes();
   auto generated = generateLoopKernels(module, attributes, prePipeline, lanes);
   if (!generated)
     return generated.takeError();

@@ -57,9 +57,10 @@ llvm::Error mlir::yasps::runPasses(
   return llvm::Error::success();
 }
 
-llvm::Expected<OwningOpRef<ModuleOp>> mlir::yasps::generateLoopKernels(
-    ModuleOp module, const std::vector<std::string> &attributes,
-    StringRef prePipeline, int64_t projectionLanes) {
+llvm::Expected<OwningOpRef<ModuleOp>>
+mlir::yasps::generateLoopKernels(ModuleOp module,
+                                 const std::vector<std::string> &attributes,
+                                 StringRef prePipeline, int64_t lanes) {
   OwningOpRef<ModuleOp> kernels(cast<ModuleOp>(module->clone()));
   if (llvm::Error err =
           runPasses(*kernels, "kernel generation failed", [&](PassManager &pm) {
@@ -69,7 +70,7 @@ llvm::Expected<OwningOpRef<ModuleOp>> mlir::yasps::generateLoopKernels(
             YaspsLowerToLoopsOptions lowerOptions;
             lowerOptions.attributes.assign(attributes.begin(),
                                            attributes.end());
-            lowerOptions.projectionLanes = projectionLanes;
+            lowerOptions.lanes = lanes;
             pm.addPass(createYaspsLowerToLoops(lowerOptions));
             pm.addPass(createYaspsStripScenes());
             pm.addPass(createCanonicalizerPass());

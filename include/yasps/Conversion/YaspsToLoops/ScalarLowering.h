@@ -34,10 +34,13 @@ struct ScalarMatrix {
 /// buffers) given its operands. Reports an error on `op` and fails for ops
 /// that kernels do not support. With `symbolicZeros` (derivative kernels),
 /// products with a literal 0 are 0 and with a literal 1 are the other
-/// factor, without IEEE's special cases for infinities and NaN.
+/// factor, without IEEE's special cases for infinities and NaN. With
+/// `lanes` > 1 the operands' entries are vectors of that many instances
+/// (SIMD lanes), and so are the results.
 FailureOr<ScalarMatrix> lowerToScalars(OpBuilder &b, Operation *op,
                                        ArrayRef<ScalarMatrix> operands,
-                                       bool symbolicZeros = false);
+                                       bool symbolicZeros = false,
+                                       int64_t lanes = 1);
 
 /// PSD projection of the symmetric matrix `in` (tridiagonal QL
 /// eigen-decomposition, eigenvalues clamped or made absolute); `none`

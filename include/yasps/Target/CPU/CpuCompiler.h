@@ -58,9 +58,10 @@ struct CpuCompileOptions {
   std::string cacheDir;
   /// LLVM optimisation level of the kernels (0-3).
   unsigned optLevel = 3;
-  /// Instances whose PSD projections run together in SIMD lanes; 0 picks
-  /// the host's vector width in doubles (8 with AVX-512, else 4).
-  int64_t projectionLanes = 0;
+  /// Instances evaluated together in SIMD lanes (yasps-lower-to-loops
+  /// {lanes}); 0 picks the host's vector width in doubles (8 with AVX-512,
+  /// else 4), 1 evaluates one instance at a time.
+  int64_t lanes = 0;
 };
 
 /// The number of f64 lanes in the host's widest vector registers.
