@@ -5,6 +5,7 @@
 #include "yasps/Runtime/ThreadPool.h"
 
 #include <algorithm>
+#include <map>
 #include <stdexcept>
 #include <string>
 #include <tuple>
@@ -44,13 +45,19 @@ BlockSparseMatrix::BlockSparseMatrix(
   const std::int64_t n = layout_.numBlocks();
 
   // One entry per input coordinate, normalised to the upper triangle and
-  // keyed by (shape, row, col) so that sorting yields the stored order.
+  // keyed by (shape, row, col): in that order the entries are the stored
+  // blocks. Counting sorts order the ~10^6 coordinates of a large scene in
+  // a few passes, where a comparison sort of all of them took most of the
+  // structure's build time.
   struct Entry {
     std::int64_t rows, cols, row, col;
     std::size_t input;
   };
-  std::vector<Entry> entries;
-  entries.reserve(coords.size());
+  std::vector<Entry> unordered;
+  unordered.reserve(coords.size());
+  std::map<std::pair<std::int64_t, std::int64_t>, std::size_t> shapeIds;
+  std::vector<std::size_t> shapeOf;
+  shapeOf.reserve(coords.size());
   for (std::size_t k = 0; k < coords.size(); ++k) {
     auto [i, j] = coords[k];
     if (i < 0 || i >= n || j < 0 || j >= n)
@@ -59,14 +66,53 @@ BlockSparseMatrix::BlockSparseMatrix(
           ", " + std::to_string(j) + ") is outside a layout of " +
           std::to_string(n) + " blocks");
     std::int64_t row = std::min(i, j), col = std::max(i, j);
-    entries.push_back(
-        {layout_.blockSize(row), layout_.blockSize(col), row, col, k});
+    Entry e{layout_.blockSize(row), layout_.blockSize(col), row, col, k};
+    shapeOf.push_back(
+        shapeIds.try_emplace({e.rows, e.cols}, shapeIds.size()).first->second);
+    unordered.push_back(e);
   }
+  // Shape ids in (rows, cols) order, as the comparison sort had them.
+  std::vector<std::size_t> shapeRank(shapeIds.size());
+  {
+    std::size_t rank = 0;
+    for (const auto &[shape, id] : shapeIds)
+      shapeRank[id] = rank++;
+  }
+  // By row (counting sort), then by column within each row (a row holds a
+  // few dozen entries), then, stably, by shape when there are several.
+  std::vector<std::size_t> order(unordered.size());
+  {
+    std::vector<std::size_t> start(static_cast<std::size_t>(n) + 1, 0);
+    for (const Entry &e : unordered)
+      ++start[e.row + 1];
+    for (std::int64_t r = 0; r < n; ++r)
+      start[r + 1] += start[r];
+    std::vector<std::size_t> fill(start.begin(), start.end() - 1);
+    for (std::size_t k = 0; k < unordered.size(); ++k)
+      order[fill[unordered[k].row]++] = k;
+    for (std::int64_t r = 0; r < n; ++r)
+      std::sort(order.begin() + start[r], order.begin() + start[r + 1],
+                [&](std::size_t a, std::size_t b) {
+                  return unordered[a].col < unordered[b].col;
+                });
+  }
+  if (shapeRank.size() > 1) {
+    std::vector<std::size_t> start(shapeRank.size() + 1, 0), next(order.size());
+    for (std::size_t k : order)
+      ++start[shapeRank[shapeOf[k]] + 1];
+    for (std::size_t r = 0; r + 1 < start.size(); ++r)
+      start[r + 1] += start[r];
+    for (std::size_t k : order)
+      next[start[shapeRank[shapeOf[k]]]++] = k;
+    order.swap(next);
+  }
+  std::vector<Entry> entries;
+  entries.reserve(order.size());
+  for (std::size_t k : order)
+    entries.push_back(unordered[k]);
   auto key = [](const Entry &e) {
     return std::make_tuple(e.rows, e.cols, e.row, e.col);
   };
-  std::sort(entries.begin(), entries.end(),
-            [&](const Entry &a, const Entry &b) { return key(a) < key(b); });
 
   if (positions)
     positions->assign(coords.size(), BlockSlot{0, false});

@@ -10,17 +10,17 @@
 
 using namespace yasps::runtime;
 
-static std::int64_t blockOfDof(const BlockLayout &layout, std::int64_t dof) {
-  const auto &offsets = layout.blockOffset;
-  auto it = std::upper_bound(offsets.begin(), offsets.end(), dof);
-  return static_cast<std::int64_t>(it - offsets.begin()) - 1;
-}
-
 GlobalSystem::Part GlobalSystem::buildPart(const BlockLayout &layout,
                                            const std::vector<DofMap> &energies,
                                            std::size_t firstEnergy) {
   std::int64_t size =
       layout.blockOffset.empty() ? 0 : layout.blockOffset.back();
+  // The block of every DoF, looked up once per local parameter (a search
+  // of the offsets per parameter was a large part of building a part).
+  std::vector<std::int64_t> blockOf(static_cast<std::size_t>(size));
+  for (std::int64_t b = 0; b < layout.numBlocks(); ++b)
+    std::fill(blockOf.begin() + layout.blockOffset[b],
+              blockOf.begin() + layout.blockOffset[b + 1], b);
   std::vector<std::pair<std::int64_t, std::int64_t>> coords;
   std::vector<EnergyMap> maps(energies.size());
   for (std::size_t e = 0; e < energies.size(); ++e) {
@@ -30,9 +30,13 @@ GlobalSystem::Part GlobalSystem::buildPart(const BlockLayout &layout,
     map.numParams = in.numParams;
     map.localBlock.assign(in.count * in.numParams, -1);
     map.offset.assign(in.count * in.numParams, -1);
-    // The instance's distinct blocks, in order of first appearance.
-    std::vector<std::vector<std::int64_t>> blocks(in.count);
+    // Each instance's distinct blocks, in order of first appearance: at
+    // most one per parameter, kept flat.
+    std::vector<std::int64_t> blocks(in.count * in.numParams);
+    std::vector<std::int64_t> numBlocks(in.count, 0);
     for (std::int64_t i = 0; i < in.count; ++i) {
+      std::int64_t *mine = &blocks[i * in.numParams];
+      std::int64_t &found = numBlocks[i];
       for (std::int64_t a = 0; a < in.numParams; ++a) {
         std::int64_t dof = in.dofs[i * in.numParams + a];
         if (dof < 0)
@@ -42,29 +46,26 @@ GlobalSystem::Part GlobalSystem::buildPart(const BlockLayout &layout,
               "energy " + std::to_string(firstEnergy + e) + ", instance " +
               std::to_string(i) + ": DoF " + std::to_string(dof) +
               " is outside the system of " + std::to_string(size) + " DoFs");
-        std::int64_t block = blockOfDof(layout, dof);
-        auto &mine = blocks[i];
-        auto found = std::find(mine.begin(), mine.end(), block);
-        if (found == mine.end()) {
-          mine.push_back(block);
-          found = mine.end() - 1;
-        }
-        map.localBlock[i * in.numParams + a] =
-            static_cast<std::int32_t>(found - mine.begin());
+        std::int64_t block = blockOf[dof];
+        std::int64_t local = std::find(mine, mine + found, block) - mine;
+        if (local == found)
+          mine[found++] = block;
+        map.localBlock[i * in.numParams + a] = static_cast<std::int32_t>(local);
         map.offset[i * in.numParams + a] =
             static_cast<std::int32_t>(dof - layout.blockOffset[block]);
       }
-      map.maxBlocks = std::max<std::int64_t>(map.maxBlocks, blocks[i].size());
+      map.maxBlocks = std::max<std::int64_t>(map.maxBlocks, found);
     }
     map.globalBlock.assign(in.count * map.maxBlocks, -1);
-    for (std::int64_t i = 0; i < in.count; ++i)
-      for (std::size_t k = 0; k < blocks[i].size(); ++k) {
-        map.globalBlock[i * map.maxBlocks + k] = blocks[i][k];
-        for (std::size_t l = k; l < blocks[i].size(); ++l) {
-          std::int64_t bi = blocks[i][k], bj = blocks[i][l];
-          coords.emplace_back(std::min(bi, bj), std::max(bi, bj));
-        }
+    for (std::int64_t i = 0; i < in.count; ++i) {
+      const std::int64_t *mine = &blocks[i * in.numParams];
+      for (std::int64_t k = 0; k < numBlocks[i]; ++k) {
+        map.globalBlock[i * map.maxBlocks + k] = mine[k];
+        for (std::int64_t l = k; l < numBlocks[i]; ++l)
+          coords.emplace_back(std::min(mine[k], mine[l]),
+                              std::max(mine[k], mine[l]));
       }
+    }
   }
   std::vector<BlockSlot> slots;
   BlockSparseMatrix matrix(layout, coords, &slots);
