@@ -47,12 +47,32 @@ public:
     return symbolicZeros && matchPattern(v, m_AnyZeroFloat());
   }
   bool isOne(Value v) { return symbolicZeros && matchPattern(v, m_OneFloat()); }
+  bool isMinusOne(Value v) {
+    APFloat value(0.0);
+    return symbolicZeros && matchPattern(v, m_ConstantFloat(&value)) &&
+           value.isExactlyValue(-1.0);
+  }
+  // Derivative kernels also move negations outwards: directions of
+  // differences (x1 - x0) seed -1 entries, and -a * b is then -(a * b), so
+  // that CSE shares a * b between the entries of opposite sign (the +-K
+  // blocks of a spring's Hessian). Each rewrite is exact in IEEE
+  // arithmetic.
+  Value negated(Value v) {
+    if (!symbolicZeros)
+      return {};
+    auto negOp = v.getDefiningOp<arith::NegFOp>();
+    return negOp ? negOp.getOperand() : Value();
+  }
 
   Value add(Value x, Value y) {
     if (isZero(y))
       return x;
     if (isZero(x))
       return y;
+    if (Value b = negated(y))
+      return sub(x, b);
+    if (Value a = negated(x))
+      return sub(y, a);
     return arith::AddFOp::create(b, loc, x, y);
   }
   Value sub(Value x, Value y) {
@@ -60,6 +80,8 @@ public:
       return x;
     if (isZero(x))
       return neg(y);
+    if (Value b = negated(y))
+      return add(x, b);
     return arith::SubFOp::create(b, loc, x, y);
   }
   Value mul(Value x, Value y) {
@@ -67,6 +89,14 @@ public:
       return x;
     if (isZero(y) || isOne(x))
       return y;
+    if (isMinusOne(y))
+      return neg(x);
+    if (isMinusOne(x))
+      return neg(y);
+    if (Value a = negated(x))
+      return neg(mul(a, y));
+    if (Value c = negated(y))
+      return neg(mul(x, c));
     return arith::MulFOp::create(b, loc, x, y);
   }
   Value div(Value x, Value y) {
@@ -77,6 +107,8 @@ public:
   Value neg(Value x) {
     if (isZero(x))
       return constant(0.0);
+    if (Value a = negated(x))
+      return a;
     return arith::NegFOp::create(b, loc, x);
   }
 
