@@ -29,9 +29,10 @@ class GpuSession:
         self.chip = gpu_status().devices[ordinal][1]
         self._libraries: Dict[Tuple[str, str, str], GpuKernels] = {}
         self._modules: Dict[str, object] = {}
-        # (kind, path) -> (what the copy was made from, device buffer)
-        self._copies: Dict[Tuple[str, str], Tuple[object, object]] = {}
-        self._sources: Dict[Tuple[str, str], object] = {}
+        # (kind, path) -> (what the copy was made from, device buffer, and
+        # the source object, held so that its id is not reused by another
+        # object while the copy is cached)
+        self._copies: Dict[Tuple[str, str], Tuple[object, object, object]] = {}
         #: (kind, path) of every upload, in order (for tests and tuning).
         self.uploads: List[Tuple[str, str]] = []
 
@@ -66,10 +67,7 @@ class GpuSession:
             return cached[1]
         buffer = self._native.gpu_upload(self.device,
                                          np.ascontiguousarray(host))
-        self._copies[(kind, path)] = (token, buffer)
-        # Holding the source keeps its id from being reused by another
-        # object while the copy is cached.
-        self._sources[(kind, path)] = source
+        self._copies[(kind, path)] = (token, buffer, source)
         self.uploads.append((kind, path))
         return buffer
 

@@ -26,6 +26,20 @@ int expectedParams = 0;
 std::string loadedImage, functionName;
 unsigned lastDims[6];
 std::vector<std::uint64_t> lastParams;
+struct ErrorText {
+  int code;
+  const char *name, *text;
+};
+constexpr ErrorText kErrors[] = {
+    {0, "CUDA_SUCCESS", "no error"},
+    {2, "CUDA_ERROR_OUT_OF_MEMORY", "out of memory"},
+    {100, "CUDA_ERROR_NO_DEVICE", "no CUDA-capable device is detected"}};
+const ErrorText *findError(int code) {
+  for (const ErrorText &error : kErrors)
+    if (error.code == code)
+      return &error;
+  return nullptr;
+}
 } // namespace
 
 extern "C" {
@@ -44,36 +58,14 @@ const char *fakeCudaLastLaunch(const char **image, unsigned *dims,
 }
 
 int cuGetErrorName(int error, const char **name) {
-  switch (error) {
-  case 0:
-    *name = "CUDA_SUCCESS";
-    return 0;
-  case 2:
-    *name = "CUDA_ERROR_OUT_OF_MEMORY";
-    return 0;
-  case 100:
-    *name = "CUDA_ERROR_NO_DEVICE";
-    return 0;
-  default:
-    *name = nullptr;
-    return 1;
-  }
+  const ErrorText *known = findError(error);
+  *name = known ? known->name : nullptr;
+  return known ? 0 : 1;
 }
 int cuGetErrorString(int error, const char **text) {
-  switch (error) {
-  case 0:
-    *text = "no error";
-    return 0;
-  case 2:
-    *text = "out of memory";
-    return 0;
-  case 100:
-    *text = "no CUDA-capable device is detected";
-    return 0;
-  default:
-    *text = nullptr;
-    return 1;
-  }
+  const ErrorText *known = findError(error);
+  *text = known ? known->text : nullptr;
+  return known ? 0 : 1;
 }
 int cuInit(unsigned) { return mode == 1 ? 100 : 0; }
 int cuDriverGetVersion(int *version) {

@@ -304,15 +304,27 @@ struct ImperativeBuilder {
     // The squares are representable between these bounds (with margin).
     Value safe = both(fcmp(arith::CmpFPredicate::OLT, sq, cst(1e300)),
                       fcmp(arith::CmpFPredicate::OGT, sq, cst(1e-300)));
-    return ifValue(
-        safe, valueType(), [&] { return sqrt(sq); },
-        [&] {
-          Value big = max(abs(x), abs(y));
-          Value nonzero = gt(big, cst(0.0));
-          Value scale = select(nonzero, big, cst(1.0));
-          Value xs = div(x, scale), ys = div(y, scale);
-          return mul(scale, sqrt(add(mul(xs, xs), mul(ys, ys))));
-        });
+    auto scaled = [&] {
+      Value big = max(abs(x), abs(y));
+      Value nonzero = gt(big, cst(0.0));
+      Value scale = select(nonzero, big, cst(1.0));
+      Value xs = div(x, scale), ys = div(y, scale);
+      return mul(scale, sqrt(add(mul(xs, xs), mul(ys, ys))));
+    };
+    if (lanes == 1)
+      return ifValue(
+          safe, valueType(), [&] { return sqrt(sq); }, scaled);
+    // With lanes, the scaled form (two divisions) runs only when a lane
+    // needs it: this is on the QL iteration's critical path.
+    Value fast = sqrt(sq);
+    auto ifOp = scf::IfOp::create(b, loc, TypeRange{valueType()}, all(safe),
+                                  /*withElseRegion=*/true);
+    OpBuilder::InsertionGuard guard(b);
+    b.setInsertionPointToStart(ifOp.thenBlock());
+    scf::YieldOp::create(b, loc, fast);
+    b.setInsertionPointToStart(ifOp.elseBlock());
+    scf::YieldOp::create(b, loc, select(safe, fast, scaled()));
+    return ifOp.getResult(0);
   }
 };
 

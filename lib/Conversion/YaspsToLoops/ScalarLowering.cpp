@@ -31,12 +31,17 @@ public:
       : b(b), loc(loc), type(type), symbolicZeros(symbolicZeros), lanes(lanes) {
   }
 
-  Value constant(double value) { return constant(APFloat(value)); }
+  Value constant(double value) { return splat(b.getFloatAttr(type, value)); }
   Value constant(const APFloat &value) {
-    Attribute attr = b.getFloatAttr(type, value);
+    return splat(b.getFloatAttr(type, value));
+  }
+  /// A constant scalar, or a vector of it in every lane.
+  Value splat(FloatAttr attr) {
+    TypedAttr typed = attr;
     if (lanes > 1)
-      attr = DenseElementsAttr::get(VectorType::get({lanes}, type), attr);
-    return arith::ConstantOp::create(b, loc, cast<TypedAttr>(attr));
+      typed = DenseElementsAttr::get(VectorType::get({lanes}, type),
+                                     Attribute(attr));
+    return arith::ConstantOp::create(b, loc, typed);
   }
   // In derivative kernels literal zeros and ones are folded symbolically:
   // derivative code is full of products with the 0/1 entries of unit

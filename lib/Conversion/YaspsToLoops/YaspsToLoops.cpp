@@ -29,10 +29,10 @@
 #include "yasps/Dialect/Yasps/IR/Yasps.h"
 
 #include "mlir/AsmParser/AsmParser.h"
-#include "mlir/IR/Matchers.h"
-
 #include "mlir/Dialect/Math/IR/Math.h"
 #include "mlir/Dialect/Vector/IR/VectorOps.h"
+#include "mlir/IR/Matchers.h"
+
 #include <map>
 
 namespace mlir::yasps {
