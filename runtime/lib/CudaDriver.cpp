@@ -63,6 +63,8 @@ void CudaDriver::load(const std::string &path) {
   resolve(cuMemGetInfo, "cuMemGetInfo_v2");
   resolve(cuMemcpyHtoD, "cuMemcpyHtoD_v2");
   resolve(cuMemcpyDtoH, "cuMemcpyDtoH_v2");
+  resolve(cuMemcpyDtoD, "cuMemcpyDtoD_v2");
+  resolve(cuMemsetD8, "cuMemsetD8_v2");
   resolve(cuModuleLoadData, "cuModuleLoadData");
   resolve(cuModuleUnload, "cuModuleUnload");
   resolve(cuModuleGetFunction, "cuModuleGetFunction");

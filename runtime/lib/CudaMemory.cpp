@@ -113,3 +113,23 @@ void DeviceBuffer::download(void *host, std::size_t bytes) const {
   ctx->driver().check(ctx->driver().cuMemcpyDtoH(host, ptr, bytes),
                       "cuMemcpyDtoH");
 }
+
+void DeviceBuffer::setZero() {
+  if (length == 0)
+    return;
+  ctx->makeCurrent();
+  ctx->driver().check(ctx->driver().cuMemsetD8(ptr, 0, length), "cuMemsetD8");
+}
+
+void DeviceBuffer::copyFrom(const DeviceBuffer &source, std::size_t bytes) {
+  if (bytes > length || bytes > source.length)
+    throw std::out_of_range("device copy of " + std::to_string(bytes) +
+                            " bytes from a buffer of " +
+                            std::to_string(source.length) + " into one of " +
+                            std::to_string(length));
+  if (bytes == 0)
+    return;
+  ctx->makeCurrent();
+  ctx->driver().check(ctx->driver().cuMemcpyDtoD(ptr, source.ptr, bytes),
+                      "cuMemcpyDtoD");
+}

@@ -141,6 +141,11 @@ GlobalSystem::energyMap(std::size_t energy) {
   return {&part, &part.maps[isStatic ? energy : energy - numStaticEnergies()]};
 }
 
+const GlobalSystem::EnergyMap &
+GlobalSystem::energyStructure(std::size_t energy) const {
+  return *const_cast<GlobalSystem *>(this)->energyMap(energy).second;
+}
+
 /// Runs body(atomic, begin, end) over [0, count): on the pool's threads,
 /// or in order when there is no pool, one thread or little work. `atomic`
 /// (std::true_type when threads share the work) says whether accumulation

@@ -20,6 +20,16 @@ yasps::runtime::selectGpuImage(const std::vector<GpuImage> &images,
   for (const GpuImage &image : images)
     if (image.format == "cubin" && image.chip == chip)
       return image;
+  // A cubin runs on later chips of its major version (sm_80 on sm_86).
+  const GpuImage *cubin = nullptr;
+  int device = chipNumber(chip);
+  for (const GpuImage &image : images)
+    if (image.format == "cubin" && chipNumber(image.chip) / 10 == device / 10 &&
+        chipNumber(image.chip) <= device &&
+        (!cubin || chipNumber(image.chip) > chipNumber(cubin->chip)))
+      cubin = &image;
+  if (cubin)
+    return *cubin;
   // PTX of the newest chip that the device is at least.
   const GpuImage *best = nullptr;
   for (const GpuImage &image : images)

@@ -2,6 +2,7 @@
 
 #include "yasps/Runtime/Pcg.h"
 
+#include "yasps/Runtime/BlockInverse.h"
 #include "yasps/Runtime/BlockSparseMatrix.h"
 #include "yasps/Runtime/ThreadPool.h"
 
@@ -45,7 +46,7 @@ public:
           static_cast<std::size_t>(layout_.blockSize(r) * layout_.blockSize(r));
     pool.parallelFor(0, layout_.numBlocks(), kBlocksPerChunk,
                      [&](std::int64_t begin, std::int64_t end) {
-                       std::vector<std::int64_t> freeDofs;
+                       std::vector<long long> freeDofs;
                        std::vector<double> a, l;
                        for (std::int64_t r = begin; r < end; ++r)
                          invertBlock(r, fixed, freeDofs, a, l);
@@ -73,68 +74,15 @@ public:
 private:
   /// Replaces diagonal block `r` (in inverse_) by its preconditioner.
   void invertBlock(std::int64_t r, const std::uint8_t *fixed,
-                   std::vector<std::int64_t> &freeDofs, std::vector<double> &a,
+                   std::vector<long long> &freeDofs, std::vector<double> &a,
                    std::vector<double> &l) {
     std::int64_t s = layout_.blockSize(r);
-    double *block = inverse_.data() + start_[r];
-    freeDofs.clear();
-    for (std::int64_t i = 0; i < s; ++i)
-      if (!fixed || !fixed[layout_.blockOffset[r] + i])
-        freeDofs.push_back(i);
-    std::int64_t m = static_cast<std::int64_t>(freeDofs.size());
-    a.assign(static_cast<std::size_t>(m * m), 0.0);
-    for (std::int64_t i = 0; i < m; ++i)
-      for (std::int64_t j = 0; j < m; ++j)
-        a[i * m + j] = block[freeDofs[i] * s + freeDofs[j]];
-    std::fill(block, block + s * s, 0.0);
-
-    // Cholesky A = L L^T, lower triangle of l.
-    l.assign(static_cast<std::size_t>(m * m), 0.0);
-    bool ok = true;
-    for (std::int64_t j = 0; j < m && ok; ++j) {
-      double d = a[j * m + j];
-      for (std::int64_t k = 0; k < j; ++k)
-        d -= l[j * m + k] * l[j * m + k];
-      // `!(d > 0)` also catches NaN.
-      if (!(d > 0.0) || !std::isfinite(d)) {
-        ok = false;
-        break;
-      }
-      double ljj = std::sqrt(d);
-      l[j * m + j] = ljj;
-      for (std::int64_t i = j + 1; i < m; ++i) {
-        double v = a[i * m + j];
-        for (std::int64_t k = 0; k < j; ++k)
-          v -= l[i * m + k] * l[j * m + k];
-        l[i * m + j] = v / ljj;
-      }
-    }
-    if (!ok) {
-      for (std::int64_t i = 0; i < m; ++i) {
-        double d = std::fabs(a[i * m + i]);
-        block[freeDofs[i] * s + freeDofs[i]] =
-            d > 0.0 && std::isfinite(d) ? 1.0 / d : 1.0;
-      }
-      return;
-    }
-    // Column e of A^-1 solves L L^T x = e_col; `a` is reused for x.
-    for (std::int64_t col = 0; col < m; ++col) {
-      double *y = a.data();
-      for (std::int64_t i = 0; i < m; ++i) {
-        double v = i == col ? 1.0 : 0.0;
-        for (std::int64_t k = 0; k < i; ++k)
-          v -= l[i * m + k] * y[k];
-        y[i] = v / l[i * m + i];
-      }
-      for (std::int64_t i = m - 1; i >= 0; --i) {
-        double v = y[i];
-        for (std::int64_t k = i + 1; k < m; ++k)
-          v -= l[k * m + i] * y[k];
-        y[i] = v / l[i * m + i];
-      }
-      for (std::int64_t i = 0; i < m; ++i)
-        block[freeDofs[i] * s + freeDofs[col]] = y[i];
-    }
+    freeDofs.resize(static_cast<std::size_t>(s));
+    a.resize(static_cast<std::size_t>(s * s));
+    l.resize(static_cast<std::size_t>(s * s));
+    invertDiagonalBlock(s, inverse_.data() + start_[r],
+                        fixed ? fixed + layout_.blockOffset[r] : nullptr,
+                        freeDofs.data(), a.data(), l.data());
   }
 
   const BlockLayout &layout_;
@@ -195,6 +143,21 @@ static bool allFinite(const double *v, std::size_t n) {
   return true;
 }
 
+void yasps::runtime::checkPcgOptions(const PcgOptions &options,
+                                     std::int64_t size) {
+  if (options.fixedDofs &&
+      options.fixedDofs->size() != static_cast<std::size_t>(size))
+    throw std::invalid_argument(
+        "the fixed-DoF mask has " + std::to_string(options.fixedDofs->size()) +
+        " entries but the matrix has " + std::to_string(size) + " DoFs");
+  if (options.maxIterations < 0)
+    throw std::invalid_argument("PCG needs maxIterations >= 0, got " +
+                                std::to_string(options.maxIterations));
+  if (!(options.relativeTolerance >= 0.0))
+    throw std::invalid_argument("PCG needs a relative tolerance >= 0, got " +
+                                std::to_string(options.relativeTolerance));
+}
+
 PcgResult yasps::runtime::solvePcg(const BlockSparseMatrix &H, const double *b,
                                    double *x, const PcgOptions &options,
                                    ThreadPool &pool) {
@@ -213,21 +176,9 @@ PcgResult yasps::runtime::solvePcg(const HessianParts &parts, const double *b,
           "the parts of a PCG matrix must share one block layout");
   const std::int64_t n = H.size();
   const std::size_t un = static_cast<std::size_t>(n);
-  const std::uint8_t *fixed = nullptr;
-  if (options.fixedDofs) {
-    if (options.fixedDofs->size() != un)
-      throw std::invalid_argument("the fixed-DoF mask has " +
-                                  std::to_string(options.fixedDofs->size()) +
-                                  " entries but the matrix has " +
-                                  std::to_string(n) + " DoFs");
-    fixed = options.fixedDofs->data();
-  }
-  if (options.maxIterations < 0)
-    throw std::invalid_argument("PCG needs maxIterations >= 0, got " +
-                                std::to_string(options.maxIterations));
-  if (!(options.relativeTolerance >= 0.0))
-    throw std::invalid_argument("PCG needs a relative tolerance >= 0, got " +
-                                std::to_string(options.relativeTolerance));
+  checkPcgOptions(options, n);
+  const std::uint8_t *fixed =
+      options.fixedDofs ? options.fixedDofs->data() : nullptr;
 
   const double nan = std::numeric_limits<double>::quiet_NaN();
   std::fill(x, x + n, 0.0);

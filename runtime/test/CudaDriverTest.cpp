@@ -8,26 +8,17 @@
 #include "yasps/Runtime/CudaMemory.h"
 #include "yasps/Runtime/GpuLaunch.h"
 
+#include "FakeCudaDriver.h"
+
 #include <gtest/gtest.h>
 
 #include <dlfcn.h>
 #include <vector>
 
 using namespace yasps::runtime;
+using yasps::runtime::test::fakeDriver;
 
 namespace {
-
-/// Loads the fake driver in `mode` (see FakeCuda.cpp).
-std::unique_ptr<CudaDriver> fakeDriver(int mode) {
-  void *fake = dlopen(YASPS_FAKE_CUDA, RTLD_NOW | RTLD_LOCAL);
-  EXPECT_NE(fake, nullptr) << dlerror();
-  auto setMode =
-      reinterpret_cast<void (*)(int)>(dlsym(fake, "fakeCudaSetMode"));
-  setMode(mode);
-  auto driver = std::make_unique<CudaDriver>(YASPS_FAKE_CUDA);
-  dlclose(fake);
-  return driver;
-}
 
 TEST(CudaDriver, MissingLibraryIsReported) {
   CudaDriver driver("/nonexistent/libcuda.so.1");
@@ -126,6 +117,9 @@ TEST(GpuLaunch, PicksTheDevicesCubinElsePtx) {
   EXPECT_EQ(selectGpuImage(images, "sm_90").chip, "sm_90");
   EXPECT_EQ(selectGpuImage(images, "sm_90").format, "cubin");
   EXPECT_EQ(selectGpuImage(images, "sm_120").format, "ptx");
+  // sm_80 code runs on sm_86 and sm_89.
+  EXPECT_EQ(selectGpuImage(images, "sm_89").chip, "sm_80");
+  EXPECT_EQ(selectGpuImage(images, "sm_89").format, "cubin");
   try {
     selectGpuImage(images, "sm_75");
     FAIL() << "an sm_75 device got a binary";

@@ -5,11 +5,16 @@
 // machines without a GPU. `fakeCudaSetMode` picks the behaviour: 0 a
 // healthy driver with one "Fake GPU" (compute capability 9.0, 8 GiB, of
 // which 1 GiB is free), 1 a cuInit that fails with CUDA_ERROR_NO_DEVICE,
-// 2 a driver without devices. Modules load any image; launches are not
-// run but recorded (`fakeCudaLastLaunch`), with as many 8-byte parameters
-// as `fakeCudaExpectParams` said.
+// 2 a driver without devices. Modules load any image. Launches are
+// recorded (`fakeCudaLastLaunch`), with as many 8-byte parameters as
+// `fakeCudaExpectParams` said. Launches of the GPU solver's kernels
+// (GpuSolverKernels.h) also run: their bodies, the ones nvcc compiles, run
+// on the host one thread after another, on "device" memory that is host
+// memory here. Other kernels are not run.
 //
 //===----------------------------------------------------------------------===//
+
+#include "yasps/Runtime/GpuSolverKernels.h"
 
 #include <cstddef>
 #include <cstdlib>
@@ -34,6 +39,51 @@ constexpr ErrorText kErrors[] = {
     {0, "CUDA_SUCCESS", "no error"},
     {2, "CUDA_ERROR_OUT_OF_MEMORY", "out of memory"},
     {100, "CUDA_ERROR_NO_DEVICE", "no CUDA-capable device is detected"}};
+
+using namespace yasps::runtime::gpu;
+
+/// Runs a solver kernel's body over `grid` blocks of `threads` threads.
+template <typename Args, void (*Body)(HostBlock &, const Args &)>
+void emulate(void **params, unsigned grid, unsigned threads) {
+  const Args &args = *static_cast<const Args *>(params[0]);
+  static SharedMemory shared;
+  for (unsigned b = 0; b < grid; ++b) {
+    HostBlock block{&shared, b, grid, static_cast<int>(threads)};
+    Body(block, args);
+  }
+}
+
+struct EmulatedKernel {
+  const char *name;
+  void (*run)(void **, unsigned, unsigned);
+};
+#define YASPS_EMULATED_SPMV(R, C)                                              \
+  {"yasps_spmv_" #R "x" #C, emulate<SpmvArgs, spmvBody<R, C, HostBlock>>},
+const EmulatedKernel kEmulated[] = {
+    {"yasps_assemble", emulate<AssembleArgs, assembleBody<HostBlock>>},
+    {"yasps_check_finite",
+     emulate<CheckFiniteArgs, checkFiniteBody<HostBlock>>},
+    {"yasps_jacobi_invert",
+     emulate<JacobiInvertArgs, jacobiInvertBody<HostBlock>>},
+    {"yasps_jacobi_apply",
+     emulate<JacobiApplyArgs, jacobiApplyBody<HostBlock>>},
+    {"yasps_dot", emulate<DotArgs, dotBody<HostBlock>>},
+    {"yasps_pcg_init", emulate<PcgInitArgs, pcgInitBody<HostBlock>>},
+    {"yasps_pcg_update", emulate<PcgUpdateArgs, pcgUpdateBody<HostBlock>>},
+    {"yasps_pcg_direction",
+     emulate<PcgDirectionArgs, pcgDirectionBody<HostBlock>>},
+    {"yasps_pcg_scalar", emulate<PcgScalarArgs, pcgScalarBody<HostBlock>>},
+    {"yasps_spmv_any", emulate<SpmvArgs, spmvBody<0, 0, HostBlock>>},
+    YASPS_SPMV_SHAPES(YASPS_EMULATED_SPMV)};
+#undef YASPS_EMULATED_SPMV
+
+const EmulatedKernel *emulatedKernel(const void *function) {
+  for (const EmulatedKernel &kernel : kEmulated)
+    if (function == &kernel)
+      return &kernel;
+  return nullptr;
+}
+
 const ErrorText *findError(int code) {
   for (const ErrorText &error : kErrors)
     if (error.code == code)
@@ -123,6 +173,15 @@ int cuMemcpyDtoH_v2(void *dst, unsigned long long src, std::size_t n) {
   std::memcpy(dst, reinterpret_cast<void *>(src), n);
   return 0;
 }
+int cuMemcpyDtoD_v2(unsigned long long dst, unsigned long long src,
+                    std::size_t n) {
+  std::memmove(reinterpret_cast<void *>(dst), reinterpret_cast<void *>(src), n);
+  return 0;
+}
+int cuMemsetD8_v2(unsigned long long dst, unsigned char value, std::size_t n) {
+  std::memset(reinterpret_cast<void *>(dst), value, n);
+  return 0;
+}
 int cuModuleLoadData(void **module, const void *image) {
   static int token;
   loadedImage = static_cast<const char *>(image);
@@ -136,15 +195,24 @@ int cuModuleGetFunction(void **function, void *, const char *name) {
     return 500; // CUDA_ERROR_NOT_FOUND
   functionName = name;
   *function = &token;
+  for (const EmulatedKernel &kernel : kEmulated)
+    if (functionName == kernel.name)
+      *function = const_cast<EmulatedKernel *>(&kernel);
   return 0;
 }
-int cuLaunchKernel(void *, unsigned gx, unsigned gy, unsigned gz, unsigned bx,
-                   unsigned by, unsigned bz, unsigned, void *, void **params,
-                   void **) {
+int cuLaunchKernel(void *function, unsigned gx, unsigned gy, unsigned gz,
+                   unsigned bx, unsigned by, unsigned bz, unsigned, void *,
+                   void **params, void **) {
   unsigned dims[6] = {gx, gy, gz, bx, by, bz};
   for (int i = 0; i < 6; ++i)
     lastDims[i] = dims[i];
   lastParams.clear();
+  if (const EmulatedKernel *kernel = emulatedKernel(function)) {
+    // Solver kernels take one argument struct.
+    functionName = kernel->name;
+    kernel->run(params, gx, bx);
+    return 0;
+  }
   for (int i = 0; i < expectedParams; ++i)
     lastParams.push_back(*static_cast<std::uint64_t *>(params[i]));
   return 0;

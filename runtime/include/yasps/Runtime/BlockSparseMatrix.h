@@ -136,6 +136,14 @@ public:
   const std::vector<BlockGroup> &groups() const { return groups_; }
   std::int64_t blockRow(std::size_t block) const { return blockRow_[block]; }
   std::int64_t blockCol(std::size_t block) const { return blockCol_[block]; }
+  /// Where stored block `block`'s values start in values().
+  std::size_t valueOffset(std::size_t block) const {
+    return valueOffset_[block];
+  }
+  /// The stored block holding diagonal block `block` (-1: none).
+  std::int64_t diagonalBlock(std::int64_t block) const {
+    return diagonalBlock_[block];
+  }
   /// The row-major values of stored block `block`.
   double *blockData(std::size_t block) {
     return values_.data() + valueOffset_[block];

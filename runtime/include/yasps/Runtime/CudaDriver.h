@@ -108,6 +108,9 @@ public:
   cu::Result (*cuMemcpyHtoD)(cu::DevicePtr, const void *,
                              std::size_t) = nullptr;
   cu::Result (*cuMemcpyDtoH)(void *, cu::DevicePtr, std::size_t) = nullptr;
+  cu::Result (*cuMemcpyDtoD)(cu::DevicePtr, cu::DevicePtr,
+                             std::size_t) = nullptr;
+  cu::Result (*cuMemsetD8)(cu::DevicePtr, unsigned char, std::size_t) = nullptr;
   cu::Result (*cuModuleLoadData)(cu::Module *, const void *) = nullptr;
   cu::Result (*cuModuleUnload)(cu::Module) = nullptr;
   cu::Result (*cuModuleGetFunction)(cu::Function *, cu::Module,

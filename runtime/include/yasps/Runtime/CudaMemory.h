@@ -44,6 +44,8 @@ public:
   /// Allocates; throws CudaError, with the sizes involved for out of
   /// memory. Zero bytes allocate nothing.
   DeviceBuffer(const CudaContext &context, std::size_t bytes);
+  /// An empty buffer (of no context), to be assigned later.
+  DeviceBuffer() = default;
   ~DeviceBuffer();
   DeviceBuffer(DeviceBuffer &&other) noexcept;
   DeviceBuffer &operator=(DeviceBuffer &&other) noexcept;
@@ -56,12 +58,18 @@ public:
   /// Copies `bytes` bytes from the start of the buffer to host memory.
   void download(void *host, std::size_t bytes) const;
 
+  /// Sets every byte to zero.
+  void setZero();
+  /// Copies `bytes` bytes from the start of `source` to the start of this
+  /// buffer (on the device; throws std::out_of_range past either's end).
+  void copyFrom(const DeviceBuffer &source, std::size_t bytes);
+
   cu::DevicePtr pointer() const { return ptr; }
   std::size_t size() const { return length; }
 
 private:
   void release() noexcept;
-  const CudaContext *ctx;
+  const CudaContext *ctx = nullptr;
   cu::DevicePtr ptr = 0;
   std::size_t length = 0;
 };

@@ -84,13 +84,6 @@ public:
   /// Solves H x = g by block-Jacobi PCG (x has size() entries).
   PcgResult solve(double *x, const PcgOptions &options, ThreadPool &pool) const;
 
-  std::int64_t size() const { return staticPart.matrix.size(); }
-  std::size_t numStaticEnergies() const { return staticPart.maps.size(); }
-  std::size_t numEnergies() const {
-    return staticPart.maps.size() + dynamicPart.maps.size();
-  }
-
-private:
   /// Per energy: for each instance and parameter, the index of its block
   /// among the instance's blocks and its offset in the block (-1: no DoF);
   /// for each instance, the stored slot of every pair of its blocks.
@@ -100,6 +93,16 @@ private:
     std::vector<std::int64_t> globalBlock; // count x maxBlocks, -1 padded
     std::vector<BlockSlot> pairSlot;       // count x maxBlocks x maxBlocks
   };
+  /// The structure of energy `energy` (throws std::out_of_range).
+  const EnergyMap &energyStructure(std::size_t energy) const;
+
+  std::int64_t size() const { return staticPart.matrix.size(); }
+  std::size_t numStaticEnergies() const { return staticPart.maps.size(); }
+  std::size_t numEnergies() const {
+    return staticPart.maps.size() + dynamicPart.maps.size();
+  }
+
+private:
   /// Energies and the matrix their structure makes.
   struct Part {
     std::vector<EnergyMap> maps;

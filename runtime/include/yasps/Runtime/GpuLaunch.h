@@ -43,7 +43,8 @@ struct GpuImage {
 };
 
 /// The image a device of compute capability `chip` runs: its own cubin, else
-/// PTX for an older or equal chip (which the driver compiles). Throws
+/// a cubin of an older chip of the same major version (binary compatible),
+/// else PTX for an older or equal chip (which the driver compiles). Throws
 /// CudaError naming what there is when nothing fits.
 const GpuImage &selectGpuImage(const std::vector<GpuImage> &images,
                                const std::string &chip);

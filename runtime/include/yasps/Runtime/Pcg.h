@@ -38,6 +38,11 @@ struct PcgResult {
   bool converged;
 };
 
+/// Throws std::invalid_argument if `options` do not fit a matrix of `size`
+/// DoFs: a fixed-DoF mask of another size, maxIterations < 0 or a negative
+/// or NaN tolerance.
+void checkPcgOptions(const PcgOptions &options, std::int64_t size);
+
 /// Solves H x = b from x = 0 by block-Jacobi preconditioned CG. `b` and `x`
 /// hold H.size() values. H must be symmetric positive definite on the free
 /// DoFs; a diagonal block whose free part has no Cholesky factor (not

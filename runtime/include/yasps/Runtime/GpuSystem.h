@@ -1,0 +1,107 @@
+//===- GpuSystem.h - the Newton system on the GPU ---------------*- C++ -*-===//
+//
+// The device side of GlobalSystem: the same compressed block-sparse
+// Hessian (static and dynamic parts) and gradient, held in device memory,
+// assembled from device-resident local derivatives with atomic adds, and
+// solved by block-Jacobi PCG on the device (paper sections 7-8, appendices
+// B-D). Only the results asked for are copied back.
+//
+// The structure (which blocks exist and where each instance's entries go)
+// is built on the host by GlobalSystem and uploaded; a GpuSystem mirrors
+// one GlobalSystem and is told when its dynamic part changes.
+//
+//===----------------------------------------------------------------------===//
+
+#ifndef YASPS_RUNTIME_GPUSYSTEM_H
+#define YASPS_RUNTIME_GPUSYSTEM_H
+
+#include "yasps/Runtime/CudaMemory.h"
+#include "yasps/Runtime/GlobalSystem.h"
+#include "yasps/Runtime/GpuLaunch.h"
+
+#include <map>
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace yasps::runtime {
+
+/// The binaries of the solver kernels (lib/Gpu/SolverKernels.cu) built
+/// into this library: cubins for sm_80 and sm_90 and PTX. Empty when nvcc
+/// was not found at build time.
+const std::vector<GpuImage> &gpuSolverImages();
+
+/// The names of the solver kernels (every binary defines them all).
+std::vector<std::string> gpuSolverKernelNames();
+
+/// The Newton system of a GlobalSystem, on one device.
+class GpuSystem {
+public:
+  /// Uploads `host`'s structure to the device of `context`; values start
+  /// at zero. Throws CudaError when the solver kernels cannot be loaded
+  /// (built without nvcc, or no binary fits the device).
+  GpuSystem(const CudaContext &context, const GlobalSystem &host);
+  ~GpuSystem();
+  GpuSystem(const GpuSystem &) = delete;
+  GpuSystem &operator=(const GpuSystem &) = delete;
+
+  /// Uploads the dynamic part's structure again, after host.setDynamic().
+  /// Its values are zero afterwards.
+  void updateDynamic(const GlobalSystem &host);
+
+  /// Zeroes the gradient and the Hessian.
+  void setZero();
+
+  /// Adds energy `energy`'s local gradients (count x n) and Hessians
+  /// (count x n x n), both in device memory, with one thread per instance.
+  void add(std::size_t energy, cu::DevicePtr gradients, cu::DevicePtr hessians);
+  /// add() for factored Hessians J^T P J: `maps` (count x m x n) and
+  /// `inner` (count x m x m) in device memory; m <= 64.
+  void addFactored(std::size_t energy, cu::DevicePtr gradients,
+                   cu::DevicePtr maps, cu::DevicePtr inner, std::int64_t m);
+
+  /// y = H x (both parts), x and y in device memory (size() each).
+  void multiply(cu::DevicePtr x, cu::DevicePtr y);
+
+  /// Solves H x = gradient by block-Jacobi PCG on the device, x in device
+  /// memory. Same contract as GlobalSystem::solve; the host looks at the
+  /// solver's state every `checkEvery` iterations (iterations queued past
+  /// the end do nothing).
+  PcgResult solve(cu::DevicePtr x, const PcgOptions &options,
+                  int checkEvery = 8);
+
+  /// The gradient on the device, and copies of it and of a part's values
+  /// (0 static, 1 dynamic; laid out as that part's BlockSparseMatrix).
+  cu::DevicePtr gradientPointer() const;
+  std::vector<double> gradient() const;
+  std::vector<double> hessianValues(int part) const;
+
+  std::int64_t size() const { return numDofs; }
+
+private:
+  struct Energy;
+  struct Part;
+  template <typename Args>
+  void launch(const char *kernel, std::int64_t blocks, const Args &args);
+  cu::Function function(const std::string &name) const;
+  void uploadPart(Part &part, const BlockSparseMatrix &matrix,
+                  const GlobalSystem &host, std::size_t firstEnergy,
+                  std::size_t numEnergies);
+  void addLocal(std::size_t energy, cu::DevicePtr gradients,
+                cu::DevicePtr hessians, cu::DevicePtr inner, std::int64_t m);
+  /// Launches the reduction-style kernels over `n` items: their grid.
+  static std::int64_t reductionBlocks(std::int64_t n);
+
+  const CudaContext &ctx;
+  std::unique_ptr<CudaModule> module;
+  std::map<std::string, cu::Function> functions;
+  std::int64_t numDofs = 0, numBlocks = 0;
+  std::size_t numStatic = 0;
+  std::unique_ptr<Part> parts[2];
+  DeviceBuffer gradientValues, blockOffset, inverseStart, inverse, scratchA,
+      scratchL, scratchFree, r, z, p, q, partials, state, fixed;
+};
+
+} // namespace yasps::runtime
+
+#endif // YASPS_RUNTIME_GPUSYSTEM_H

@@ -1,0 +1,434 @@
+//===- GpuSystem.cpp - the Newton system on the GPU -----------------------===//
+
+#include "yasps/Runtime/GpuSystem.h"
+
+#include "yasps/Runtime/GpuSolverKernels.h"
+
+#include <algorithm>
+#include <set>
+#include <stdexcept>
+
+using namespace yasps::runtime;
+using namespace yasps::runtime::gpu;
+
+namespace {
+#define YASPS_SPMV_NAME(R, C) "yasps_spmv_" #R "x" #C,
+const char *const kSpmvKernels[] = {YASPS_SPMV_SHAPES(YASPS_SPMV_NAME)};
+#undef YASPS_SPMV_NAME
+const char *const kOtherKernels[] = {
+    "yasps_assemble",     "yasps_check_finite",  "yasps_jacobi_invert",
+    "yasps_jacobi_apply", "yasps_dot",           "yasps_pcg_init",
+    "yasps_pcg_update",   "yasps_pcg_direction", "yasps_pcg_scalar",
+    "yasps_spmv_any"};
+
+/// The specialised SpMV kernel of a rows x cols block, else the generic one.
+std::string spmvKernel(std::int64_t rows, std::int64_t cols) {
+  std::string name =
+      "yasps_spmv_" + std::to_string(rows) + "x" + std::to_string(cols);
+  for (const char *known : kSpmvKernels)
+    if (name == known)
+      return name;
+  return "yasps_spmv_any";
+}
+
+template <typename T>
+DeviceBuffer uploaded(const CudaContext &context, const std::vector<T> &host) {
+  DeviceBuffer buffer(context, host.size() * sizeof(T));
+  buffer.upload(host.data(), host.size() * sizeof(T));
+  return buffer;
+}
+
+template <typename T> T *as(const DeviceBuffer &buffer) {
+  return reinterpret_cast<T *>(buffer.pointer());
+}
+template <typename T> T *as(cu::DevicePtr pointer) {
+  return reinterpret_cast<T *>(pointer);
+}
+
+std::int64_t ceilDiv(std::int64_t a, std::int64_t b) { return (a + b - 1) / b; }
+} // namespace
+
+std::vector<std::string> yasps::runtime::gpuSolverKernelNames() {
+  std::vector<std::string> names(std::begin(kOtherKernels),
+                                 std::end(kOtherKernels));
+  names.insert(names.end(), std::begin(kSpmvKernels), std::end(kSpmvKernels));
+  return names;
+}
+
+/// One energy's placement tables (GlobalSystem::EnergyMap, flattened for
+/// the assembly kernel).
+struct GpuSystem::Energy {
+  std::int64_t count = 0, numParams = 0, maxBlocks = 0;
+  DeviceBuffer dofs, localBlock, offset, blockSize, pairValue;
+};
+
+/// One part of the Hessian (BlockSparseMatrix, on the device).
+struct GpuSystem::Part {
+  struct Group {
+    std::int64_t rows, cols, count, first, valueStart;
+  };
+  std::vector<Group> groups;
+  std::size_t numValues = 0;
+  DeviceBuffer values, rowDof, colDof, diagonalValue;
+  std::vector<Energy> energies;
+};
+
+GpuSystem::GpuSystem(const CudaContext &context, const GlobalSystem &host)
+    : ctx(context) {
+  const std::vector<GpuImage> &images = gpuSolverImages();
+  if (images.empty())
+    throw CudaError("this build of yasps has no GPU solver kernels: nvcc was "
+                    "not found when it was built",
+                    0);
+  const std::string chip = ctx.driver().devices().at(ctx.ordinal()).chip();
+  module =
+      std::make_unique<CudaModule>(ctx, *selectGpuImage(images, chip).bytes);
+
+  const BlockLayout &layout = host.staticHessian().layout();
+  numDofs = host.size();
+  numBlocks = layout.numBlocks();
+  numStatic = host.numStaticEnergies();
+  std::vector<long long> offsets(layout.blockOffset.begin(),
+                                 layout.blockOffset.end());
+  std::vector<long long> starts{0};
+  for (std::int64_t b = 0; b < numBlocks; ++b)
+    starts.push_back(starts.back() + layout.blockSize(b) * layout.blockSize(b));
+  blockOffset = uploaded(ctx, offsets);
+  inverseStart = uploaded(ctx, starts);
+  const std::size_t squares = static_cast<std::size_t>(starts.back());
+  const std::size_t n = static_cast<std::size_t>(numDofs);
+  inverse = DeviceBuffer(ctx, squares * sizeof(double));
+  scratchA = DeviceBuffer(ctx, squares * sizeof(double));
+  scratchL = DeviceBuffer(ctx, squares * sizeof(double));
+  scratchFree = DeviceBuffer(ctx, n * sizeof(long long));
+  for (DeviceBuffer *vector : {&gradientValues, &r, &z, &p, &q})
+    *vector = DeviceBuffer(ctx, n * sizeof(double));
+  partials = DeviceBuffer(ctx, kMaxPartials * sizeof(double));
+  state = DeviceBuffer(ctx, sizeof(PcgState));
+  fixed = DeviceBuffer(ctx, n);
+
+  parts[0] = std::make_unique<Part>();
+  uploadPart(*parts[0], host.staticHessian(), host, 0, numStatic);
+  updateDynamic(host);
+  setZero();
+}
+
+GpuSystem::~GpuSystem() = default;
+
+void GpuSystem::updateDynamic(const GlobalSystem &host) {
+  if (host.size() != numDofs || host.numStaticEnergies() != numStatic)
+    throw std::invalid_argument("GpuSystem::updateDynamic: a GlobalSystem "
+                                "other than the one this system mirrors");
+  parts[1] = std::make_unique<Part>();
+  uploadPart(*parts[1], host.dynamicHessian(), host, numStatic,
+             host.numEnergies() - numStatic);
+  parts[1]->values.setZero();
+}
+
+void GpuSystem::uploadPart(Part &part, const BlockSparseMatrix &matrix,
+                           const GlobalSystem &host, std::size_t firstEnergy,
+                           std::size_t numEnergies) {
+  const BlockLayout &layout = matrix.layout();
+  const std::size_t stored = matrix.numStoredBlocks();
+  std::vector<long long> rowDof(stored), colDof(stored);
+  for (std::size_t k = 0; k < stored; ++k) {
+    rowDof[k] = layout.blockOffset[matrix.blockRow(k)];
+    colDof[k] = layout.blockOffset[matrix.blockCol(k)];
+  }
+  for (const BlockGroup &group : matrix.groups())
+    if (group.size() > 0 && group.rows * group.cols > 0)
+      part.groups.push_back(
+          {group.rows, group.cols, std::int64_t(group.size()),
+           std::int64_t(group.firstBlock),
+           std::int64_t(matrix.valueOffset(group.firstBlock))});
+  std::vector<long long> diagonal(static_cast<std::size_t>(numBlocks), -1);
+  for (std::int64_t b = 0; b < numBlocks; ++b)
+    if (matrix.diagonalBlock(b) >= 0)
+      diagonal[b] = static_cast<long long>(matrix.valueOffset(
+          static_cast<std::size_t>(matrix.diagonalBlock(b))));
+  part.numValues = matrix.values().size();
+  part.values = DeviceBuffer(ctx, part.numValues * sizeof(double));
+  part.rowDof = uploaded(ctx, rowDof);
+  part.colDof = uploaded(ctx, colDof);
+  part.diagonalValue = uploaded(ctx, diagonal);
+
+  for (std::size_t e = firstEnergy; e < firstEnergy + numEnergies; ++e) {
+    const GlobalSystem::EnergyMap &map = host.energyStructure(e);
+    const std::int64_t count = map.count, n = map.numParams, m = map.maxBlocks;
+    std::vector<long long> dofs(static_cast<std::size_t>(count * n), -1);
+    std::vector<int> sizes(static_cast<std::size_t>(count * m), 0);
+    std::vector<long long> pairValue(static_cast<std::size_t>(count * m * m),
+                                     -1);
+    for (std::int64_t i = 0; i < count; ++i) {
+      const std::int64_t *global = &map.globalBlock[i * m];
+      for (std::int64_t a = 0; a < n; ++a) {
+        std::int32_t local = map.localBlock[i * n + a];
+        if (local >= 0)
+          dofs[i * n + a] =
+              layout.blockOffset[global[local]] + map.offset[i * n + a];
+      }
+      for (std::int64_t a = 0; a < m; ++a) {
+        if (global[a] < 0)
+          continue;
+        sizes[i * m + a] = static_cast<int>(layout.blockSize(global[a]));
+        for (std::int64_t b = 0; b < m; ++b)
+          // Pairs in the lower triangle are added through their transpose.
+          if (global[b] >= 0 && global[a] <= global[b])
+            pairValue[(i * m + a) * m + b] = static_cast<long long>(
+                matrix.valueOffset(map.pairSlot[(i * m + a) * m + b].block));
+      }
+    }
+    Energy energy;
+    energy.count = count;
+    energy.numParams = n;
+    energy.maxBlocks = m;
+    energy.dofs = uploaded(ctx, dofs);
+    energy.localBlock = uploaded(ctx, map.localBlock);
+    energy.offset = uploaded(ctx, map.offset);
+    energy.blockSize = uploaded(ctx, sizes);
+    energy.pairValue = uploaded(ctx, pairValue);
+    part.energies.push_back(std::move(energy));
+  }
+}
+
+cu::Function GpuSystem::function(const std::string &name) const {
+  auto found = functions.find(name);
+  if (found != functions.end())
+    return found->second;
+  cu::Function fn = module->function(name);
+  const_cast<GpuSystem *>(this)->functions.emplace(name, fn);
+  return fn;
+}
+
+template <typename Args>
+void GpuSystem::launch(const char *kernel, std::int64_t blocks,
+                       const Args &args) {
+  if (blocks <= 0)
+    return;
+  ctx.makeCurrent();
+  void *params[] = {const_cast<Args *>(&args)};
+  ctx.driver().check(ctx.driver().cuLaunchKernel(
+                         function(kernel), static_cast<unsigned>(blocks), 1, 1,
+                         kThreadsPerBlock, 1, 1, 0, nullptr, params, nullptr),
+                     "cuLaunchKernel");
+}
+
+std::int64_t GpuSystem::reductionBlocks(std::int64_t n) {
+  return std::clamp<std::int64_t>(ceilDiv(n, kThreadsPerBlock), 1,
+                                  kMaxPartials);
+}
+
+void GpuSystem::setZero() {
+  gradientValues.setZero();
+  for (const std::unique_ptr<Part> &part : parts)
+    part->values.setZero();
+}
+
+void GpuSystem::addLocal(std::size_t energy, cu::DevicePtr gradients,
+                         cu::DevicePtr hessians, cu::DevicePtr inner,
+                         std::int64_t m) {
+  if (energy >= numStatic + parts[1]->energies.size())
+    throw std::out_of_range(
+        "energy " + std::to_string(energy) + " out of range: the system has " +
+        std::to_string(numStatic + parts[1]->energies.size()) + " energies");
+  Part &part = energy < numStatic ? *parts[0] : *parts[1];
+  const Energy &e =
+      part.energies[energy < numStatic ? energy : energy - numStatic];
+  if (inner && (m < 1 || m > kMaxInner))
+    throw std::invalid_argument("GPU assembly of factored Hessians needs an "
+                                "inner size in [1, " +
+                                std::to_string(kMaxInner) + "], got " +
+                                std::to_string(m));
+  AssembleArgs args{};
+  args.count = e.count;
+  args.numParams = e.numParams;
+  args.maxBlocks = e.maxBlocks;
+  args.innerSize = m;
+  args.gradients = as<const double>(gradients);
+  args.hessians = as<const double>(hessians);
+  args.inner = inner ? as<const double>(inner) : nullptr;
+  args.dofs = as<const long long>(e.dofs);
+  args.localBlock = as<const int>(e.localBlock);
+  args.offset = as<const int>(e.offset);
+  args.blockSize = as<const int>(e.blockSize);
+  args.pairValue = as<const long long>(e.pairValue);
+  args.gradient = as<double>(gradientValues);
+  args.values = as<double>(part.values);
+  launch("yasps_assemble", ceilDiv(e.count, kThreadsPerBlock), args);
+}
+
+void GpuSystem::add(std::size_t energy, cu::DevicePtr gradients,
+                    cu::DevicePtr hessians) {
+  addLocal(energy, gradients, hessians, 0, 0);
+}
+
+void GpuSystem::addFactored(std::size_t energy, cu::DevicePtr gradients,
+                            cu::DevicePtr maps, cu::DevicePtr inner,
+                            std::int64_t m) {
+  if (!inner)
+    throw std::invalid_argument("GPU factored assembly without inner Hessians");
+  addLocal(energy, gradients, maps, inner, m);
+}
+
+namespace {
+/// Launches the SpMV kernels of every group of `part` (y += part x).
+template <typename Launch, typename Part>
+void multiplyPart(Launch &&launch, const Part &part, const double *x, double *y,
+                  const PcgState *state) {
+  for (const auto &group : part.groups) {
+    SpmvArgs args{};
+    args.count = group.count;
+    args.rows = group.rows;
+    args.cols = group.cols;
+    args.rowDof = as<const long long>(part.rowDof) + group.first;
+    args.colDof = as<const long long>(part.colDof) + group.first;
+    args.values = as<const double>(part.values) + group.valueStart;
+    args.x = x;
+    args.y = y;
+    args.state = state;
+    launch(spmvKernel(group.rows, group.cols),
+           ceilDiv(group.count, kThreadsPerBlock), args);
+  }
+}
+} // namespace
+
+void GpuSystem::multiply(cu::DevicePtr x, cu::DevicePtr y) {
+  ctx.makeCurrent();
+  ctx.driver().check(
+      ctx.driver().cuMemsetD8(y, 0, static_cast<std::size_t>(numDofs) * 8),
+      "cuMemsetD8");
+  auto run = [&](const std::string &kernel, std::int64_t blocks,
+                 const SpmvArgs &args) {
+    launch(kernel.c_str(), blocks, args);
+  };
+  for (const std::unique_ptr<Part> &part : parts)
+    multiplyPart(run, *part, as<const double>(x), as<double>(y), nullptr);
+}
+
+PcgResult GpuSystem::solve(cu::DevicePtr x, const PcgOptions &options,
+                           int checkEvery) {
+  checkPcgOptions(options, numDofs);
+  if (checkEvery < 1)
+    throw std::invalid_argument("GpuSystem::solve: checkEvery must be >= 1");
+  const unsigned char *mask = nullptr;
+  if (options.fixedDofs) {
+    fixed.upload(options.fixedDofs->data(), options.fixedDofs->size());
+    mask = as<const unsigned char>(fixed);
+  }
+  PcgState initial{};
+  initial.tolerance = options.relativeTolerance;
+  initial.maxIterations = options.maxIterations;
+  state.upload(&initial, sizeof(initial));
+  PcgState *st = as<PcgState>(state);
+  double *partialSums = as<double>(partials);
+  auto scalar = [&](int step, std::int64_t numPartials) {
+    launch("yasps_pcg_scalar", 1,
+           PcgScalarArgs{step, numPartials, partialSums, st});
+  };
+  auto result = [&] {
+    PcgState now;
+    state.download(&now, sizeof(now));
+    return now;
+  };
+  auto finish = [](const PcgState &now) {
+    return PcgResult{now.iterations, now.residual,
+                     now.stopped == kPcgConverged};
+  };
+
+  // r = b (free DoFs), x = 0, ||b||; non-finite input stops at once.
+  const std::int64_t vectorBlocks = reductionBlocks(numDofs);
+  launch("yasps_pcg_init", vectorBlocks,
+         PcgInitArgs{numDofs, as<const double>(gradientValues), mask,
+                     as<double>(x), as<double>(r), partialSums, st});
+  for (const std::unique_ptr<Part> &part : parts)
+    launch("yasps_check_finite",
+           reductionBlocks(static_cast<std::int64_t>(part->numValues)),
+           CheckFiniteArgs{static_cast<long long>(part->numValues),
+                           as<const double>(part->values), st});
+  scalar(kPcgBegin, vectorBlocks);
+  PcgState now = result();
+  if (now.stopped)
+    return finish(now);
+
+  JacobiInvertArgs invert{};
+  invert.numBlocks = numBlocks;
+  invert.numParts = 2;
+  invert.blockOffset = as<const long long>(blockOffset);
+  invert.inverseStart = as<const long long>(inverseStart);
+  for (int k = 0; k < 2; ++k) {
+    invert.diagonalValue[k] = as<const long long>(parts[k]->diagonalValue);
+    invert.values[k] = as<const double>(parts[k]->values);
+  }
+  invert.fixed = mask;
+  invert.inverse = as<double>(inverse);
+  invert.scratchA = as<double>(scratchA);
+  invert.scratchL = as<double>(scratchL);
+  invert.scratchFree = as<long long>(scratchFree);
+  launch("yasps_jacobi_invert", ceilDiv(numBlocks, kThreadsPerBlock), invert);
+
+  const std::int64_t blockBlocks = reductionBlocks(numBlocks);
+  const JacobiApplyArgs apply{numBlocks,
+                              as<const long long>(blockOffset),
+                              as<const long long>(inverseStart),
+                              as<const double>(inverse),
+                              as<const double>(r),
+                              as<double>(z),
+                              partialSums,
+                              st};
+  const PcgDirectionArgs direction{numDofs, as<const double>(z), as<double>(p),
+                                   st};
+  // z = M^-1 r, rz = r . z, p = z.
+  p.setZero();
+  launch("yasps_jacobi_apply", blockBlocks, apply);
+  scalar(kPcgBeta, blockBlocks);
+  launch("yasps_pcg_direction", vectorBlocks, direction);
+
+  auto run = [&](const std::string &kernel, std::int64_t blocks,
+                 const SpmvArgs &args) {
+    launch(kernel.c_str(), blocks, args);
+  };
+  for (std::int64_t k = 0; k <= options.maxIterations; ++k) {
+    scalar(kPcgCheck, 0);
+    q.setZero();
+    for (const std::unique_ptr<Part> &part : parts)
+      multiplyPart(run, *part, as<const double>(p), as<double>(q), st);
+    launch("yasps_dot", vectorBlocks,
+           DotArgs{numDofs, as<const double>(p), as<double>(q), mask,
+                   partialSums, st});
+    scalar(kPcgAlpha, vectorBlocks);
+    launch("yasps_pcg_update", vectorBlocks,
+           PcgUpdateArgs{numDofs, as<const double>(p), as<const double>(q),
+                         as<double>(x), as<double>(r), partialSums, st});
+    scalar(kPcgAfterUpdate, vectorBlocks);
+    launch("yasps_jacobi_apply", blockBlocks, apply);
+    scalar(kPcgBeta, blockBlocks);
+    launch("yasps_pcg_direction", vectorBlocks, direction);
+    if ((k + 1) % checkEvery == 0) {
+      now = result();
+      if (now.stopped)
+        return finish(now);
+    }
+  }
+  // The check of iteration maxIterations has stopped the solve.
+  return finish(result());
+}
+
+cu::DevicePtr GpuSystem::gradientPointer() const {
+  return gradientValues.pointer();
+}
+
+std::vector<double> GpuSystem::gradient() const {
+  std::vector<double> out(static_cast<std::size_t>(numDofs));
+  gradientValues.download(out.data(), out.size() * sizeof(double));
+  return out;
+}
+
+std::vector<double> GpuSystem::hessianValues(int part) const {
+  if (part != 0 && part != 1)
+    throw std::out_of_range("a GPU system has parts 0 (static) and 1 "
+                            "(dynamic), not " +
+                            std::to_string(part));
+  std::vector<double> out(parts[part]->numValues);
+  parts[part]->values.download(out.data(), out.size() * sizeof(double));
+  return out;
+}
