@@ -12,8 +12,10 @@
 #include "GpuRuntimeBindings.h"
 
 #include "yasps/Runtime/GpuLaunch.h"
+#include "yasps/Runtime/GpuSystem.h"
 
 #include <nanobind/ndarray.h>
+#include <nanobind/stl/optional.h>
 #include <nanobind/stl/pair.h>
 #include <nanobind/stl/shared_ptr.h>
 #include <nanobind/stl/string.h>
@@ -174,4 +176,163 @@ void yasps::python::bindGpuRuntime(nb::module_ &m) {
         "Launches `kernel` on instances [begin, end): params are the "
         "recorded (kind, value) pairs, buffers the loop kernel's buffer "
         "arguments in order");
+}
+
+namespace {
+
+using DoubleArray = nb::ndarray<double, nb::c_contig, nb::device::cpu>;
+using MaskArray =
+    nb::ndarray<std::uint8_t, nb::ndim<1>, nb::c_contig, nb::device::cpu>;
+
+/// A GpuSystem with what it needs kept alive: its device's context and the
+/// Python GlobalSystem it mirrors. Local derivatives given as NumPy arrays
+/// are uploaded for each call (they are computed on the CPU for now).
+struct PyGpuSystem {
+  std::shared_ptr<CudaContext> context;
+  nb::object hostObject;
+  const GlobalSystem *host;
+  std::unique_ptr<GpuSystem> gpu;
+
+  /// A device copy of `array` after checking it has `expected` entries.
+  DeviceBuffer upload(const DoubleArray &array, std::size_t expected,
+                      const char *what, std::size_t energy) const {
+    if (array.size() != expected)
+      throw std::invalid_argument(
+          std::string(what) + " of energy " + std::to_string(energy) + " has " +
+          std::to_string(array.size()) + " entries, expected " +
+          std::to_string(expected));
+    DeviceBuffer buffer(*context, expected * sizeof(double));
+    buffer.upload(array.data(), expected * sizeof(double));
+    return buffer;
+  }
+
+  const GlobalSystem::EnergyMap &structure(std::size_t energy) const {
+    return host->energyStructure(energy);
+  }
+
+  void add(std::size_t energy, DoubleArray gradients, DoubleArray hessians) {
+    const auto &map = structure(energy);
+    std::size_t count = map.count, n = map.numParams;
+    DeviceBuffer g = upload(gradients, count * n, "the gradients", energy);
+    DeviceBuffer h = upload(hessians, count * n * n, "the Hessians", energy);
+    gpu->add(energy, g.pointer(), h.pointer());
+    // The uploads are freed on return: let the assembly finish first.
+    context->synchronize();
+  }
+
+  void addFactored(std::size_t energy, DoubleArray gradients, DoubleArray maps,
+                   DoubleArray inner, std::int64_t m) {
+    const auto &map = structure(energy);
+    std::size_t count = map.count, n = map.numParams, k = std::size_t(m);
+    DeviceBuffer g = upload(gradients, count * n, "the gradients", energy);
+    DeviceBuffer j = upload(maps, count * k * n, "the inner maps", energy);
+    DeviceBuffer p = upload(inner, count * k * k, "the inner Hessians", energy);
+    gpu->addFactored(energy, g.pointer(), j.pointer(), p.pointer(), m);
+    context->synchronize();
+  }
+
+  void checkSize(const DoubleArray &array) const {
+    if (array.size() != std::size_t(gpu->size()))
+      throw std::invalid_argument("array of " + std::to_string(array.size()) +
+                                  " entries, expected " +
+                                  std::to_string(gpu->size()));
+  }
+
+  nb::tuple solve(DoubleArray out, double tolerance, std::int64_t maxIterations,
+                  std::optional<MaskArray> fixed, int checkEvery) {
+    checkSize(out);
+    PcgOptions options;
+    options.relativeTolerance = tolerance;
+    options.maxIterations = maxIterations;
+    std::vector<std::uint8_t> mask;
+    if (fixed) {
+      mask.assign(fixed->data(), fixed->data() + fixed->shape(0));
+      options.fixedDofs = &mask;
+    }
+    DeviceBuffer x(*context, out.size() * sizeof(double));
+    PcgResult result;
+    {
+      nb::gil_scoped_release release;
+      result = gpu->solve(x.pointer(), options, checkEvery);
+      x.download(out.data(), out.size() * sizeof(double));
+    }
+    return nb::make_tuple(result.iterations, result.relativeResidual,
+                          result.converged);
+  }
+
+  void multiply(DoubleArray x, DoubleArray y) {
+    checkSize(x);
+    checkSize(y);
+    DeviceBuffer dx(*context, x.size() * sizeof(double));
+    dx.upload(x.data(), x.size() * sizeof(double));
+    DeviceBuffer dy(*context, y.size() * sizeof(double));
+    gpu->multiply(dx.pointer(), dy.pointer());
+    dy.download(y.data(), y.size() * sizeof(double));
+  }
+
+  void gradient(DoubleArray out) const {
+    checkSize(out);
+    std::vector<double> g = gpu->gradient();
+    std::copy(g.begin(), g.end(), out.data());
+  }
+};
+
+} // namespace
+
+void yasps::python::bindGpuSystem(nb::module_ &m, HostSystemOf hostSystemOf) {
+  static HostSystemOf systemOf = hostSystemOf;
+  nb::class_<PyGpuSystem>(
+      m, "GpuSystem",
+      "The Newton system of a GlobalSystem on a GPU: assembly, SpMV and "
+      "block-Jacobi PCG on the device")
+      .def(
+          "__init__",
+          [](PyGpuSystem *self, const PyDevice &device, nb::handle system) {
+            const GlobalSystem &host = systemOf(system);
+            new (self)
+                PyGpuSystem{device.context, nb::borrow(system), &host,
+                            std::make_unique<GpuSystem>(*device.context, host)};
+          },
+          nb::arg("device"), nb::arg("system"),
+          "Uploads the structure of `system` (a GlobalSystem) to `device`")
+      .def_prop_ro("size",
+                   [](const PyGpuSystem &self) { return self.gpu->size(); })
+      .def(
+          "update_dynamic",
+          [](PyGpuSystem &self) { self.gpu->updateDynamic(*self.host); },
+          "Uploads the dynamic structure again after system.set_dynamic")
+      .def(
+          "set_zero", [](PyGpuSystem &self) { self.gpu->setZero(); },
+          "Zeroes the gradient and Hessian")
+      .def("add", &PyGpuSystem::add, nb::arg("energy"), nb::arg("gradients"),
+           nb::arg("hessians"),
+           "Adds energy `energy`'s local gradients (count, n) and Hessians "
+           "(count, n, n)")
+      .def("add_factored", &PyGpuSystem::addFactored, nb::arg("energy"),
+           nb::arg("gradients"), nb::arg("maps"), nb::arg("inner"),
+           nb::arg("m"),
+           "add() with Hessians J^T P J: maps (count, m, n), inner (count, m, "
+           "m)")
+      .def("solve", &PyGpuSystem::solve, nb::arg("out"), nb::arg("tolerance"),
+           nb::arg("max_iterations"), nb::arg("fixed").none() = nb::none(),
+           nb::arg("check_every") = 8,
+           "Solves H x = g into `out` on the device; returns (iterations, "
+           "relative residual, converged)")
+      .def("multiply", &PyGpuSystem::multiply, nb::arg("x"), nb::arg("y"),
+           "y = H x on the device")
+      .def("gradient", &PyGpuSystem::gradient, nb::arg("out"),
+           "Copies the assembled gradient into `out`");
+  m.def(
+      "gpu_solver_images",
+      [] {
+        nb::dict out;
+        for (const GpuImage &image : gpuSolverImages())
+          out[nb::make_tuple(image.chip, image.format)] =
+              nb::bytes(image.bytes->data(), image.bytes->size());
+        return out;
+      },
+      "The GPU solver kernels built into the runtime: {(chip, format): "
+      "bytes} (empty without nvcc at build time)");
+  m.def("gpu_solver_kernel_names", &gpuSolverKernelNames,
+        "The kernels every GPU solver binary defines");
 }

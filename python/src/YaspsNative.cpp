@@ -324,6 +324,7 @@ public:
   }
 
   int64_t size() const { return system->size(); }
+  const ::yasps::runtime::GlobalSystem &runtime() const { return *system; }
   size_t storedBlocks() const {
     return system->staticHessian().numStoredBlocks() +
            system->dynamicHessian().numStoredBlocks();
@@ -745,6 +746,10 @@ NB_MODULE(_yasps_native, m) {
            "PCG on H x = g into out; `fixed` (uint8 per DoF) excludes DoFs, "
            "whose solution is 0; returns (iterations, relative residual, "
            "converged)");
+  ::yasps::python::bindGpuSystem(
+      m, [](nb::handle system) -> const ::yasps::runtime::GlobalSystem & {
+        return nb::cast<const PySystem &>(system).runtime();
+      });
 
   m.def("attribute_params", &attributeParams, nb::arg("ir"),
         nb::arg("pipeline"), nb::arg("paths"), nb::arg("name") = "<yasps>",

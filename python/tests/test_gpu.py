@@ -96,3 +96,21 @@ def test_projection_scratch_is_per_thread():
     k = kernels.kernel("@m::@p::@proj")
     assert [kind for kind, _ in k.launch_params].count("buffer") == 2
     assert list(kernels.binaries) == [("sm_90", "cubin")]
+
+
+def test_the_gpu_solver_kernels_are_built_for_sm80_and_sm90():
+    """The runtime's hand-written solver kernels (assembly, SpMV per block
+    shape, block-Jacobi, PCG) are built into it as sm_80 and sm_90 cubins
+    and PTX."""
+    native = yasps.compiler._module()
+    images = native.gpu_solver_images()
+    names = set(native.gpu_solver_kernel_names())
+    assert {"yasps_assemble", "yasps_spmv_3x3", "yasps_spmv_any",
+            "yasps_pcg_scalar"} <= names
+    assert set(images) == {("sm_80", "cubin"), ("sm_90", "cubin"),
+                           ("sm_90", "ptx")}
+    for chip in ("sm_80", "sm_90"):
+        assert names <= elf_function_symbols(images[(chip, "cubin")])
+    ptx = images[("sm_90", "ptx")].rstrip(b"\0").decode()
+    for name in names:
+        assert f".entry {name}(" in ptx

@@ -3,9 +3,10 @@ that are uploaded only when their values change, and (on a machine with a
 usable GPU) compute() on the GPU against the CPU.
 
 Without a GPU the host side still runs against the runtime's stand-in
-driver library (runtime/test/FakeCuda.cpp, which records launches instead of
-running them), in a subprocess so that this process keeps its real driver
-status."""
+driver library (runtime/test/FakeCuda.cpp, which records the launches of
+compiled energy kernels without running them, and runs the GPU solver's
+kernels on the host), in a subprocess so that this process keeps its real
+driver status."""
 
 import os
 import shutil
@@ -99,6 +100,57 @@ def test_device_copies_are_uploaded_only_when_values_change():
     """, YASPS_CUDA_LIBRARY=str(FAKE_DRIVER))
     assert out.splitlines() == ["['attr', 'conn']", "[]", "['attr']",
                                 "['conn']", "[]"]
+
+
+MINIMIZE_ON_BOTH = """
+    import sys
+    import numpy as np, yasps
+    sys.path.insert(0, %r)
+    from test_minimize import soft_box, mixed_scene
+
+    def solve(scene, backend, **kw):
+        yasps.config.backend = backend
+        out = scene.minimizeEnergy(tolerance=1e-12, **kw)
+        assert scene.lastSolve["backend"] == backend
+        return np.concatenate([a.reshape(-1) for a in out]), scene.lastSolve
+
+    def compare(scene, **kw):
+        cpu, cpu_info = solve(scene, "cpu", **kw)
+        gpu, gpu_info = solve(scene, "gpu", **kw)
+        err = np.abs(gpu - cpu).max() / np.abs(cpu).max()
+        print(err < 1e-9, abs(gpu_info["iterations"] - cpu_info["iterations"]) <= 1)
+
+    box = soft_box()
+    compare(box)
+    n = box.m.v.numInstances
+    compare(box, fixed=[np.arange(n) %% 3 == 0])
+    s, pp, p2v, *_ = mixed_scene([[0, 3], [1, 4]])
+    compare(s)
+    for pairs in ([[2, 4]], [[0, 1], [2, 3], [1, 4]]):
+        pp.updateNumInstances(len(pairs))
+        p2v.updateConnectivity(np.array(pairs, dtype=np.int64))
+        compare(s)
+    yasps.config.separate_reduced_hessians = True
+    compare(s)
+    yasps.config.backend = "gpu"
+    try:
+        box.minimizeEnergy(tolerance=1e-14, maxIterations=1)
+    except yasps.SolverError as err:
+        print("after 1 iterations" in str(err), err.solution[0].shape == (n, 3, 1))
+"""
+
+
+@pytest.mark.skipif(not FAKE_DRIVER.exists(),
+                    reason=f"the stand-in driver {FAKE_DRIVER} is not built")
+def test_minimize_energy_on_the_gpu_backend_matches_the_cpu():
+    """minimizeEnergy with the GPU backend: assembly and PCG through the
+    GPU solver's kernels, here run by the stand-in driver (which executes
+    the same kernel bodies on the host), against the CPU backend: a soft
+    box with and without fixed DoFs, a scene with changing dynamic pairs,
+    factored Hessians, and a solve stopped by its iteration limit."""
+    out = run_python(MINIMIZE_ON_BOTH % str(REPO / "python" / "tests"),
+                     YASPS_CUDA_LIBRARY=str(FAKE_DRIVER))
+    assert out.split() == ["True"] * 14, out
 
 
 # --- on a GPU: the same values as the CPU ------------------------------------

@@ -11,8 +11,9 @@ chooses:
 ``yasps.backend()`` names the active one and ``yasps.gpu_status()`` says
 what the driver reported. On the GPU, ``Attribute.compute()`` launches the
 CUDA kernels of ``yasps.gpu`` on device copies of the stored values, which
-are uploaded again only when they change; energy derivatives and
-``minimizeEnergy`` still run on the CPU (docs/gpu.md).
+are uploaded again only when they change, and ``minimizeEnergy`` assembles
+the Newton system and solves it by PCG on the device; energy derivatives
+still run on the CPU (docs/gpu.md).
 """
 
 from __future__ import annotations

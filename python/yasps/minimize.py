@@ -7,6 +7,10 @@ generated ``@E__dofs`` kernels (appendix A.3, ``yasps-generate-indices``),
 from the same parameter groups that differentiation produced; the C++ runtime
 assembles the local gradients and projected Hessians into a block-sparse
 system (appendix B) and solves it with block-Jacobi PCG (section 8).
+
+On the GPU backend (``yasps.backend() == "gpu"``) the assembly and the PCG
+solve run on the device (``GpuSystem``); the local derivatives are still
+computed on the CPU and uploaded, and only the solution comes back.
 """
 
 from __future__ import annotations
@@ -18,6 +22,7 @@ import numpy as np
 
 from . import compiler, config
 from .attribute import Attribute
+from .backend import backend
 from .errors import SceneError, YaspsError
 from .evaluate import energy_derivatives
 from .emit import emit_scene
@@ -80,12 +85,28 @@ def _static_structure_key(scene, layout: DofLayout, static_energies) -> tuple:
             tuple(unions), tuple(id(e) for e in static_energies))
 
 
+def _gpu_system(scene, system):
+    """The GpuSystem mirroring ``system`` (made once per static structure;
+    its dynamic structure is uploaded again on every call)."""
+    from .gpu_runtime import session
+    cached = scene._gpu_system
+    if cached is not None and cached[0] is system:
+        cached[1].update_dynamic()
+        return cached[1]
+    gpu = compiler._module().GpuSystem(session().device, system)
+    scene._gpu_system = (system, gpu)
+    return gpu
+
+
 def assemble(scene, threads: Optional[int] = None,
              timings: Optional[Dict[str, float]] = None,
-             report: Optional[Dict[str, object]] = None):
+             report: Optional[Dict[str, object]] = None,
+             on_gpu: bool = False):
     """The assembled global system and its DoF layout. ``timings``, if given,
     receives the seconds spent on derivatives, indices and assembly;
-    ``report`` whether the static structure was rebuilt.
+    ``report`` whether the static structure was rebuilt. With ``on_gpu``,
+    the system returned is the GPU mirror of the CPU one (a ``GpuSystem``),
+    assembled on the device.
 
     The system keeps static energies (instances fixed from step to step) and
     dynamic ones (``dynamic_instances``, e.g. collision pairs) apart: the
@@ -126,18 +147,22 @@ def assemble(scene, threads: Optional[int] = None,
     spent["indices"] += clock() - start
 
     start = clock()
+    if on_gpu:
+        system = _gpu_system(scene, system)
     system.set_zero()
-    workers = config.num_threads if threads is None else threads
+    # The CPU system splits instances across threads; the GPU runs them all.
+    workers = () if on_gpu else \
+        (config.num_threads if threads is None else threads,)
     for k, (_, d) in enumerate(static + dynamic):
         gradient = np.ascontiguousarray(d.gradient)
         if d.innerMap is not None:
             # Hessians kept as factors: J^T P J is formed while assembling.
             system.add_factored(k, gradient, np.ascontiguousarray(d.innerMap),
                                 np.ascontiguousarray(d.projectedInnerHessian),
-                                d.innerMap.shape[1], workers)
+                                d.innerMap.shape[1], *workers)
         else:
             system.add(k, gradient, np.ascontiguousarray(d.projectedHessian),
-                       workers)
+                       *workers)
     spent["assembly"] += clock() - start
     if timings is not None:
         timings.update(spent)
@@ -177,21 +202,29 @@ def minimize_energy(scene, tolerance: float = 1e-6, maxIterations: int = 1000,
                     threads: Optional[int] = None,
                     fixed: Optional[list] = None) -> List[np.ndarray]:
     """Solves H dx = g for the assembled projected Hessian and gradient,
-    with dx = 0 at the ``fixed`` DoFs (see fixed_dof_mask)."""
+    with dx = 0 at the ``fixed`` DoFs (see fixed_dof_mask), on the active
+    backend (``yasps.backend()``)."""
     if not (tolerance >= 0):
         raise ValueError(f"minimizeEnergy: tolerance must be >= 0, got {tolerance}")
     timings: Dict[str, float] = {}
     report: Dict[str, object] = {}
-    system, layout = assemble(scene, threads, timings, report)
+    where = backend()
+    system, layout = assemble(scene, threads, timings, report,
+                              on_gpu=where == "gpu")
     mask = fixed_dof_mask(layout, fixed)
     x = np.zeros(system.size)
     start = time.perf_counter()
-    iterations, residual, converged = system.solve(
-        x, float(tolerance), int(maxIterations),
-        config.num_threads if threads is None else threads, mask)
+    if where == "gpu":
+        iterations, residual, converged = system.solve(
+            x, float(tolerance), int(maxIterations), mask)
+    else:
+        iterations, residual, converged = system.solve(
+            x, float(tolerance), int(maxIterations),
+            config.num_threads if threads is None else threads, mask)
     timings["solve"] = time.perf_counter() - start
     info = {"iterations": int(iterations), "relativeResidual": float(residual),
-            "converged": bool(converged), "seconds": timings, **report}
+            "converged": bool(converged), "seconds": timings,
+            "backend": where, **report}
     scene.lastSolve = info
     solution = layout.split(x)
     if not converged:

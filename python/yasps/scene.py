@@ -220,6 +220,8 @@ class Scene(Entity):
         # The runtime system of the static energies and what it was built
         # from (yasps.minimize), reused while the structure is unchanged.
         self._static_system = None
+        # The GPU mirror of _static_system's system: (system, GpuSystem).
+        self._gpu_system = None
 
     @property
     def meshes(self) -> Dict[str, "Mesh"]:
