@@ -22,6 +22,7 @@
 #include <nanobind/stl/tuple.h>
 #include <nanobind/stl/vector.h>
 
+#include <chrono>
 #include <memory>
 
 namespace nb = nanobind;
@@ -231,6 +232,38 @@ struct PyGpuSystem {
     context->synchronize();
   }
 
+  /// The device pointer of `buffer` after checking it holds `expected`
+  /// doubles at least.
+  static cu::DevicePtr device(const PyBuffer &buffer, std::size_t expected,
+                              const char *what, std::size_t energy) {
+    if (buffer.buffer->size() < expected * sizeof(double))
+      throw std::invalid_argument(
+          std::string(what) + " of energy " + std::to_string(energy) +
+          ": a device buffer of " + std::to_string(buffer.buffer->size()) +
+          " bytes, expected " + std::to_string(expected) + " doubles");
+    return buffer.buffer->pointer();
+  }
+
+  void addDevice(std::size_t energy, const PyBuffer &gradients,
+                 const PyBuffer &hessians) {
+    const auto &map = structure(energy);
+    std::size_t count = map.count, n = map.numParams;
+    gpu->add(energy, device(gradients, count * n, "the gradients", energy),
+             device(hessians, count * n * n, "the Hessians", energy));
+  }
+
+  void addFactoredDevice(std::size_t energy, const PyBuffer &gradients,
+                         const PyBuffer &maps, const PyBuffer &inner,
+                         std::int64_t m, bool columnMajor) {
+    const auto &map = structure(energy);
+    std::size_t count = map.count, n = map.numParams, k = std::size_t(m);
+    gpu->addFactored(energy,
+                     device(gradients, count * n, "the gradients", energy),
+                     device(maps, count * k * n, "the inner maps", energy),
+                     device(inner, count * k * k, "the inner Hessians", energy),
+                     m, columnMajor);
+  }
+
   void checkSize(const DoubleArray &array) const {
     if (array.size() != std::size_t(gpu->size()))
       throw std::invalid_argument("array of " + std::to_string(array.size()) +
@@ -268,6 +301,28 @@ struct PyGpuSystem {
     DeviceBuffer dy(*context, y.size() * sizeof(double));
     gpu->multiply(dx.pointer(), dy.pointer());
     dy.download(y.data(), y.size() * sizeof(double));
+  }
+
+  /// Seconds per multiply() on device-resident vectors, over `repeats`
+  /// back-to-back launches after a warm-up (for benchmarks).
+  double timeMultiply(int repeats) {
+    if (repeats < 1)
+      throw std::invalid_argument("time_multiply needs repeats >= 1");
+    std::vector<double> ones(std::size_t(gpu->size()), 1.0);
+    DeviceBuffer x(*context, ones.size() * sizeof(double));
+    x.upload(ones.data(), ones.size() * sizeof(double));
+    DeviceBuffer y(*context, ones.size() * sizeof(double));
+    nb::gil_scoped_release release;
+    for (int k = 0; k < 3; ++k)
+      gpu->multiply(x.pointer(), y.pointer());
+    context->synchronize();
+    auto start = std::chrono::steady_clock::now();
+    for (int k = 0; k < repeats; ++k)
+      gpu->multiply(x.pointer(), y.pointer());
+    context->synchronize();
+    std::chrono::duration<double> spent =
+        std::chrono::steady_clock::now() - start;
+    return spent.count() / repeats;
   }
 
   void gradient(DoubleArray out) const {
@@ -313,6 +368,19 @@ void yasps::python::bindGpuSystem(nb::module_ &m, HostSystemOf hostSystemOf) {
            nb::arg("m"),
            "add() with Hessians J^T P J: maps (count, m, n), inner (count, m, "
            "m)")
+      .def("add_device", &PyGpuSystem::addDevice, nb::arg("energy"),
+           nb::arg("gradients"), nb::arg("hessians"),
+           "add() from GpuBuffers already on the device (no copy; the "
+           "buffers must live until the device has run the assembly)")
+      .def("add_factored_device", &PyGpuSystem::addFactoredDevice,
+           nb::arg("energy"), nb::arg("gradients"), nb::arg("maps"),
+           nb::arg("inner"), nb::arg("m"), nb::arg("column_major") = false,
+           "add_factored() from GpuBuffers; column_major: each J is stored "
+           "column-major, as the generated kernels write it")
+      .def(
+          "synchronize",
+          [](const PyGpuSystem &self) { self.context->synchronize(); },
+          "Waits for the system's work on the device")
       .def("solve", &PyGpuSystem::solve, nb::arg("out"), nb::arg("tolerance"),
            nb::arg("max_iterations"), nb::arg("fixed").none() = nb::none(),
            nb::arg("check_every") = 8,
@@ -321,7 +389,17 @@ void yasps::python::bindGpuSystem(nb::module_ &m, HostSystemOf hostSystemOf) {
       .def("multiply", &PyGpuSystem::multiply, nb::arg("x"), nb::arg("y"),
            "y = H x on the device")
       .def("gradient", &PyGpuSystem::gradient, nb::arg("out"),
-           "Copies the assembled gradient into `out`");
+           "Copies the assembled gradient into `out`")
+      .def("time_multiply", &PyGpuSystem::timeMultiply, nb::arg("repeats"),
+           "Seconds per SpMV on device-resident vectors (benchmarks)")
+      .def_prop_ro(
+          "stored_blocks",
+          [](const PyGpuSystem &self) { return self.gpu->storedBlocks(); })
+      .def_prop_ro(
+          "multiply_bytes",
+          [](const PyGpuSystem &self) { return self.gpu->multiplyBytes(); },
+          "Bytes one SpMV moves at least: values, block coordinates, x "
+          "and y once each");
   m.def(
       "gpu_solver_images",
       [] {

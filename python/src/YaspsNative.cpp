@@ -642,6 +642,9 @@ NB_MODULE(_yasps_native, m) {
               d["attribute"] = kernel.attribute;
               d["name"] = kernel.kernelName;
               d["threads_per_block"] = kernel.threadsPerBlock;
+              d["rows"] = kernel.rows;
+              d["cols"] = kernel.cols;
+              d["projection"] = kernel.projection;
               nb::list args, params;
               for (const auto &arg : kernel.arguments)
                 args.append(nb::make_tuple(arg.kind, arg.path));
@@ -660,7 +663,9 @@ NB_MODULE(_yasps_native, m) {
             return out;
           },
           "one dict per kernel: attribute, name (entry point), "
-          "threads_per_block, arguments [(kind, path)], launch_params "
+          "threads_per_block, rows and cols of each instance's value, "
+          "projection (as CpuLibrary.projection), arguments [(kind, path)], "
+          "launch_params "
           "[('index'|'buffer', loop-kernel argument) or ('constant', value)]")
       .def_prop_ro(
           "binaries",

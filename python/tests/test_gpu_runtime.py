@@ -108,6 +108,10 @@ MINIMIZE_ON_BOTH = """
     sys.path.insert(0, %r)
     from test_minimize import soft_box, mixed_scene
 
+    # The stand-in driver does not run generated kernels: derivatives on the
+    # CPU, uploaded for the GPU solve.
+    yasps.config.gpu_derivatives = False
+
     def solve(scene, backend, **kw):
         yasps.config.backend = backend
         out = scene.minimizeEnergy(tolerance=1e-12, **kw)
@@ -140,6 +144,27 @@ MINIMIZE_ON_BOTH = """
 """
 
 
+GPU_DERIVATIVES = """
+    import sys
+    import numpy as np, yasps
+    sys.path.insert(0, %r)
+    from test_minimize import soft_box
+    # Compression reads the indices first: the stand-in's zeros, all
+    # padding, would send every energy to the CPU.
+    yasps.config.compress_local_hessians = False
+    box = soft_box()
+    (dx,) = box.minimizeEnergy()
+    info = box.lastSolve
+    print(info["backend"], info["energiesDifferentiatedOnGpu"],
+          info["converged"], info["iterations"], np.abs(dx).max())
+    # With compression, instances whose indices repeat a DoF (here: all of
+    # them) are differentiated on the CPU.
+    yasps.config.compress_local_hessians = True
+    box.minimizeEnergy()
+    print(box.lastSolve["energiesDifferentiatedOnGpu"])
+"""
+
+
 @pytest.mark.skipif(not FAKE_DRIVER.exists(),
                     reason=f"the stand-in driver {FAKE_DRIVER} is not built")
 def test_minimize_energy_on_the_gpu_backend_matches_the_cpu():
@@ -151,6 +176,22 @@ def test_minimize_energy_on_the_gpu_backend_matches_the_cpu():
     out = run_python(MINIMIZE_ON_BOTH % str(REPO / "python" / "tests"),
                      YASPS_CUDA_LIBRARY=str(FAKE_DRIVER))
     assert out.split() == ["True"] * 14, out
+
+
+@pytest.mark.skipif(not FAKE_DRIVER.exists(),
+                    reason=f"the stand-in driver {FAKE_DRIVER} is not built")
+@pytest.mark.skipif(not HAS_PTXAS, reason="the CUDA toolkit (ptxas) is not "
+                    "installed")
+def test_gpu_derivatives_feed_the_gpu_assembly():
+    """With config.gpu_derivatives, the derivative and index kernels are
+    compiled for the device and launched there, and assembly reads their
+    device outputs. The stand-in driver records those launches without
+    running them (its memory reads as zeros: no DoF, a zero system), so
+    this checks the path, not the numbers; the comparison with the CPU is
+    test_minimize_matches_the_cpu_on_a_gpu."""
+    out = run_python(GPU_DERIVATIVES % str(REPO / "python" / "tests"),
+                     YASPS_CUDA_LIBRARY=str(FAKE_DRIVER))
+    assert out.split() == ["gpu", "2", "True", "0", "0.0", "0"]
 
 
 # --- on a GPU: the same values as the CPU ------------------------------------
@@ -188,3 +229,24 @@ def test_projection_matches_the_cpu(monkeypatch):
     h.updateValue(M + np.transpose(M, (0, 2, 1)))
     for method in ("clamp", "abs"):
         assert_same_as_cpu(h.project(method), monkeypatch)
+
+
+@needs_gpu
+def test_minimize_matches_the_cpu_on_a_gpu(monkeypatch):
+    """minimizeEnergy with derivatives, assembly and PCG on the GPU against
+    the CPU backend, with and without separated reduced Hessians."""
+    import test_minimize as tm
+
+    def solve(scene, backend):
+        monkeypatch.setattr(yasps.config, "backend", backend)
+        out = scene.minimizeEnergy(tolerance=1e-12)
+        assert scene.lastSolve["backend"] == backend
+        return np.concatenate([a.reshape(-1) for a in out])
+
+    for separate in (False, True):
+        monkeypatch.setattr(yasps.config, "separate_reduced_hessians", separate)
+        for scene in (tm.soft_box(), tm.mixed_scene([[0, 3], [1, 4]])[0]):
+            cpu = solve(scene, "cpu")
+            gpu = solve(scene, "gpu")
+            assert scene.lastSolve["energiesDifferentiatedOnGpu"] > 0
+            assert np.abs(gpu - cpu).max() <= 1e-9 * np.abs(cpu).max()

@@ -26,6 +26,10 @@
   in assembly, merge the rows and columns of parameters that share a DoF
   and drop UNION padding, then project the k x k matrix with a kernel
   compiled for that size (paper 7.2). On by default.
+- ``gpu_derivatives``: on the GPU backend, ``minimizeEnergy`` computes the
+  energies' local derivatives on the device, where assembly reads them
+  (``yasps.gpu_derivatives``). Off, they are computed on the CPU and
+  uploaded; the solve still runs on the device. On by default.
 """
 
 from __future__ import annotations
@@ -50,3 +54,4 @@ backend: str = os.environ.get("YASPS_BACKEND", "auto").strip().lower() or "auto"
 simd_lanes: int = 0
 separate_reduced_hessians: bool = False
 compress_local_hessians: bool = True
+gpu_derivatives: bool = True

@@ -8,6 +8,7 @@ offsets as buffers. Intermediate attributes are never stored.
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 from typing import Dict, List, Tuple
 
 import numpy as np
@@ -156,11 +157,25 @@ def _compute_on_gpu(scene: Scene, ir: str, path: str, count: int,
 
     gpu = session()
     kernels = gpu.kernels(ir, path, scene.name)
-    kernel = kernels.kernel(path)
-    native = compiler._module()
-    out = native.gpu_allocate(gpu.device, size)
-    buffers = []
     uploads = len(gpu.uploads)
+    out = run_on_gpu(gpu, kernels, scene, path, count, size)
+    host = np.empty(size, dtype=np.float64)
+    out.download(host)
+    stats = dict(kernels.stats, backend="gpu", device=gpu.chip,
+                 uploaded=gpu.uploads[uploads:])
+    return host, stats
+
+
+def run_on_gpu(gpu, kernels, scene: Scene, path: str, count: int,
+               size: int, out=None):
+    """Launches the kernel of ``path`` on ``count`` instances on the GPU
+    session ``gpu``, its inputs device copies of the scene's stored values;
+    returns its output, a device buffer of ``size`` values (``out`` if
+    given)."""
+    kernel = kernels.kernel(path)
+    if out is None:
+        out = compiler._module().gpu_allocate(gpu.device, size)
+    buffers = []
     for kind, p in kernel.arguments:
         if kind == "out":
             buffers.append(out)
@@ -169,11 +184,7 @@ def _compute_on_gpu(scene: Scene, ir: str, path: str, count: int,
         buffers.append(gpu.copy_of(kind, p, source,
                                    _buffer(scene, kind, p, None)))
     gpu.launch(kernels, path, count, buffers)
-    host = np.empty(size, dtype=np.float64)
-    out.download(host)
-    stats = dict(kernels.stats, backend="gpu", device=gpu.chip,
-                 uploaded=gpu.uploads[uploads:])
-    return host, stats
+    return out
 
 
 #: Passes that turn energies into their local derivatives (docs/passes.md).
@@ -363,42 +374,75 @@ def _project_compressed(dofs: np.ndarray, hess: np.ndarray, method: str,
     return out
 
 
-def energy_derivatives(scene: Scene, energy: Attribute, threads: int = None,
-                       assembly_only: bool = False) -> LocalDerivatives:
-    """Local gradients and Hessians of a registered energy, per instance.
-    ``assembly_only`` computes only what assembly needs: the gradients and
-    the projected Hessians (or their factors), not the values and the
-    unprojected Hessians."""
+@dataclass
+class DerivativeKernels:
+    """Which kernels give an energy's local derivatives (the attributes
+    that ``differentiation_pipeline()`` makes of it)."""
+    base: str         #: the energy's scene-relative path
+    ir: str           #: the scene's IR
+    pipeline: str     #: the differentiation pipeline
+    separate: bool    #: projected Hessians kept as factors (__ij, inner)
+    #: the kernels whose values are returned: __grad, __hess unless only
+    #: assembly needs them, and the projected Hessian or its factors
+    evaluated: List[str]
+    #: whether assembly compresses repeated DoFs before projecting (paper
+    #: 7.2), which needs the unprojected Hessian as well
+    compress: bool
+    paths: List[str]  #: every kernel to compile (evaluated, __hess, __dofs)
+
+
+def derivative_kernels(scene: Scene, energy: Attribute,
+                       assembly_only: bool) -> DerivativeKernels:
+    """The kernels of ``energy``'s local derivatives; ``assembly_only``
+    leaves out what assembly does not need (values, unprojected
+    Hessians)."""
     if not any(e is energy for e in scene.energies):
         raise SceneError(f"{energy.describe()} is not an energy of scene "
                          f"'{scene.name}' (addEnergy)")
     if not scene.minimizeTargets:
         raise SceneError(f"scene '{scene.name}' has no minimisation targets "
                          "(addMinimizeTarget)")
-    owner = energy.owner
-    base = "::".join("@" + n for n in owner.path + [energy.name])
-    native = compiler._module()
+    base = "::".join("@" + n for n in energy.owner.path + [energy.name])
     ir = emit_scene(scene, locations=True)
     pipeline = differentiation_pipeline()
     separate = config.separate_reduced_hessians and bool(
-        native.attribute_params(ir, pipeline, [base + "__hess_inner_proj"],
-                                scene.name)[0])
+        compiler._module().attribute_params(
+            ir, pipeline, [base + "__hess_inner_proj"], scene.name)[0])
     projected = [base + "__ij", base + "__hess_inner_proj"] if separate \
         else [base + "__hess_proj"]
     evaluated = [base + "__grad"] + \
         ([] if assembly_only else [base + "__hess"]) + projected
-    # Assembly may compress full projections (paper 7.2): it then needs the
-    # unprojected Hessian instead of the projected one.
     compress = assembly_only and not separate and config.compress_local_hessians
     paths = evaluated + ([base + "__hess"] if compress else []) \
         + [base + "__dofs"]
+    return DerivativeKernels(base, ir, pipeline, separate, evaluated,
+                             compress, paths)
+
+
+def derivative_compile_error(energy: Attribute, message: str) -> Exception:
+    """The error to raise for a failed compilation of derivative kernels:
+    an energy that reads no minimisation target has none."""
+    if "does not name an attribute" in message:
+        return SceneError(f"{energy.describe()} depends on no minimisation "
+                          "target")
+    return compiler.IRError(message)
+
+
+def energy_derivatives(scene: Scene, energy: Attribute, threads: int = None,
+                       assembly_only: bool = False) -> LocalDerivatives:
+    """Local gradients and Hessians of a registered energy, per instance.
+    ``assembly_only`` computes only what assembly needs: the gradients and
+    the projected Hessians (or their factors), not the values and the
+    unprojected Hessians."""
+    spec = derivative_kernels(scene, energy, assembly_only)
+    base, ir, evaluated, compress, paths = (spec.base, spec.ir, spec.evaluated,
+                                            spec.compress, spec.paths)
+    owner = energy.owner
+    native = compiler._module()
     try:
-        library, _ = _compile(ir, paths, scene, pipeline)
+        library, _ = _compile(ir, paths, scene, spec.pipeline)
     except native.IRError as err:
-        if "does not name an attribute" in str(err):
-            raise SceneError(f"{energy.describe()} depends on no "
-                             "minimisation target") from None
-        raise compiler.IRError(str(err)) from None
+        raise derivative_compile_error(energy, str(err)) from None
     resolver = _ParamResolver(scene, ir)
     params = [ParamSlot(f[0], f, owner, resolver)
               for f in library.params(paths[0])]

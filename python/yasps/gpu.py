@@ -38,6 +38,11 @@ class GpuKernel:
     #: descriptor of buffer argument i (pointer, pointer, 0, size, 1), and
     #: ("constant", v) the i64 v.
     launch_params: List[Tuple[str, int]]
+    rows: int = 0  #: rows of each instance's value (column-major in memory)
+    cols: int = 0  #: its columns
+    #: how a projected Hessian's kernel projects ("full", "reduced",
+    #: "separate"), "" for other kernels
+    projection: str = ""
 
 
 @dataclass
@@ -106,7 +111,8 @@ def compile_ir(ir: str, paths: Sequence[str], name: str, pipeline: str = "",
         raise compiler.IRError(str(err)) from None
     kernels = [GpuKernel(k["attribute"], k["name"], k["threads_per_block"],
                          [tuple(a) for a in k["arguments"]],
-                         [tuple(p) for p in k["launch_params"]])
+                         [tuple(p) for p in k["launch_params"]],
+                         k["rows"], k["cols"], k["projection"])
                for k in library.kernels]
     binaries = {(chip, fmt): data for chip, fmt, data in library.binaries}
     return GpuKernels(kernels, binaries, dict(library.stats))

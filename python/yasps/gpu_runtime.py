@@ -36,12 +36,14 @@ class GpuSession:
         #: (kind, path) of every upload, in order (for tests and tuning).
         self.uploads: List[Tuple[str, str]] = []
 
-    def kernels(self, ir: str, path: str, name: str,
+    def kernels(self, ir: str, paths, name: str,
                 pipeline: str = "") -> GpuKernels:
-        """The kernels of ``path`` for this device, compiled once."""
-        key = (ir, path, pipeline)
+        """The kernels of ``paths`` (one path or a list, compiled into one
+        module) for this device, compiled once."""
+        paths = (paths,) if isinstance(paths, str) else tuple(paths)
+        key = (ir, paths, pipeline)
         if key not in self._libraries:
-            self._libraries[key] = compile_ir(ir, [path], name, pipeline,
+            self._libraries[key] = compile_ir(ir, list(paths), name, pipeline,
                                               chips=(self.chip,),
                                               keep_ptx=False)
         return self._libraries[key]

@@ -8,9 +8,10 @@ from the same parameter groups that differentiation produced; the C++ runtime
 assembles the local gradients and projected Hessians into a block-sparse
 system (appendix B) and solves it with block-Jacobi PCG (section 8).
 
-On the GPU backend (``yasps.backend() == "gpu"``) the assembly and the PCG
-solve run on the device (``GpuSystem``); the local derivatives are still
-computed on the CPU and uploaded, and only the solution comes back.
+On the GPU backend (``yasps.backend() == "gpu"``) the local derivatives,
+the assembly and the PCG solve run on the device (``yasps.gpu_derivatives``,
+``GpuSystem``); only the placement indices (when the structure is built)
+and the solution come back.
 """
 
 from __future__ import annotations
@@ -25,6 +26,7 @@ from .attribute import Attribute
 from .backend import backend
 from .errors import SceneError, YaspsError
 from .evaluate import energy_derivatives
+from .gpu_derivatives import DeviceDerivatives, device_derivatives
 from .emit import emit_scene
 from .scene import Mesh, Primitive, PrimitiveUnion
 from .values import from_column_major
@@ -104,9 +106,10 @@ def assemble(scene, threads: Optional[int] = None,
              on_gpu: bool = False):
     """The assembled global system and its DoF layout. ``timings``, if given,
     receives the seconds spent on derivatives, indices and assembly;
-    ``report`` whether the static structure was rebuilt. With ``on_gpu``,
-    the system returned is the GPU mirror of the CPU one (a ``GpuSystem``),
-    assembled on the device.
+    ``report`` whether the static structure was rebuilt and how many
+    energies were differentiated on the GPU. With ``on_gpu``, the system
+    returned is the GPU mirror of the CPU one (a ``GpuSystem``), assembled
+    on the device from derivatives computed there (``config.gpu_derivatives``).
 
     The system keeps static energies (instances fixed from step to step) and
     dynamic ones (``dynamic_instances``, e.g. collision pairs) apart: the
@@ -124,13 +127,27 @@ def assemble(scene, threads: Optional[int] = None,
     for energy, is_dynamic, _ in scene._energies:
         start = clock()
         try:
-            d = energy_derivatives(scene, energy, threads, assembly_only=True)
+            d = None
+            if on_gpu and config.gpu_derivatives:
+                # None where the host must compress repeated DoFs.
+                d = device_derivatives(scene, energy)
+            if d is None:
+                d = energy_derivatives(scene, energy, threads,
+                                       assembly_only=True)
         except SceneError as err:
             if "depends on no minimisation target" in str(err):
                 continue
             raise
         spent["derivatives"] += clock() - start
         (dynamic if is_dynamic else static).append((energy, d))
+    on_device = sum(isinstance(d, DeviceDerivatives)
+                    for _, d in static + dynamic)
+    if on_device:
+        # Launches return at once: time the derivatives, not their launch.
+        start = clock()
+        from .gpu_runtime import session
+        session().device.synchronize()
+        spent["derivatives"] += clock() - start
 
     start = clock()
     native = compiler._module()
@@ -154,6 +171,9 @@ def assemble(scene, threads: Optional[int] = None,
     workers = () if on_gpu else \
         (config.num_threads if threads is None else threads,)
     for k, (_, d) in enumerate(static + dynamic):
+        if isinstance(d, DeviceDerivatives):
+            d.add_to(system, k)
+            continue
         gradient = np.ascontiguousarray(d.gradient)
         if d.innerMap is not None:
             # Hessians kept as factors: J^T P J is formed while assembling.
@@ -163,11 +183,15 @@ def assemble(scene, threads: Optional[int] = None,
         else:
             system.add(k, gradient, np.ascontiguousarray(d.projectedHessian),
                        *workers)
+    if on_gpu:
+        # The device derivatives are freed on return: let assembly finish.
+        system.synchronize()
     spent["assembly"] += clock() - start
     if timings is not None:
         timings.update(spent)
     if report is not None:
         report["staticStructureRebuilt"] = rebuilt
+        report["energiesDifferentiatedOnGpu"] = on_device
     return system, layout
 
 

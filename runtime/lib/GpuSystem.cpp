@@ -226,7 +226,7 @@ void GpuSystem::setZero() {
 
 void GpuSystem::addLocal(std::size_t energy, cu::DevicePtr gradients,
                          cu::DevicePtr hessians, cu::DevicePtr inner,
-                         std::int64_t m) {
+                         std::int64_t m, bool columnMajorMaps) {
   if (energy >= numStatic + parts[1]->energies.size())
     throw std::out_of_range(
         "energy " + std::to_string(energy) + " out of range: the system has " +
@@ -244,6 +244,7 @@ void GpuSystem::addLocal(std::size_t energy, cu::DevicePtr gradients,
   args.numParams = e.numParams;
   args.maxBlocks = e.maxBlocks;
   args.innerSize = m;
+  args.mapsColumnMajor = columnMajorMaps ? 1 : 0;
   args.gradients = as<const double>(gradients);
   args.hessians = as<const double>(hessians);
   args.inner = inner ? as<const double>(inner) : nullptr;
@@ -259,15 +260,15 @@ void GpuSystem::addLocal(std::size_t energy, cu::DevicePtr gradients,
 
 void GpuSystem::add(std::size_t energy, cu::DevicePtr gradients,
                     cu::DevicePtr hessians) {
-  addLocal(energy, gradients, hessians, 0, 0);
+  addLocal(energy, gradients, hessians, 0, 0, false);
 }
 
 void GpuSystem::addFactored(std::size_t energy, cu::DevicePtr gradients,
                             cu::DevicePtr maps, cu::DevicePtr inner,
-                            std::int64_t m) {
+                            std::int64_t m, bool columnMajorMaps) {
   if (!inner)
     throw std::invalid_argument("GPU factored assembly without inner Hessians");
-  addLocal(energy, gradients, maps, inner, m);
+  addLocal(energy, gradients, maps, inner, m, columnMajorMaps);
 }
 
 namespace {
@@ -411,6 +412,21 @@ PcgResult GpuSystem::solve(cu::DevicePtr x, const PcgOptions &options,
   }
   // The check of iteration maxIterations has stopped the solve.
   return finish(result());
+}
+
+std::size_t GpuSystem::storedBlocks() const {
+  std::size_t blocks = 0;
+  for (const std::unique_ptr<Part> &part : parts)
+    for (const Part::Group &group : part->groups)
+      blocks += static_cast<std::size_t>(group.count);
+  return blocks;
+}
+
+std::size_t GpuSystem::multiplyBytes() const {
+  std::size_t bytes = 2 * static_cast<std::size_t>(numDofs) * sizeof(double);
+  for (const std::unique_ptr<Part> &part : parts)
+    bytes += part->numValues * sizeof(double);
+  return bytes + storedBlocks() * 2 * sizeof(long long);
 }
 
 cu::DevicePtr GpuSystem::gradientPointer() const {

@@ -7,7 +7,9 @@
 // which 1 GiB is free), 1 a cuInit that fails with CUDA_ERROR_NO_DEVICE,
 // 2 a driver without devices. Modules load any image. Launches are
 // recorded (`fakeCudaLastLaunch`), with as many 8-byte parameters as
-// `fakeCudaExpectParams` said. Launches of the GPU solver's kernels
+// `fakeCudaExpectParams` said; memory starts zeroed, so that the outputs
+// of kernels that do not run read as zeros. Launches of the GPU solver's
+// kernels
 // (GpuSolverKernels.h) also run: their bodies, the ones nvcc compiles, run
 // on the host one thread after another, on "device" memory that is host
 // memory here. Other kernels are not run.
@@ -153,7 +155,9 @@ int cuCtxSynchronize() { return 0; }
 int cuMemAlloc_v2(unsigned long long *ptr, std::size_t bytes) {
   if (bytes > kGiB)
     return 2;
-  *ptr = reinterpret_cast<unsigned long long>(std::malloc(bytes));
+  // Zeroed, so that outputs of kernels that are not run read as zeros.
+  *ptr =
+      reinterpret_cast<unsigned long long>(std::calloc(bytes ? bytes : 1, 1));
   return 0;
 }
 int cuMemFree_v2(unsigned long long ptr) {

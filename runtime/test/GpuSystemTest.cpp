@@ -234,6 +234,12 @@ TEST_P(GpuSystemTest, AssemblesLikeTheCpu) {
               "static Hessian");
   expectClose(gpu->hessianValues(1), host->dynamicHessian().values(), 1e-14,
               "dynamic Hessian");
+  std::size_t stored = host->staticHessian().numStoredBlocks() +
+                       host->dynamicHessian().numStoredBlocks();
+  EXPECT_EQ(gpu->storedBlocks(), stored);
+  EXPECT_EQ(gpu->multiplyBytes(),
+            8 * (2 * host->size() + host->staticHessian().values().size() +
+                 host->dynamicHessian().values().size() + 2 * stored));
   // The scene meets specialised and generic SpMV shapes.
   std::vector<std::pair<std::int64_t, std::int64_t>> shapes;
   for (const BlockGroup &group : host->staticHessian().groups())
@@ -340,6 +346,17 @@ TEST_P(GpuSystemTest, AssemblesFactoredHessians) {
   gpu->addFactored(2, g.pointer(), j.pointer(), p.pointer(), m);
   expectClose(gpu->hessianValues(0), host->staticHessian().values(), 1e-13,
               "factored Hessian");
+  // The same maps stored column-major, as generated kernels write them.
+  std::vector<double> columnMajor(maps.size());
+  for (std::int64_t i = 0; i < energy.count; ++i)
+    for (std::int64_t r = 0; r < m; ++r)
+      for (std::int64_t c = 0; c < n; ++c)
+        columnMajor[(i * n + c) * m + r] = maps[(i * m + r) * n + c];
+  DeviceBuffer jc = onDevice(*context, columnMajor);
+  gpu->setZero();
+  gpu->addFactored(2, g.pointer(), jc.pointer(), p.pointer(), m, true);
+  expectClose(gpu->hessianValues(0), host->staticHessian().values(), 1e-13,
+              "factored Hessian, column-major maps");
   EXPECT_THROW(gpu->addFactored(2, g.pointer(), j.pointer(), p.pointer(), 65),
                std::invalid_argument);
 }

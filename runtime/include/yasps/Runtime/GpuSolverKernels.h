@@ -46,8 +46,9 @@ constexpr int kMaxInner = 64;
 /// group sizes of points in 1-3 dimensions and of affine bodies (12).
 #define YASPS_SPMV_SHAPES(X)                                                   \
   X(1, 1)                                                                      \
-  X(1, 2) X(1, 3) X(1, 12) X(2, 1) X(2, 2) X(2, 3) X(2, 12) X(3, 1) X(3, 2)    \
-      X(3, 3) X(3, 12) X(12, 1) X(12, 2) X(12, 3) X(12, 12)
+  X(1, 2)                                                                      \
+  X(1, 3) X(1, 12) X(2, 1) X(2, 2) X(2, 3) X(2, 12) X(3, 1) X(3, 2) X(3, 3)    \
+      X(3, 12) X(12, 1) X(12, 2) X(12, 3) X(12, 12)
 
 /// Why PCG stopped (PcgState::stopped); 0 while it runs.
 enum PcgStop : int {
@@ -97,9 +98,11 @@ enum PcgScalarStep : int {
 /// (count x n x n, row-major) into the global gradient and Hessian values.
 /// With `inner` set, the Hessians are factored (paper 7.2): instance i's is
 /// J^T P J with J = `hessians` (count x innerSize x n) and P = `inner`
-/// (count x innerSize x innerSize).
+/// (count x innerSize x innerSize); `mapsColumnMajor` says that each J is
+/// stored column-major (as the generated kernels write matrices).
 struct AssembleArgs {
   long long count, numParams, maxBlocks, innerSize;
+  int mapsColumnMajor;
   const double *gradients, *hessians, *inner;
   /// Per instance and parameter: its global DoF, its instance-local block
   /// and offset in it (-1: not a DoF).
@@ -293,6 +296,9 @@ YASPS_HD void assembleBody(Block &block, const AssembleArgs &args) {
         atomicAddDouble(&args.gradient[dofs[a]], g[a]);
     const long long k = args.innerSize;
     const double *j = args.hessians + i * (args.inner ? k * n : n * n);
+    // Entry (r, c) of J is j[r * rs + c * cs].
+    const long long rs = args.mapsColumnMajor ? 1 : n;
+    const long long cs = args.mapsColumnMajor ? k : 1;
     const double *p = args.inner ? args.inner + i * k * k : nullptr;
     for (long long b = 0; b < n; ++b) {
       if (local[b] < 0)
@@ -304,7 +310,7 @@ YASPS_HD void assembleBody(Block &block, const AssembleArgs &args) {
         for (long long r = 0; r < k; ++r) {
           double sum = 0.0;
           for (long long c = 0; c < k; ++c)
-            sum += p[r * k + c] * j[c * n + b];
+            sum += p[r * k + c] * j[c * rs + b * cs];
           pj[r] = sum;
         }
       for (long long a = 0; a < n; ++a) {
@@ -317,7 +323,7 @@ YASPS_HD void assembleBody(Block &block, const AssembleArgs &args) {
         if (p) {
           h = 0.0;
           for (long long r = 0; r < k; ++r)
-            h += j[r * n + a] * pj[r];
+            h += j[r * rs + a * cs] * pj[r];
         } else {
           h = j[a * n + b];
         }

@@ -55,10 +55,12 @@ public:
   /// Adds energy `energy`'s local gradients (count x n) and Hessians
   /// (count x n x n), both in device memory, with one thread per instance.
   void add(std::size_t energy, cu::DevicePtr gradients, cu::DevicePtr hessians);
-  /// add() for factored Hessians J^T P J: `maps` (count x m x n) and
-  /// `inner` (count x m x m) in device memory; m <= 64.
+  /// add() for factored Hessians J^T P J: `maps` (count x m x n, each
+  /// row-major, or column-major with `columnMajorMaps`) and `inner`
+  /// (count x m x m) in device memory; m <= 64.
   void addFactored(std::size_t energy, cu::DevicePtr gradients,
-                   cu::DevicePtr maps, cu::DevicePtr inner, std::int64_t m);
+                   cu::DevicePtr maps, cu::DevicePtr inner, std::int64_t m,
+                   bool columnMajorMaps = false);
 
   /// y = H x (both parts), x and y in device memory (size() each).
   void multiply(cu::DevicePtr x, cu::DevicePtr y);
@@ -77,6 +79,11 @@ public:
   std::vector<double> hessianValues(int part) const;
 
   std::int64_t size() const { return numDofs; }
+  /// Stored blocks of both parts.
+  std::size_t storedBlocks() const;
+  /// The bytes one multiply() must move at least: every stored value and
+  /// block coordinate once, x read and y written once (a bandwidth bound).
+  std::size_t multiplyBytes() const;
 
 private:
   struct Energy;
@@ -88,7 +95,8 @@ private:
                   const GlobalSystem &host, std::size_t firstEnergy,
                   std::size_t numEnergies);
   void addLocal(std::size_t energy, cu::DevicePtr gradients,
-                cu::DevicePtr hessians, cu::DevicePtr inner, std::int64_t m);
+                cu::DevicePtr hessians, cu::DevicePtr inner, std::int64_t m,
+                bool columnMajorMaps);
   /// Launches the reduction-style kernels over `n` items: their grid.
   static std::int64_t reductionBlocks(std::int64_t n);
 

@@ -1,0 +1,238 @@
+#!/usr/bin/env python3
+"""The GPU backend on the bunny: SpMV, per-instance derivatives, a Newton
+iteration. Needs a CUDA GPU; each part is checked before it is timed.
+
+1. ``spmv``: the runtime's SpMV (upper triangle, a kernel per block shape,
+   the paper's algorithm 7) on the assembled bunny-19k Hessian (stable
+   Neo-Hookean + inertia, as bench/newton_system.py), against cuSPARSE's
+   BSR and CSR SpMV (through PyTorch) on the same matrix stored whole, and
+   against the memory-bandwidth bound: the bytes the runtime's SpMV must
+   move at least (values, block coordinates, x and y once) at the
+   bandwidth of a device-to-device copy.
+2. ``derivatives``: per-instance gradient and Hessian of stable Neo-Hookean
+   on positions over the 79,935 bunny tets: yasps' generated CUDA kernels
+   against PyTorch (``torch.func.vmap`` of ``grad`` / ``hessian``) and JAX
+   (``jit(vmap(...))``) on the same GPU, float64, after checking that all
+   three agree with the CPU kernels.
+3. ``newton``: one ``minimizeEnergy`` of bench/newton_system.py's scene on
+   the GPU backend (derivatives, indices, assembly, PCG), split into stages,
+   against the CPU backend.
+
+    python3 bench/gpu.py [spmv] [derivatives] [newton] [--repeat 50]
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import sys
+import tempfile
+import time
+from functools import partial
+from pathlib import Path
+
+os.environ.setdefault("YASPS_CACHE_DIR", tempfile.mkdtemp(prefix="yasps-bench-"))
+HERE = Path(__file__).resolve().parent
+sys.path.insert(0, str(HERE.parent / "python"))
+sys.path.insert(0, str(HERE))
+
+import numpy as np  # noqa: E402
+
+import yasps  # noqa: E402
+from yasps import compiler  # noqa: E402
+from yasps.emit import emit_scene  # noqa: E402
+from yasps.evaluate import DIFFERENTIATION_PIPELINE, run_on_gpu  # noqa: E402
+from yasps.minimize import assemble  # noqa: E402
+
+from meshes import bunny  # noqa: E402
+from newton_system import build  # noqa: E402
+from timing import median  # noqa: E402
+
+
+def device_seconds(fn, repeat: int, synchronize) -> float:
+    """Seconds per call of ``fn`` over ``repeat`` back-to-back calls, after
+    a warm-up, waiting for the device at both ends."""
+    fn()
+    synchronize()
+    start = time.perf_counter()
+    for _ in range(repeat):
+        fn()
+    synchronize()
+    return (time.perf_counter() - start) / repeat
+
+
+def spmv(repeat: int) -> None:
+    import torch
+    import scipy.sparse as sparse
+
+    s = build()
+    system, _ = assemble(s, on_gpu=True)
+    host, _ = assemble(s)
+    n = system.size
+    x = np.random.default_rng(1).normal(size=n)
+    want, got = np.empty(n), np.empty(n)
+    host.multiply(x, want, 0)
+    system.multiply(x, got)
+    np.testing.assert_allclose(got, want, rtol=1e-10,
+                               atol=1e-10 * np.abs(want).max())
+    ours = system.time_multiply(repeat)
+
+    nnz = host.non_zeros
+    rows, cols, values = np.empty(nnz, np.int64), np.empty(nnz, np.int64), \
+        np.empty(nnz)
+    host.coordinates(rows, cols, values)
+    csr = sparse.csr_matrix((values, (rows, cols)), shape=(n, n))
+    bsr = csr.tobsr(blocksize=(3, 3))
+    cuda = torch.device("cuda")
+    xt = torch.from_numpy(x).to(cuda)
+    sync = torch.cuda.synchronize
+    results = {}
+    for name, matrix in (
+            ("cuSPARSE BSR 3x3 (whole matrix)", torch.sparse_bsr_tensor(
+                torch.from_numpy(bsr.indptr), torch.from_numpy(bsr.indices),
+                torch.from_numpy(bsr.data), size=(n, n)).to(cuda)),
+            ("cuSPARSE CSR (whole matrix)", torch.sparse_csr_tensor(
+                torch.from_numpy(csr.indptr), torch.from_numpy(csr.indices),
+                torch.from_numpy(csr.data), size=(n, n)).to(cuda))):
+        try:
+            y = (matrix @ xt).cpu().numpy()
+            np.testing.assert_allclose(y, want, rtol=1e-10,
+                                       atol=1e-10 * np.abs(want).max())
+            results[name] = device_seconds(lambda: matrix @ xt, repeat, sync)
+        except (RuntimeError, NotImplementedError) as err:
+            results[name] = f"not run: {type(err).__name__}: {err}"
+
+    # Achievable bandwidth: a device-to-device copy of 1 GiB (read + write).
+    src = torch.empty(1 << 27, dtype=torch.float64, device=cuda)
+    dst = torch.empty_like(src)
+    copy = device_seconds(lambda: dst.copy_(src), 20, sync)
+    bandwidth = 2 * src.numel() * 8 / copy
+    bound = system.multiply_bytes / bandwidth
+
+    print(f"SpMV, bunny-19k Hessian ({n} DoFs, {system.stored_blocks} stored "
+          f"upper blocks, {nnz} scalar non-zeros), {torch.cuda.get_device_name()}")
+    print(f"  yasps (upper triangle, algorithm 7)  {ours * 1e3:8.4f} ms")
+    for name, t in results.items():
+        if isinstance(t, str):
+            print(f"  {name:36s} {t}")
+        else:
+            print(f"  {name:36s} {t * 1e3:8.4f} ms  ({t / ours:.2f}x yasps)")
+    print(f"  bandwidth bound: {system.multiply_bytes / 2**20:.1f} MiB at "
+          f"{bandwidth / 1e9:.0f} GB/s (device copy) = {bound * 1e3:.4f} ms; "
+          f"yasps reaches {100 * bound / ours:.0f}%")
+
+
+def derivatives(repeat: int) -> None:
+    import jax
+    import jax.numpy as jnp
+    import torch
+    from torch.func import grad as torch_grad, hessian as torch_hessian, \
+        vmap as torch_vmap
+
+    from energy_cases import CASES, ArrayOps, TorchOps, snh_positions
+    from yasps.gpu_runtime import session
+
+    jax.config.update("jax_enable_x64", True)
+    verts, tets = bunny("19k")
+    rng = np.random.default_rng(0)
+    rest = verts[tets]
+    cur = rest + rng.normal(scale=1e-3 * np.abs(verts).max(), size=rest.shape)
+    dm_inv = np.linalg.inv(np.stack([rest[:, k] - rest[:, 0]
+                                     for k in (1, 2, 3)], axis=2))
+    arrays = (cur.reshape(-1, 12), dm_inv.reshape(-1, 9))
+    count = len(tets)
+    case = next(c for c in CASES if c.name == "stable Neo-Hookean (x, 12)")
+    energy = case.build(arrays)
+    check = energy.derivatives()   # CPU kernels, the reference
+
+    gpu = session()
+    names = ("grad", "hess")
+    paths = [energy.path(k) for k in names]
+    kernels = gpu.kernels(emit_scene(energy.scene), paths, energy.scene.name,
+                          DIFFERENTIATION_PIPELINE)
+    native = compiler._module()
+    sync = gpu.device.synchronize
+    yasps_seconds = {}
+    for name, path in zip(names, paths):
+        k = kernels.kernel(path)
+        size = count * k.rows * k.cols
+        out = native.gpu_allocate(gpu.device, size)
+        run = partial(run_on_gpu, gpu, kernels, energy.scene, path, count,
+                      size, out)
+        run()
+        host = np.empty(size)
+        out.download(host)
+        want = check.gradient if name == "grad" else check.hessian
+        np.testing.assert_allclose(host.reshape(want.shape), want, rtol=1e-10,
+                                   atol=1e-10 * np.abs(want).max())
+        yasps_seconds[name] = device_seconds(run, repeat, sync)
+
+    cuda = torch.device("cuda")
+    targs = [torch.from_numpy(np.ascontiguousarray(a)).to(cuda) for a in arrays]
+    tf = partial(snh_positions, TorchOps())
+    tgrad, thess = torch_vmap(torch_grad(tf)), torch_vmap(torch_hessian(tf))
+    np.testing.assert_allclose(thess(*targs).cpu().numpy(), check.hessian,
+                               rtol=1e-7, atol=1e-7 * np.abs(check.hessian).max())
+    torch_seconds = {
+        "grad": device_seconds(lambda: tgrad(*targs), repeat,
+                               torch.cuda.synchronize),
+        "hess": device_seconds(lambda: thess(*targs), max(repeat // 10, 3),
+                               torch.cuda.synchronize)}
+
+    jf = partial(snh_positions, ArrayOps(jnp))
+    jgrad, jhess = jax.jit(jax.vmap(jax.grad(jf))), \
+        jax.jit(jax.vmap(jax.hessian(jf)))
+    jargs = [jax.device_put(a) for a in arrays]
+    np.testing.assert_allclose(np.asarray(jhess(*jargs)), check.hessian,
+                               rtol=1e-7, atol=1e-7 * np.abs(check.hessian).max())
+    jax_seconds = {}
+    for name, fn in (("grad", jgrad), ("hess", jhess)):
+        jax_seconds[name] = median(lambda: fn(*jargs).block_until_ready(),
+                                   repeat)
+
+    print(f"stable Neo-Hookean on positions, {count} bunny tets, float64, "
+          f"{torch.cuda.get_device_name()} (ms for all instances)")
+    print(f"  {'':10s}{'yasps':>10s}{'PyTorch':>12s}{'JAX':>10s}")
+    for name in names:
+        y, t, j = yasps_seconds[name], torch_seconds[name], jax_seconds[name]
+        print(f"  {name:10s}{y * 1e3:10.3f}{t * 1e3:12.3f}{j * 1e3:10.3f}   "
+              f"PyTorch {t / y:.0f}x, JAX {j / y:.1f}x yasps")
+
+
+def newton() -> None:
+    s = build()
+    print("one Newton iteration, bunny-19k, stable Neo-Hookean + inertia "
+          "(second call: static structure reused)")
+    rows = {}
+    for where in ("cpu", "gpu"):
+        yasps.config.backend = where
+        s.minimizeEnergy(tolerance=1e-4)   # compiles, builds the structure
+        s.minimizeEnergy(tolerance=1e-4)
+        rows[where] = dict(s.lastSolve["seconds"],
+                           iterations=s.lastSolve["iterations"])
+    print(f"  {'stage':12s}{'CPU (all cores)':>16s}{'GPU':>10s}")
+    for stage in ("derivatives", "indices", "assembly", "solve"):
+        c, g = rows["cpu"][stage], rows["gpu"][stage]
+        print(f"  {stage:12s}{c * 1e3:13.1f} ms{g * 1e3:7.1f} ms   "
+              f"({c / g:.1f}x)")
+    print(f"  PCG iterations: CPU {rows['cpu']['iterations']}, "
+          f"GPU {rows['gpu']['iterations']}")
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    parser.add_argument("parts", nargs="*",
+                        default=["spmv", "derivatives", "newton"])
+    parser.add_argument("--repeat", type=int, default=50)
+    args = parser.parse_args()
+    status = yasps.gpu_status()
+    if not status.usable:
+        sys.exit(f"bench/gpu.py needs a GPU: {status.reason}")
+    for part in args.parts:
+        {"spmv": lambda: spmv(args.repeat),
+         "derivatives": lambda: derivatives(args.repeat),
+         "newton": newton}[part]()
+
+
+if __name__ == "__main__":
+    main()
