@@ -434,62 +434,61 @@ YASPS_HD void jacobiInvertBody(Block &block, const JacobiInvertArgs &args) {
   });
 }
 
+/// Runs `element(i)` for i in [0, n) over the grid (each thread strides by
+/// the grid's size) and writes each block's sum of the results to
+/// partials[block index].
+template <typename Block, typename Element>
+YASPS_HD void sumOverGrid(Block &block, long long n, double *partials,
+                          Element &&element) {
+  block.forEachThread([&](int t) {
+    double sum = 0.0;
+    for (long long i = firstElement(block, t); i < n; i += gridStride(block))
+      sum += element(i);
+    block.shared->values[t] = sum;
+  });
+  blockSumToPartial(block, partials);
+}
+
 template <typename Block>
 YASPS_HD void jacobiApplyBody(Block &block, const JacobiApplyArgs &args) {
   if (args.state->stopped)
     return;
-  block.forEachThread([&](int t) {
+  sumOverGrid(block, args.numBlocks, args.partials, [&](long long b) {
+    long long o = args.blockOffset[b], s = args.blockOffset[b + 1] - o;
+    const double *inverse = args.inverse + args.inverseStart[b];
     double rz = 0.0;
-    for (long long b = firstElement(block, t); b < args.numBlocks;
-         b += gridStride(block)) {
-      long long o = args.blockOffset[b], s = args.blockOffset[b + 1] - o;
-      const double *inverse = args.inverse + args.inverseStart[b];
-      for (long long i = 0; i < s; ++i) {
-        double sum = 0.0;
-        for (long long j = 0; j < s; ++j)
-          sum += inverse[i * s + j] * args.r[o + j];
-        args.z[o + i] = sum;
-        rz += args.r[o + i] * sum;
-      }
+    for (long long i = 0; i < s; ++i) {
+      double sum = 0.0;
+      for (long long j = 0; j < s; ++j)
+        sum += inverse[i * s + j] * args.r[o + j];
+      args.z[o + i] = sum;
+      rz += args.r[o + i] * sum;
     }
-    block.shared->values[t] = rz;
+    return rz;
   });
-  blockSumToPartial(block, args.partials);
 }
 
 template <typename Block>
 YASPS_HD void dotBody(Block &block, const DotArgs &args) {
   if (args.state && args.state->stopped)
     return;
-  block.forEachThread([&](int t) {
-    double sum = 0.0;
-    for (long long i = firstElement(block, t); i < args.n;
-         i += gridStride(block)) {
-      if (args.fixed && args.fixed[i])
-        args.b[i] = 0.0;
-      sum += args.a[i] * args.b[i];
-    }
-    block.shared->values[t] = sum;
+  sumOverGrid(block, args.n, args.partials, [&](long long i) {
+    if (args.fixed && args.fixed[i])
+      args.b[i] = 0.0;
+    return args.a[i] * args.b[i];
   });
-  blockSumToPartial(block, args.partials);
 }
 
 template <typename Block>
 YASPS_HD void pcgInitBody(Block &block, const PcgInitArgs &args) {
-  block.forEachThread([&](int t) {
-    double sum = 0.0;
-    for (long long i = firstElement(block, t); i < args.n;
-         i += gridStride(block)) {
-      double r = args.fixed && args.fixed[i] ? 0.0 : args.b[i];
-      if (!hdIsFinite(r))
-        args.state->nonFinite = 1;
-      args.x[i] = 0.0;
-      args.r[i] = r;
-      sum += r * r;
-    }
-    block.shared->values[t] = sum;
+  sumOverGrid(block, args.n, args.partials, [&](long long i) {
+    double r = args.fixed && args.fixed[i] ? 0.0 : args.b[i];
+    if (!hdIsFinite(r))
+      args.state->nonFinite = 1;
+    args.x[i] = 0.0;
+    args.r[i] = r;
+    return r * r;
   });
-  blockSumToPartial(block, args.partials);
 }
 
 template <typename Block>
@@ -497,18 +496,12 @@ YASPS_HD void pcgUpdateBody(Block &block, const PcgUpdateArgs &args) {
   if (args.state->stopped)
     return;
   const double alpha = args.state->alpha;
-  block.forEachThread([&](int t) {
-    double sum = 0.0;
-    for (long long i = firstElement(block, t); i < args.n;
-         i += gridStride(block)) {
-      args.x[i] += alpha * args.p[i];
-      double r = args.r[i] - alpha * args.q[i];
-      args.r[i] = r;
-      sum += r * r;
-    }
-    block.shared->values[t] = sum;
+  sumOverGrid(block, args.n, args.partials, [&](long long i) {
+    args.x[i] += alpha * args.p[i];
+    double r = args.r[i] - alpha * args.q[i];
+    args.r[i] = r;
+    return r * r;
   });
-  blockSumToPartial(block, args.partials);
 }
 
 template <typename Block>
