@@ -150,7 +150,7 @@ TEST(GpuLaunch, ParametersFollowTheRecordedAbi) {
 
 TEST(GpuLaunch, LaunchesOneThreadPerInstance) {
   auto driver = fakeDriver(0);
-  void *fake = dlopen(YASPS_FAKE_CUDA, RTLD_NOW | RTLD_LOCAL);
+  void *fake = dlopen(test::fakeCudaPath(), RTLD_NOW | RTLD_LOCAL);
   auto expect =
       reinterpret_cast<void (*)(int)>(dlsym(fake, "fakeCudaExpectParams"));
   auto last = reinterpret_cast<const char *(*)(const char **, unsigned *,

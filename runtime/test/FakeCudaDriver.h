@@ -1,7 +1,8 @@
 //===- FakeCudaDriver.h - loading the stand-in CUDA driver in tests -------===//
 //
 // Tests of the GPU backend run against FakeCuda.cpp, a stand-in driver
-// library built beside them (its path is YASPS_FAKE_CUDA).
+// library built beside them: at the path YASPS_FAKE_CUDA had at build time,
+// or at $YASPS_FAKE_CUDA (for a test binary carried to another machine).
 //
 //===----------------------------------------------------------------------===//
 
@@ -12,19 +13,26 @@
 
 #include <gtest/gtest.h>
 
+#include <cstdlib>
 #include <dlfcn.h>
 #include <memory>
 
 namespace yasps::runtime::test {
 
+/// Where the stand-in driver library is.
+inline const char *fakeCudaPath() {
+  const char *path = std::getenv("YASPS_FAKE_CUDA");
+  return path && *path ? path : YASPS_FAKE_CUDA;
+}
+
 /// Loads the fake driver in `mode` (see FakeCuda.cpp).
 inline std::unique_ptr<CudaDriver> fakeDriver(int mode) {
-  void *fake = dlopen(YASPS_FAKE_CUDA, RTLD_NOW | RTLD_LOCAL);
+  void *fake = dlopen(fakeCudaPath(), RTLD_NOW | RTLD_LOCAL);
   EXPECT_NE(fake, nullptr) << dlerror();
   auto setMode =
       reinterpret_cast<void (*)(int)>(dlsym(fake, "fakeCudaSetMode"));
   setMode(mode);
-  auto driver = std::make_unique<CudaDriver>(YASPS_FAKE_CUDA);
+  auto driver = std::make_unique<CudaDriver>(fakeCudaPath());
   dlclose(fake);
   return driver;
 }

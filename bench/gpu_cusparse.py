@@ -1,0 +1,87 @@
+#!/usr/bin/env python3
+"""cuSPARSE SpMV (through PyTorch) on the matrix that yasps-spmv-bench
+exported, for the comparison with the runtime's SpMV.
+
+    yasps-spmv-bench bunny-19k.msh --export DIR    # prints yasps' GPU SpMV
+    python3 bench/gpu_cusparse.py DIR [--yasps-ms T] [--repeat 200]
+
+Loads the whole matrix (both triangles) as CSR, converts it to BSR with
+3x3 blocks, checks both products against the exported y = H x, and times
+``matrix @ x`` on the GPU (cuSPARSE's CSR and BSR SpMV), float64. With
+``--yasps-ms`` (yasps' time from yasps-spmv-bench) it prints the ratios.
+``--device cpu`` runs the same code on the CPU (to check the script without
+a GPU; the times then say nothing about cuSPARSE).
+"""
+
+from __future__ import annotations
+
+import argparse
+import time
+import warnings
+from pathlib import Path
+
+import numpy as np
+import scipy.sparse as sparse
+import torch
+
+
+def seconds_per_call(fn, repeat: int, synchronize) -> float:
+    fn()
+    synchronize()
+    start = time.perf_counter()
+    for _ in range(repeat):
+        fn()
+    synchronize()
+    return (time.perf_counter() - start) / repeat
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    parser.add_argument("dir", type=Path)
+    parser.add_argument("--yasps-ms", type=float, default=None)
+    parser.add_argument("--repeat", type=int, default=200)
+    parser.add_argument("--device", default="cuda")
+    args = parser.parse_args()
+    # PyTorch warns that its sparse tensors are in beta.
+    warnings.filterwarnings("ignore", category=UserWarning)
+    load = {k: np.load(args.dir / f"{k}.npy")
+            for k in ("indptr", "indices", "values", "x", "y")}
+    n = len(load["x"])
+    csr = sparse.csr_matrix((load["values"], load["indices"], load["indptr"]),
+                            shape=(n, n))
+    bsr = csr.tobsr(blocksize=(3, 3))
+    device = torch.device(args.device)
+    synchronize = torch.cuda.synchronize if device.type == "cuda" else \
+        (lambda: None)
+    x = torch.from_numpy(load["x"]).to(device)
+    want = load["y"]
+    matrices = {
+        "CSR": torch.sparse_csr_tensor(
+            torch.from_numpy(csr.indptr.astype(np.int64)),
+            torch.from_numpy(csr.indices.astype(np.int64)),
+            torch.from_numpy(csr.data), size=(n, n)).to(device),
+        "BSR 3x3": torch.sparse_bsr_tensor(
+            torch.from_numpy(bsr.indptr.astype(np.int64)),
+            torch.from_numpy(bsr.indices.astype(np.int64)),
+            torch.from_numpy(bsr.data), size=(n, n)).to(device),
+    }
+    name = torch.cuda.get_device_name() if device.type == "cuda" else "CPU"
+    print(f"cuSPARSE SpMV through PyTorch {torch.__version__} on {name}: "
+          f"{n} DoFs, {csr.nnz} scalar non-zeros, {bsr.nnz // 9} 3x3 blocks "
+          "(whole matrix)")
+    for label, matrix in matrices.items():
+        try:
+            got = (matrix @ x).cpu().numpy()
+        except (RuntimeError, NotImplementedError) as err:
+            print(f"  {label:8s} not run: {type(err).__name__}: {err}")
+            continue
+        error = np.abs(got - want).max() / np.abs(want).max()
+        assert error < 1e-10, f"{label}: product off by {error:.2e}"
+        t = seconds_per_call(lambda: matrix @ x, args.repeat, synchronize)
+        ratio = f"  ({t * 1e3 / args.yasps_ms:.2f}x yasps)" \
+            if args.yasps_ms else ""
+        print(f"  {label:8s} {t * 1e3:9.4f} ms{ratio}")
+
+
+if __name__ == "__main__":
+    main()
