@@ -2,7 +2,8 @@
 # The GPU checks that run without MLIR or the Python extension, on a GPU
 # machine (docs/gpu.md, "On a GPU machine"): the runtime's unit tests with
 # the real driver (GPU solve against the CPU), the SpMV/PCG benchmark on
-# the bunny, and cuSPARSE (through PyTorch) on the same matrix.
+# the bunny, cuSPARSE (through PyTorch) on the same matrix, and stable
+# Neo-Hookean's generated derivative kernels against PyTorch and JAX.
 #
 #   bash scripts/device_check.sh KIT [OUT]
 #
@@ -28,4 +29,9 @@ ms=$(awk '/GPU SpMV/ {print $3}' "$out/spmv.log")
 echo "== cuSPARSE on the same matrix"
 python3 "$root/bench/gpu_cusparse.py" /tmp/yasps-bunny-hessian \
   ${ms:+--yasps-ms "$ms"} 2>&1 | tee "$out/cusparse.log" || status=1
+echo "== stable Neo-Hookean derivatives: yasps kernels, PyTorch, JAX"
+"$kit/yasps-kernel-bench" "$kit/snh" --repeat 100 2>&1 \
+  | tee "$out/kernels.log" || status=1
+python3 "$root/bench/gpu_peers.py" "$kit/snh" --yasps-log "$out/kernels.log" \
+  2>&1 | tee "$out/peers.log" || status=1
 exit $status
