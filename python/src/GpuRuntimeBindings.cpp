@@ -83,6 +83,37 @@ void download(const PyBuffer &buffer, HostArray array) {
   buffer.buffer->download(array.data(), byteSize(array));
 }
 
+/// A DLPack-capable view of `buffer`'s doubles (no copy): `shape` and
+/// `strides` in elements; the view keeps the buffer alive.
+nb::ndarray<nb::array_api, double, nb::device::cuda>
+dlpackView(const PyBuffer &buffer, const std::vector<std::size_t> &shape,
+           const std::vector<std::int64_t> &strides) {
+  if (shape.size() != strides.size())
+    throw std::invalid_argument("dlpack_view: shape and strides differ in "
+                                "length");
+  std::int64_t last = 0;
+  bool empty = false;
+  for (std::size_t k = 0; k < shape.size(); ++k) {
+    if (strides[k] < 0)
+      throw std::invalid_argument("dlpack_view: negative stride");
+    empty |= shape[k] == 0;
+    if (shape[k] > 0)
+      last += std::int64_t(shape[k] - 1) * strides[k];
+  }
+  if (!empty && std::size_t(last + 1) * sizeof(double) > buffer.buffer->size())
+    throw std::out_of_range("dlpack_view: the view reaches element " +
+                            std::to_string(last) + " of a buffer of " +
+                            std::to_string(buffer.buffer->size() / 8) +
+                            " doubles");
+  auto *keep = new PyBuffer(buffer);
+  nb::capsule owner(
+      keep, [](void *p) noexcept { delete static_cast<PyBuffer *>(p); });
+  return nb::ndarray<nb::array_api, double, nb::device::cuda>(
+      reinterpret_cast<void *>(buffer.buffer->pointer()), shape.size(),
+      shape.data(), owner, strides.data(), nb::dtype<double>(),
+      nb::device::cuda::value, buffer.context->ordinal());
+}
+
 GpuParam toParam(const std::pair<std::string, std::int64_t> &param) {
   if (param.first == "index")
     return {GpuParam::Kind::Index, param.second, 0};
@@ -138,7 +169,11 @@ void yasps::python::bindGpuRuntime(nb::module_ &m) {
                    [](const PyBuffer &self) { return self.buffer->size(); })
       .def("download", &download, nb::arg("out"),
            "Copies the buffer's first out.nbytes bytes into the C-contiguous "
-           "array `out` (waits for earlier launches)");
+           "array `out` (waits for earlier launches)")
+      .def("dlpack_view", &dlpackView, nb::arg("shape"), nb::arg("strides"),
+           "A view of the buffer's doubles on the device, without a copy, "
+           "that DLPack consumers (torch.from_dlpack, cupy.from_dlpack) "
+           "take; shape and strides in elements");
   m.def("gpu_upload", &upload, nb::arg("device"), nb::arg("array"),
         "A device buffer holding a copy of the C-contiguous array");
   m.def(

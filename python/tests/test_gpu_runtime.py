@@ -21,6 +21,7 @@ import pytest
 from conftest import REPO, running_example
 
 import yasps
+import yasps.gpu_runtime
 
 STATUS = yasps.gpu_status()
 needs_gpu = pytest.mark.skipif(
@@ -42,6 +43,15 @@ def run_python(script: str, **env: str) -> str:
         capture_output=True, text=True)
     assert result.returncode == 0, result.stderr
     return result.stdout
+
+
+def test_computed_values_are_dlpack_arrays_on_the_cpu(monkeypatch):
+    monkeypatch.setattr(yasps.config, "backend", "cpu")
+    s = running_example()
+    r = s.bunny_affine.tets["positions"].compute()
+    assert r.__dlpack_device__() == (1, 0)   # kDLCPU
+    view = np.from_dlpack(r)
+    assert view.shape == r.value.shape and np.shares_memory(view, r.value)
 
 
 @no_gpu
@@ -97,9 +107,20 @@ def test_device_copies_are_uploaded_only_when_values_change():
         conn.updateConnectivity([[1, 0], [3, 2]])
         print(uploads())
         print(uploads())
+        # The result is a DLPack array on the device (kDLCUDA = 2), viewed
+        # without a copy; views cannot reach past their buffer.
+        r = length.compute()
+        print(r.__dlpack_device__(), type(r.__dlpack__()).__name__)
+        buffer = yasps.compiler._module().gpu_allocate(
+            yasps.gpu_runtime.session().device, 2)
+        try:
+            buffer.dlpack_view([3], [1])
+        except IndexError as err:
+            print("IndexError", "reaches element 2" in str(err))
     """, YASPS_CUDA_LIBRARY=str(FAKE_DRIVER))
     assert out.splitlines() == ["['attr', 'conn']", "[]", "['attr']",
-                                "['conn']", "[]"]
+                                "['conn']", "[]", "(2, 0) PyCapsule",
+                                "IndexError True"]
 
 
 MINIMIZE_ON_BOTH = """
@@ -250,3 +271,14 @@ def test_minimize_matches_the_cpu_on_a_gpu(monkeypatch):
             gpu = solve(scene, "gpu")
             assert scene.lastSolve["energiesDifferentiatedOnGpu"] > 0
             assert np.abs(gpu - cpu).max() <= 1e-9 * np.abs(cpu).max()
+
+
+@needs_gpu
+def test_gpu_results_are_dlpack_views_of_device_memory(monkeypatch):
+    torch = pytest.importorskip("torch")
+    monkeypatch.setattr(yasps.config, "backend", "gpu")
+    s = running_example()
+    r = s.bunny_affine.tets["positions"].compute()
+    on_device = torch.from_dlpack(r)
+    assert on_device.is_cuda
+    assert np.array_equal(on_device.cpu().numpy(), r.value)

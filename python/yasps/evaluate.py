@@ -9,7 +9,7 @@ offsets as buffers. Intermediate attributes are never stored.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Dict, List, Tuple
+from typing import Dict, List, Optional, Tuple
 
 import numpy as np
 
@@ -26,17 +26,55 @@ _TEMPORARY = "__yasps_compute"
 
 
 class ComputedValue:
-    """The result of :meth:`Attribute.compute`."""
+    """The result of :meth:`Attribute.compute`: ``value``, an ``(N, rows,
+    cols)`` NumPy array, and ``stats``.
 
-    def __init__(self, attribute: Attribute, value: np.ndarray, stats: dict):
+    It is also a DLPack array of the same values (``torch.from_dlpack(r)``,
+    ``cupy.from_dlpack(r)``, ``np.from_dlpack(r)``): on the GPU backend a
+    view of the result in device memory, without a copy; on the CPU the
+    NumPy array. On the GPU, ``value`` is copied back on first use only."""
+
+    def __init__(self, attribute: Attribute, value: Optional[np.ndarray],
+                 stats: dict, device: object = None,
+                 shape: Tuple[int, int, int] = (0, 0, 0)):
         self.attribute = attribute
-        #: The values, shape ``(N, rows, cols)``.
-        self.value = value
+        self._value = value
+        #: The GPU output (column-major per instance) and its (N, rows,
+        #: cols), when computed on the GPU.
+        self._device = device
+        self._shape = shape
         #: How the kernel was obtained: cache hits and compile times.
         self.stats = stats
 
+    @property
+    def value(self) -> np.ndarray:
+        """The values, shape ``(N, rows, cols)`` (copied from the GPU the
+        first time they are read)."""
+        if self._value is None:
+            count, rows, cols = self._shape
+            host = np.empty(count * rows * cols, dtype=np.float64)
+            self._device.download(host)
+            self._value = from_column_major(host, rows, cols, copy=False)
+        return self._value
+
+    def _dlpack_source(self):
+        if self._device is None:
+            return self.value
+        count, rows, cols = self._shape
+        # Entry (i, r, c) lies at i * rows * cols + c * rows + r.
+        return self._device.dlpack_view([count, rows, cols],
+                                        [rows * cols, 1, rows])
+
+    def __dlpack__(self, **kwargs):
+        return self._dlpack_source().__dlpack__(**kwargs)
+
+    def __dlpack_device__(self):
+        return self._dlpack_source().__dlpack_device__()
+
     def __repr__(self) -> str:
-        return f"<yasps.ComputedValue of {self.attribute.describe()}: {self.value.shape}>"
+        where = "GPU" if self._device is not None else "CPU"
+        return (f"<yasps.ComputedValue of {self.attribute.describe()} on the "
+                f"{where}: {self._shape if self._value is None else self.value.shape}>")
 
 
 def _resolve(scene: Scene, path: str):
@@ -132,8 +170,8 @@ def compute(attr: Attribute, threads: int = None) -> ComputedValue:
     if backend() == "gpu":
         out, stats = _compute_on_gpu(scene, ir, path, count,
                                      count * target.rows * target.cols)
-        return ComputedValue(attr, from_column_major(
-            out, target.rows, target.cols, copy=False), stats)
+        return ComputedValue(attr, None, stats, out,
+                             (count, target.rows, target.cols))
     native = compiler._module()
     try:
         library, stats = _compile(ir, [path], scene)
@@ -150,20 +188,19 @@ def compute(attr: Attribute, threads: int = None) -> ComputedValue:
 
 
 def _compute_on_gpu(scene: Scene, ir: str, path: str, count: int,
-                    size: int) -> Tuple[np.ndarray, dict]:
+                    size: int) -> Tuple[object, dict]:
     """Runs the kernel of ``path`` on ``count`` instances on the GPU
-    session's device and copies its ``size`` output values back."""
+    session's device: its output, a device buffer of ``size`` values, and
+    the stats."""
     from .gpu_runtime import session
 
     gpu = session()
     kernels = gpu.kernels(ir, path, scene.name)
     uploads = len(gpu.uploads)
     out = run_on_gpu(gpu, kernels, scene, path, count, size)
-    host = np.empty(size, dtype=np.float64)
-    out.download(host)
     stats = dict(kernels.stats, backend="gpu", device=gpu.chip,
                  uploaded=gpu.uploads[uploads:])
-    return host, stats
+    return out, stats
 
 
 def run_on_gpu(gpu, kernels, scene: Scene, path: str, count: int,
