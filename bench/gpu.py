@@ -27,7 +27,6 @@ import argparse
 import os
 import sys
 import tempfile
-import time
 from functools import partial
 from pathlib import Path
 
@@ -44,21 +43,9 @@ from yasps.emit import emit_scene  # noqa: E402
 from yasps.evaluate import DIFFERENTIATION_PIPELINE, run_on_gpu  # noqa: E402
 from yasps.minimize import assemble  # noqa: E402
 
-from meshes import bunny  # noqa: E402
 from newton_system import build  # noqa: E402
-from timing import median  # noqa: E402
-
-
-def device_seconds(fn, repeat: int, synchronize) -> float:
-    """Seconds per call of ``fn`` over ``repeat`` back-to-back calls, after
-    a warm-up, waiting for the device at both ends."""
-    fn()
-    synchronize()
-    start = time.perf_counter()
-    for _ in range(repeat):
-        fn()
-    synchronize()
-    return (time.perf_counter() - start) / repeat
+from gpu_kit import bunny_snh_inputs  # noqa: E402
+from timing import median, per_call  # noqa: E402
 
 
 def spmv(repeat: int) -> None:
@@ -98,14 +85,15 @@ def spmv(repeat: int) -> None:
             y = (matrix @ xt).cpu().numpy()
             np.testing.assert_allclose(y, want, rtol=1e-10,
                                        atol=1e-10 * np.abs(want).max())
-            results[name] = device_seconds(lambda: matrix @ xt, repeat, sync)
+            results[name] = per_call(lambda: matrix @ xt, repeat,
+                                     lambda _: sync())
         except (RuntimeError, NotImplementedError) as err:
             results[name] = f"not run: {type(err).__name__}: {err}"
 
     # Achievable bandwidth: a device-to-device copy of 1 GiB (read + write).
     src = torch.empty(1 << 27, dtype=torch.float64, device=cuda)
     dst = torch.empty_like(src)
-    copy = device_seconds(lambda: dst.copy_(src), 20, sync)
+    copy = per_call(lambda: dst.copy_(src), 20, lambda _: sync())
     bandwidth = 2 * src.numel() * 8 / copy
     bound = system.multiply_bytes / bandwidth
 
@@ -133,14 +121,8 @@ def derivatives(repeat: int) -> None:
     from yasps.gpu_runtime import session
 
     jax.config.update("jax_enable_x64", True)
-    verts, tets = bunny("19k")
-    rng = np.random.default_rng(0)
-    rest = verts[tets]
-    cur = rest + rng.normal(scale=1e-3 * np.abs(verts).max(), size=rest.shape)
-    dm_inv = np.linalg.inv(np.stack([rest[:, k] - rest[:, 0]
-                                     for k in (1, 2, 3)], axis=2))
-    arrays = (cur.reshape(-1, 12), dm_inv.reshape(-1, 9))
-    count = len(tets)
+    arrays = bunny_snh_inputs()
+    count = len(arrays[0])
     case = next(c for c in CASES if c.name == "stable Neo-Hookean (x, 12)")
     energy = case.build(arrays)
     check = energy.derivatives()   # CPU kernels, the reference
@@ -165,7 +147,7 @@ def derivatives(repeat: int) -> None:
         want = check.gradient if name == "grad" else check.hessian
         np.testing.assert_allclose(host.reshape(want.shape), want, rtol=1e-10,
                                    atol=1e-10 * np.abs(want).max())
-        yasps_seconds[name] = device_seconds(run, repeat, sync)
+        yasps_seconds[name] = per_call(run, repeat, lambda _: sync())
 
     cuda = torch.device("cuda")
     targs = [torch.from_numpy(np.ascontiguousarray(a)).to(cuda) for a in arrays]
@@ -173,11 +155,11 @@ def derivatives(repeat: int) -> None:
     tgrad, thess = torch_vmap(torch_grad(tf)), torch_vmap(torch_hessian(tf))
     np.testing.assert_allclose(thess(*targs).cpu().numpy(), check.hessian,
                                rtol=1e-7, atol=1e-7 * np.abs(check.hessian).max())
+    torch_sync = lambda _: torch.cuda.synchronize()  # noqa: E731
     torch_seconds = {
-        "grad": device_seconds(lambda: tgrad(*targs), repeat,
-                               torch.cuda.synchronize),
-        "hess": device_seconds(lambda: thess(*targs), max(repeat // 10, 3),
-                               torch.cuda.synchronize)}
+        "grad": per_call(lambda: tgrad(*targs), repeat, torch_sync),
+        "hess": per_call(lambda: thess(*targs), max(repeat // 10, 3),
+                         torch_sync)}
 
     jf = partial(snh_positions, ArrayOps(jnp))
     jgrad, jhess = jax.jit(jax.vmap(jax.grad(jf))), \

@@ -16,7 +16,7 @@ a GPU; the times then say nothing about cuSPARSE).
 from __future__ import annotations
 
 import argparse
-import time
+import sys
 import warnings
 from pathlib import Path
 
@@ -24,15 +24,8 @@ import numpy as np
 import scipy.sparse as sparse
 import torch
 
-
-def seconds_per_call(fn, repeat: int, synchronize) -> float:
-    fn()
-    synchronize()
-    start = time.perf_counter()
-    for _ in range(repeat):
-        fn()
-    synchronize()
-    return (time.perf_counter() - start) / repeat
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from timing import per_call  # noqa: E402
 
 
 def main() -> None:
@@ -51,8 +44,8 @@ def main() -> None:
                             shape=(n, n))
     bsr = csr.tobsr(blocksize=(3, 3))
     device = torch.device(args.device)
-    synchronize = torch.cuda.synchronize if device.type == "cuda" else \
-        (lambda: None)
+    finish = (lambda _: torch.cuda.synchronize()) if device.type == "cuda" \
+        else (lambda _: None)
     x = torch.from_numpy(load["x"]).to(device)
     want = load["y"]
     matrices = {
@@ -77,7 +70,7 @@ def main() -> None:
             continue
         error = np.abs(got - want).max() / np.abs(want).max()
         assert error < 1e-10, f"{label}: product off by {error:.2e}"
-        t = seconds_per_call(lambda: matrix @ x, args.repeat, synchronize)
+        t = per_call(lambda: matrix @ x, args.repeat, finish)
         ratio = f"  ({t * 1e3 / args.yasps_ms:.2f}x yasps)" \
             if args.yasps_ms else ""
         print(f"  {label:8s} {t * 1e3:9.4f} ms{ratio}")

@@ -20,7 +20,6 @@ from __future__ import annotations
 import argparse
 import re
 import sys
-import time
 from functools import partial
 from pathlib import Path
 
@@ -33,15 +32,7 @@ sys.path.insert(0, str(HERE))
 sys.path.insert(0, str(HERE.parent / "python"))
 
 from energy_cases import ArrayOps, TorchOps, snh_positions  # noqa: E402
-
-
-def seconds_per_call(fn, repeat: int, finish) -> float:
-    finish(fn())
-    start = time.perf_counter()
-    for _ in range(repeat - 1):
-        fn()
-    finish(fn())
-    return (time.perf_counter() - start) / repeat
+from timing import per_call  # noqa: E402
 
 
 def yasps_times(log: Path) -> dict:
@@ -83,8 +74,8 @@ def main() -> None:
                              ("hess", vmap(hessian(f)),
                               max(args.repeat // 5, 2))):
         check("PyTorch", fn(*targs).cpu().numpy(), args.kit, name)
-        results[("PyTorch", name)] = seconds_per_call(
-            lambda: fn(*targs), repeat, finish)
+        results[("PyTorch", name)] = per_call(lambda: fn(*targs), repeat,
+                                              finish)
 
     import jax
     import jax.numpy as jnp
@@ -95,8 +86,8 @@ def main() -> None:
     for name, fn in (("grad", jax.jit(jax.vmap(jax.grad(jf)))),
                      ("hess", jax.jit(jax.vmap(jax.hessian(jf))))):
         check("JAX", np.asarray(fn(*jargs)), args.kit, name)
-        results[("JAX", name)] = seconds_per_call(
-            lambda: fn(*jargs), args.repeat, lambda r: r.block_until_ready())
+        results[("JAX", name)] = per_call(lambda: fn(*jargs), args.repeat,
+                                          lambda r: r.block_until_ready())
 
     where = torch.cuda.get_device_name() if device.type == "cuda" else "CPU"
     print(f"stable Neo-Hookean on positions, {len(arrays[0])} bunny tets, "

@@ -5,6 +5,19 @@ import time
 import numpy as np
 
 
+def per_call(fn, repeat: int, finish=lambda result: None) -> float:
+    """Seconds per call of fn over `repeat` back-to-back calls after a
+    warm-up call. `finish(result)` waits for work that fn only queued (on a
+    GPU) after the warm-up and after the last call."""
+    finish(fn())
+    start = time.perf_counter()
+    result = None
+    for _ in range(repeat):
+        result = fn()
+    finish(result)
+    return (time.perf_counter() - start) / repeat
+
+
 def median(fn, repeat: int) -> float:
     """Median wall time of `repeat` calls of fn, in seconds."""
     times = []

@@ -22,6 +22,8 @@
 
 #include "yasps/Runtime/GpuLaunch.h"
 
+#include "BenchMain.h"
+
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -191,7 +193,8 @@ int run(int argc, char **argv) {
     Npy reference = readNpy(dir + "/" + kernel.reference);
     std::vector<double> got(reference.size());
     out.download(got.data(), got.size() * sizeof(double));
-    const double *want = reinterpret_cast<const double *>(reference.data.data());
+    const double *want =
+        reinterpret_cast<const double *>(reference.data.data());
     double diff = 0.0, scale = 0.0;
     for (std::size_t i = 0; i < got.size(); ++i) {
       diff = std::max(diff, std::fabs(got[i] - want[i]));
@@ -201,10 +204,10 @@ int run(int argc, char **argv) {
     for (int k = 0; k < repeat; ++k)
       launch();
     context.synchronize();
-    double seconds = std::chrono::duration<double>(
-                         std::chrono::steady_clock::now() - start)
-                         .count() /
-                     repeat;
+    double seconds =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - start)
+            .count() /
+        repeat;
     std::printf("  %-10s %10.4f ms  (first %zu values within %.1e of the "
                 "CPU's)\n",
                 kernel.label.c_str(), seconds * 1e3, got.size(), diff / scale);
@@ -219,10 +222,6 @@ int run(int argc, char **argv) {
 } // namespace
 
 int main(int argc, char **argv) {
-  try {
-    return run(argc, argv);
-  } catch (const std::exception &error) {
-    std::cerr << "yasps-kernel-bench: " << error.what() << "\n";
-    return 1;
-  }
+  return yasps::runtime::bench::runReportingErrors("yasps-kernel-bench", run,
+                                                   argc, argv);
 }

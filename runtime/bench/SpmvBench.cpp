@@ -21,6 +21,8 @@
 #include "yasps/Runtime/GpuSystem.h"
 #include "yasps/Runtime/ThreadPool.h"
 
+#include "BenchMain.h"
+
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -109,7 +111,8 @@ Mesh readGmshTets(const std::string &path) {
 /// `count` random symmetric positive definite n x n matrices (A A^T / n +
 /// I / 10, row-major) and gradients.
 void randomLocal(std::mt19937 &rng, std::int64_t count, std::int64_t n,
-                 std::vector<double> &gradients, std::vector<double> &hessians) {
+                 std::vector<double> &gradients,
+                 std::vector<double> &hessians) {
   std::normal_distribution<double> normal;
   gradients.resize(count * n);
   for (double &g : gradients)
@@ -233,9 +236,9 @@ int run(int argc, char **argv) {
     vertexDofs.push_back(d);
 
   Clock::time_point start = Clock::now();
-  GlobalSystem system(BlockLayout::fromSizes(std::vector<std::int64_t>(nv, 3)),
-                      {{numTets, 12, tetDofs.data()},
-                       {nv, 3, vertexDofs.data()}});
+  GlobalSystem system(
+      BlockLayout::fromSizes(std::vector<std::int64_t>(nv, 3)),
+      {{numTets, 12, tetDofs.data()}, {nv, 3, vertexDofs.data()}});
   double structure = secondsSince(start);
   std::mt19937 rng(0);
   std::vector<double> gt, ht, gv, hv;
@@ -249,10 +252,10 @@ int run(int argc, char **argv) {
     system.add(1, gv.data(), hv.data(), pool);
   };
   auto nothing = [] {};
-  double assembleOne = perCall(std::max(repeat / 10, 2),
-                               [&] { assembleCpu(&one); }, nothing);
-  double assembleAll = perCall(std::max(repeat / 10, 2),
-                               [&] { assembleCpu(&all); }, nothing);
+  double assembleOne = perCall(
+      std::max(repeat / 10, 2), [&] { assembleCpu(&one); }, nothing);
+  double assembleAll = perCall(
+      std::max(repeat / 10, 2), [&] { assembleCpu(&all); }, nothing);
   assembleCpu(nullptr);
 
   const std::int64_t n = system.size();
@@ -260,10 +263,10 @@ int run(int argc, char **argv) {
   std::normal_distribution<double> normal;
   for (double &v : x)
     v = normal(rng);
-  double spmvOne = perCall(repeat, [&] { system.multiply(x.data(), y.data(), one); },
-                           nothing);
-  double spmvAll = perCall(repeat, [&] { system.multiply(x.data(), y.data(), all); },
-                           nothing);
+  double spmvOne = perCall(
+      repeat, [&] { system.multiply(x.data(), y.data(), one); }, nothing);
+  double spmvAll = perCall(
+      repeat, [&] { system.multiply(x.data(), y.data(), all); }, nothing);
   PcgOptions options;
   options.relativeTolerance = 1e-8;
   std::vector<double> solution(n);
@@ -304,7 +307,8 @@ int run(int argc, char **argv) {
   };
   DeviceBuffer dgt = upload(gt), dht = upload(ht), dgv = upload(gv),
                dhv = upload(hv), dx = upload(x);
-  DeviceBuffer dy(context, n * sizeof(double)), dsol(context, n * sizeof(double));
+  DeviceBuffer dy(context, n * sizeof(double)),
+      dsol(context, n * sizeof(double));
   auto assembleGpu = [&] {
     gpu.setZero();
     gpu.add(0, dgt.pointer(), dht.pointer());
@@ -322,12 +326,13 @@ int run(int argc, char **argv) {
     std::printf("  GPU results differ from the CPU's: %.3g relative\n", check);
     return 1;
   }
-  double spmvGpu =
-      perCall(repeat, [&] { gpu.multiply(dx.pointer(), dy.pointer()); }, sync);
+  double spmvGpu = perCall(
+      repeat, [&] { gpu.multiply(dx.pointer(), dy.pointer()); }, sync);
   // Bandwidth: a device-to-device copy of 512 MiB, bytes read and written.
   std::size_t copyBytes = std::size_t(512) << 20;
   DeviceBuffer from(context, copyBytes), to(context, copyBytes);
-  double copy = perCall(20, [&] { to.copyFrom(from, copyBytes); }, sync);
+  double copy = perCall(
+      20, [&] { to.copyFrom(from, copyBytes); }, sync);
   double bandwidth = 2.0 * double(copyBytes) / copy;
   double bound = double(gpu.multiplyBytes()) / bandwidth;
   start = Clock::now();
@@ -360,10 +365,6 @@ int run(int argc, char **argv) {
 } // namespace
 
 int main(int argc, char **argv) {
-  try {
-    return run(argc, argv);
-  } catch (const std::exception &error) {
-    std::cerr << "yasps-spmv-bench: " << error.what() << "\n";
-    return 1;
-  }
+  return yasps::runtime::bench::runReportingErrors("yasps-spmv-bench", run,
+                                                   argc, argv);
 }
