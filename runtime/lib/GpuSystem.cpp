@@ -5,7 +5,7 @@
 #include "yasps/Runtime/GpuSolverKernels.h"
 
 #include <algorithm>
-#include <set>
+#include <limits>
 #include <stdexcept>
 
 using namespace yasps::runtime;
@@ -86,6 +86,13 @@ GpuSystem::GpuSystem(const CudaContext &context, const GlobalSystem &host)
 
   const BlockLayout &layout = host.staticHessian().layout();
   numDofs = host.size();
+  // SpMV keeps block coordinates in 32 bits (far beyond what fits in a
+  // GPU's memory as a Hessian).
+  if (numDofs > std::numeric_limits<int>::max())
+    throw std::invalid_argument(
+        "the GPU system supports at most " +
+        std::to_string(std::numeric_limits<int>::max()) + " DoFs, not " +
+        std::to_string(numDofs));
   numBlocks = layout.numBlocks();
   numStatic = host.numStaticEnergies();
   std::vector<long long> offsets(layout.blockOffset.begin(),
@@ -130,10 +137,10 @@ void GpuSystem::uploadPart(Part &part, const BlockSparseMatrix &matrix,
                            std::size_t numEnergies) {
   const BlockLayout &layout = matrix.layout();
   const std::size_t stored = matrix.numStoredBlocks();
-  std::vector<long long> rowDof(stored), colDof(stored);
+  std::vector<int> rowDof(stored), colDof(stored);
   for (std::size_t k = 0; k < stored; ++k) {
-    rowDof[k] = layout.blockOffset[matrix.blockRow(k)];
-    colDof[k] = layout.blockOffset[matrix.blockCol(k)];
+    rowDof[k] = static_cast<int>(layout.blockOffset[matrix.blockRow(k)]);
+    colDof[k] = static_cast<int>(layout.blockOffset[matrix.blockCol(k)]);
   }
   for (const BlockGroup &group : matrix.groups())
     if (group.size() > 0 && group.rows * group.cols > 0)
@@ -281,8 +288,8 @@ void multiplyPart(Launch &&launch, const Part &part, const double *x, double *y,
     args.count = group.count;
     args.rows = group.rows;
     args.cols = group.cols;
-    args.rowDof = as<const long long>(part.rowDof) + group.first;
-    args.colDof = as<const long long>(part.colDof) + group.first;
+    args.rowDof = as<const int>(part.rowDof) + group.first;
+    args.colDof = as<const int>(part.colDof) + group.first;
     args.values = as<const double>(part.values) + group.valueStart;
     args.x = x;
     args.y = y;
@@ -426,7 +433,7 @@ std::size_t GpuSystem::multiplyBytes() const {
   std::size_t bytes = 2 * static_cast<std::size_t>(numDofs) * sizeof(double);
   for (const std::unique_ptr<Part> &part : parts)
     bytes += part->numValues * sizeof(double);
-  return bytes + storedBlocks() * 2 * sizeof(long long);
+  return bytes + storedBlocks() * 2 * sizeof(int);
 }
 
 cu::DevicePtr GpuSystem::gradientPointer() const {

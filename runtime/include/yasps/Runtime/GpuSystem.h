@@ -39,7 +39,8 @@ class GpuSystem {
 public:
   /// Uploads `host`'s structure to the device of `context`; values start
   /// at zero. Throws CudaError when the solver kernels cannot be loaded
-  /// (built without nvcc, or no binary fits the device).
+  /// (built without nvcc, or no binary fits the device), and
+  /// std::invalid_argument for more than 2^31 - 1 DoFs.
   GpuSystem(const CudaContext &context, const GlobalSystem &host);
   ~GpuSystem();
   GpuSystem(const GpuSystem &) = delete;
