@@ -68,6 +68,21 @@ def test_without_a_gpu_the_cpu_is_used_and_gpu_says_why(monkeypatch):
         yasps.backend()
 
 
+def test_a_gpu_without_the_toolchain_falls_back_to_the_cpu(monkeypatch):
+    """A usable GPU is not enough: without ptxas (or the runtime's solver
+    kernels) "auto" stays on the CPU and "gpu" says what is missing."""
+    module = sys.modules["yasps.backend"]
+    monkeypatch.setattr(module, "gpu_status", lambda: module.GpuStatus(
+        True, "", (("Some GPU", "sm_90", 1 << 30),)))
+    monkeypatch.setattr(module.shutil, "which", lambda name, path=None: None)
+    monkeypatch.setattr(yasps.config, "backend", "auto")
+    assert yasps.backend() == "cpu"
+    monkeypatch.setattr(yasps.config, "backend", "gpu")
+    with pytest.raises(yasps.BackendError, match="ptxas, which builds GPU "
+                       "kernels, was not found"):
+        yasps.backend()
+
+
 def test_environment_variable_chooses_the_backend():
     out = run_python("""
         import yasps
@@ -188,6 +203,8 @@ GPU_DERIVATIVES = """
 
 @pytest.mark.skipif(not FAKE_DRIVER.exists(),
                     reason=f"the stand-in driver {FAKE_DRIVER} is not built")
+@pytest.mark.skipif(not HAS_PTXAS, reason="the CUDA toolkit (ptxas) is not "
+                    "installed")
 def test_minimize_energy_on_the_gpu_backend_matches_the_cpu():
     """minimizeEnergy with the GPU backend: assembly and PCG through the
     GPU solver's kernels, here run by the stand-in driver (which executes

@@ -3,8 +3,10 @@
 ``yasps.config.backend`` (default: ``$YASPS_BACKEND``, else ``"auto"``)
 chooses:
 
-- ``"auto"``: the GPU when the CUDA driver loads and lists a device, else
-  the CPU;
+- ``"auto"``: the GPU when the CUDA driver loads and lists a device and
+  this installation can build and run GPU kernels (the CUDA toolkit's
+  ``ptxas``, and the runtime's solver kernels, built by ``nvcc``), else the
+  CPU;
 - ``"cpu"``: always the CPU;
 - ``"gpu"``: the GPU, or ``BackendError`` saying why it cannot be used.
 
@@ -18,6 +20,8 @@ still run on the CPU (docs/gpu.md).
 
 from __future__ import annotations
 
+import os
+import shutil
 from dataclasses import dataclass
 from typing import List, Tuple
 
@@ -47,12 +51,29 @@ def gpu_status() -> GpuStatus:
     return GpuStatus(usable, reason, tuple(tuple(d) for d in devices))
 
 
+def gpu_toolchain_missing() -> str:
+    """Why this installation cannot build and run GPU kernels ("" when it
+    can): kernels are serialised by the CUDA toolkit's ``ptxas`` (in
+    ``$CUDA_ROOT/bin``, ``/usr/local/cuda/bin`` or on ``PATH``), and the
+    GPU solve needs the runtime's solver kernels, built by ``nvcc``."""
+    if not compiler._module().gpu_solver_images():
+        return ("this build of yasps has no GPU solver kernels (nvcc was not "
+                "found when it was built)")
+    roots = [os.environ.get("CUDA_ROOT"), "/usr/local/cuda"]
+    path = os.pathsep.join([f"{r}/bin" for r in roots if r] +
+                           [os.environ.get("PATH", "")])
+    if shutil.which("ptxas", path=path) is None:
+        return ("the CUDA toolkit's ptxas, which builds GPU kernels, was not "
+                "found (in $CUDA_ROOT/bin, /usr/local/cuda/bin or on PATH)")
+    return ""
+
+
 def backend() -> str:
     """The backend that evaluates kernels now: ``"cpu"`` or ``"gpu"``.
 
     Raises:
         BackendError: for an unknown ``config.backend``, or ``"gpu"``
-            without a usable GPU (the message says why).
+            without a usable GPU or GPU toolchain (the message says why).
     """
     choice = config.backend
     if choice not in BACKENDS:
@@ -61,11 +82,12 @@ def backend() -> str:
     if choice == "cpu":
         return "cpu"
     status = gpu_status()
-    if status.usable:
+    reason = status.reason if not status.usable else gpu_toolchain_missing()
+    if not reason:
         return "gpu"
     if choice == "gpu":
         raise BackendError(f"the GPU backend was requested but cannot be "
-                           f"used: {status.reason}")
+                           f"used: {reason}")
     return "cpu"
 
 
