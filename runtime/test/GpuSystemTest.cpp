@@ -374,6 +374,40 @@ TEST_P(GpuSystemTest, FollowsANewDynamicPart) {
   expectSameSolve(options);
 }
 
+TEST_P(GpuSystemTest, HandlesEmptyEnergiesAndParts) {
+  // No dynamic energy, and a static energy without instances.
+  scene.energies[3] = scene.randomPairs(0);
+  host->setDynamic({});
+  gpu->updateDynamic(*host);
+  Energy none = scene.randomPairs(0);
+  std::vector<DofMap> maps = scene.maps(0, 3);
+  maps.push_back({0, 6, none.dofs.data()});
+  GlobalSystem withEmpty(scene.layout, maps);
+  GpuSystem mirror(*context, withEmpty);
+  ThreadPool pool(1);
+  withEmpty.setZero();
+  mirror.setZero();
+  for (std::size_t e = 0; e < 3; ++e) {
+    const Energy &energy = scene.energies[e];
+    withEmpty.add(e, energy.gradients.data(), energy.hessians.data());
+    DeviceBuffer g = onDevice(*context, energy.gradients);
+    DeviceBuffer h = onDevice(*context, energy.hessians);
+    mirror.add(e, g.pointer(), h.pointer());
+  }
+  DeviceBuffer nothing(*context, 0);
+  mirror.add(3, nothing.pointer(), nothing.pointer());
+  PcgOptions options;
+  options.relativeTolerance = 1e-12;
+  std::vector<double> expected(withEmpty.size());
+  PcgResult cpu = withEmpty.solve(expected.data(), options, pool);
+  DeviceBuffer x(*context, withEmpty.size() * sizeof(double));
+  PcgResult result = mirror.solve(x.pointer(), options);
+  EXPECT_TRUE(cpu.converged);
+  EXPECT_TRUE(result.converged);
+  expectClose(download(x), expected, 1e-9, "solution without dynamic part");
+  EXPECT_TRUE(mirror.hessianValues(1).empty());
+}
+
 TEST_P(GpuSystemTest, RejectsMisuse) {
   DeviceBuffer x(*context, host->size() * sizeof(double));
   EXPECT_THROW(gpu->add(4, x.pointer(), x.pointer()), std::out_of_range);
