@@ -75,6 +75,16 @@ PyBuffer upload(const PyDevice &device, HostArray array) {
   return out;
 }
 
+/// Copies `array` to the start of `buffer`, which then holds its elements.
+void uploadInto(PyBuffer &buffer, HostArray array) {
+  if (byteSize(array) > buffer.buffer->size())
+    throw std::out_of_range("writing " + std::to_string(byteSize(array)) +
+                            " bytes into a device buffer of " +
+                            std::to_string(buffer.buffer->size()));
+  buffer.buffer->upload(array.data(), byteSize(array));
+  buffer.elements = std::int64_t(array.size());
+}
+
 void download(const PyBuffer &buffer, HostArray array) {
   if (byteSize(array) > buffer.buffer->size())
     throw std::out_of_range("reading " + std::to_string(byteSize(array)) +
@@ -167,6 +177,10 @@ void yasps::python::bindGpuRuntime(nb::module_ &m) {
   nb::class_<PyBuffer>(m, "GpuBuffer", "Device memory.")
       .def_prop_ro("bytes",
                    [](const PyBuffer &self) { return self.buffer->size(); })
+      .def("upload", &uploadInto, nb::arg("array"),
+           "Copies the C-contiguous array `array` to the start of the "
+           "buffer (which must be large enough), after the launches before "
+           "it; the buffer then stands for array.size elements")
       .def("download", &download, nb::arg("out"),
            "Copies the buffer's first out.nbytes bytes into the C-contiguous "
            "array `out` (waits for earlier launches)")
@@ -228,6 +242,7 @@ struct PyGpuSystem {
   nb::object hostObject;
   const GlobalSystem *host;
   std::unique_ptr<GpuSystem> gpu;
+  DeviceBuffer solution;
 
   /// A device copy of `array` after checking it has `expected` entries.
   DeviceBuffer upload(const DoubleArray &array, std::size_t expected,
@@ -317,12 +332,14 @@ struct PyGpuSystem {
       mask.assign(fixed->data(), fixed->data() + fixed->shape(0));
       options.fixedDofs = &mask;
     }
-    DeviceBuffer x(*context, out.size() * sizeof(double));
+    // Kept from solve to solve: a Newton loop then allocates nothing.
+    if (solution.size() < out.size() * sizeof(double))
+      solution = DeviceBuffer(*context, out.size() * sizeof(double));
     PcgResult result;
     {
       nb::gil_scoped_release release;
-      result = gpu->solve(x.pointer(), options, checkEvery);
-      x.download(out.data(), out.size() * sizeof(double));
+      result = gpu->solve(solution.pointer(), options, checkEvery);
+      solution.download(out.data(), out.size() * sizeof(double));
     }
     return nb::make_tuple(result.iterations, result.relativeResidual,
                           result.converged);

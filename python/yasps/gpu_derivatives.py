@@ -72,8 +72,11 @@ def device_derivatives(scene: Scene, energy: Attribute
 
     def run(path: str):
         kernel = kernels.kernel(path)
-        return run_on_gpu(gpu, kernels, scene, path, count,
-                          count * kernel.rows * kernel.cols)
+        size = count * kernel.rows * kernel.cols
+        # Assembly consumes the outputs before the next Newton iteration
+        # computes them again: their memory is reused.
+        return run_on_gpu(gpu, kernels, scene, path, count, size,
+                          gpu.output(("derivatives", path), size))
 
     dofs_path = spec.base + "__dofs"
     known: Optional[np.ndarray] = None

@@ -35,6 +35,8 @@ class GpuSession:
         self._copies: Dict[Tuple[str, str], Tuple[object, object, object]] = {}
         #: (kind, path) of every upload, in order (for tests and tuning).
         self.uploads: List[Tuple[str, str]] = []
+        # Reused outputs (see output()), by key.
+        self._outputs: Dict[object, object] = {}
 
     def kernels(self, ir: str, paths, name: str,
                 pipeline: str = "") -> GpuKernels:
@@ -67,10 +69,28 @@ class GpuSession:
         cached = self._copies.get((kind, path))
         if cached is not None and cached[0] == token:
             return cached[1]
-        buffer = self._native.gpu_upload(self.device,
-                                         np.ascontiguousarray(host))
+        host = np.ascontiguousarray(host)
+        if cached is not None and cached[1].bytes >= host.nbytes:
+            # New values of the same size (a simulation step): the copy's
+            # memory is reused.
+            buffer = cached[1]
+            buffer.upload(host)
+        else:
+            buffer = self._native.gpu_upload(self.device, host)
         self._copies[(kind, path)] = (token, buffer, source)
         self.uploads.append((kind, path))
+        return buffer
+
+    def output(self, key: object, size: int):
+        """A device buffer of at least ``size`` doubles kept under ``key``
+        and handed out again by later calls: for outputs that are consumed
+        before the next call with the same key (the local derivatives that
+        assembly reads), so that a Newton loop does not allocate."""
+        buffer = self._outputs.get(key)
+        if buffer is None or buffer.bytes < 8 * size:
+            buffer = self._native.gpu_allocate(self.device,
+                                               max(size + size // 2, 1))
+            self._outputs[key] = buffer
         return buffer
 
     def launch(self, kernels: GpuKernels, path: str, count: int,

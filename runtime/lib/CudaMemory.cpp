@@ -114,11 +114,15 @@ void DeviceBuffer::download(void *host, std::size_t bytes) const {
                       "cuMemcpyDtoH");
 }
 
-void DeviceBuffer::setZero() {
-  if (length == 0)
+void DeviceBuffer::setZero(std::size_t bytes) {
+  if (bytes > length)
+    throw std::out_of_range("zeroing " + std::to_string(bytes) +
+                            " bytes of a device buffer of " +
+                            std::to_string(length));
+  if (bytes == 0)
     return;
   ctx->makeCurrent();
-  ctx->driver().check(ctx->driver().cuMemsetD8(ptr, 0, length), "cuMemsetD8");
+  ctx->driver().check(ctx->driver().cuMemsetD8(ptr, 0, bytes), "cuMemsetD8");
 }
 
 void DeviceBuffer::copyFrom(const DeviceBuffer &source, std::size_t bytes) {

@@ -38,6 +38,23 @@ DeviceBuffer uploaded(const CudaContext &context, const std::vector<T> &host) {
   return buffer;
 }
 
+/// Makes `buffer` hold at least `bytes`, reallocating (with room to grow
+/// by half) only when it is smaller: the dynamic part changes size every
+/// Newton iteration, and allocations cost more than the uploads.
+void reserve(const CudaContext &context, DeviceBuffer &buffer,
+             std::size_t bytes) {
+  if (buffer.size() < bytes)
+    buffer = DeviceBuffer(context, bytes + bytes / 2);
+}
+
+/// Copies `host` to the start of `buffer`, growing it when needed.
+template <typename T>
+void uploadInto(const CudaContext &context, DeviceBuffer &buffer,
+                const std::vector<T> &host) {
+  reserve(context, buffer, host.size() * sizeof(T));
+  buffer.upload(host.data(), host.size() * sizeof(T));
+}
+
 template <typename T> T *as(const DeviceBuffer &buffer) {
   return reinterpret_cast<T *>(buffer.pointer());
 }
@@ -126,17 +143,21 @@ void GpuSystem::updateDynamic(const GlobalSystem &host) {
   if (host.size() != numDofs || host.numStaticEnergies() != numStatic)
     throw std::invalid_argument("GpuSystem::updateDynamic: a GlobalSystem "
                                 "other than the one this system mirrors");
-  parts[1] = std::make_unique<Part>();
+  if (!parts[1])
+    parts[1] = std::make_unique<Part>();
   uploadPart(*parts[1], host.dynamicHessian(), host, numStatic,
              host.numEnergies() - numStatic);
-  parts[1]->values.setZero();
+  parts[1]->values.setZero(parts[1]->numValues * sizeof(double));
 }
 
 void GpuSystem::uploadPart(Part &part, const BlockSparseMatrix &matrix,
                            const GlobalSystem &host, std::size_t firstEnergy,
                            std::size_t numEnergies) {
+  // A part's buffers are reused when it is uploaded again (the dynamic
+  // part, every Newton iteration).
   const BlockLayout &layout = matrix.layout();
   const std::size_t stored = matrix.numStoredBlocks();
+  part.groups.clear();
   std::vector<int> rowDof(stored), colDof(stored);
   for (std::size_t k = 0; k < stored; ++k) {
     rowDof[k] = static_cast<int>(layout.blockOffset[matrix.blockRow(k)]);
@@ -154,10 +175,11 @@ void GpuSystem::uploadPart(Part &part, const BlockSparseMatrix &matrix,
       diagonal[b] = static_cast<long long>(matrix.valueOffset(
           static_cast<std::size_t>(matrix.diagonalBlock(b))));
   part.numValues = matrix.values().size();
-  part.values = DeviceBuffer(ctx, part.numValues * sizeof(double));
-  part.rowDof = uploaded(ctx, rowDof);
-  part.colDof = uploaded(ctx, colDof);
-  part.diagonalValue = uploaded(ctx, diagonal);
+  reserve(ctx, part.values, part.numValues * sizeof(double));
+  uploadInto(ctx, part.rowDof, rowDof);
+  uploadInto(ctx, part.colDof, colDof);
+  uploadInto(ctx, part.diagonalValue, diagonal);
+  part.energies.resize(numEnergies);
 
   for (std::size_t e = firstEnergy; e < firstEnergy + numEnergies; ++e) {
     const GlobalSystem::EnergyMap &map = host.energyStructure(e);
@@ -185,16 +207,15 @@ void GpuSystem::uploadPart(Part &part, const BlockSparseMatrix &matrix,
                 matrix.valueOffset(map.pairSlot[(i * m + a) * m + b].block));
       }
     }
-    Energy energy;
+    Energy &energy = part.energies[e - firstEnergy];
     energy.count = count;
     energy.numParams = n;
     energy.maxBlocks = m;
-    energy.dofs = uploaded(ctx, dofs);
-    energy.localBlock = uploaded(ctx, map.localBlock);
-    energy.offset = uploaded(ctx, map.offset);
-    energy.blockSize = uploaded(ctx, sizes);
-    energy.pairValue = uploaded(ctx, pairValue);
-    part.energies.push_back(std::move(energy));
+    uploadInto(ctx, energy.dofs, dofs);
+    uploadInto(ctx, energy.localBlock, map.localBlock);
+    uploadInto(ctx, energy.offset, map.offset);
+    uploadInto(ctx, energy.blockSize, sizes);
+    uploadInto(ctx, energy.pairValue, pairValue);
   }
 }
 
@@ -228,7 +249,7 @@ std::int64_t GpuSystem::reductionBlocks(std::int64_t n) {
 void GpuSystem::setZero() {
   gradientValues.setZero();
   for (const std::unique_ptr<Part> &part : parts)
-    part->values.setZero();
+    part->values.setZero(part->numValues * sizeof(double));
 }
 
 void GpuSystem::addLocal(std::size_t energy, cu::DevicePtr gradients,

@@ -28,6 +28,7 @@
 
 namespace {
 int mode = 0;
+int allocations = 0;
 constexpr std::size_t kGiB = std::size_t(1) << 30;
 int expectedParams = 0;
 std::string loadedImage, functionName;
@@ -96,6 +97,8 @@ const ErrorText *findError(int code) {
 
 extern "C" {
 void fakeCudaSetMode(int m) { mode = m; }
+/// How many cuMemAlloc calls succeeded so far.
+int fakeCudaAllocations() { return allocations; }
 void fakeCudaExpectParams(int n) { expectedParams = n; }
 /// The last launch: its kernel's name, its module's image, grid and block
 /// sizes (6 values) and parameters (`expectedParams` values).
@@ -155,6 +158,7 @@ int cuCtxSynchronize() { return 0; }
 int cuMemAlloc_v2(unsigned long long *ptr, std::size_t bytes) {
   if (bytes > kGiB)
     return 2;
+  ++allocations;
   // Zeroed, so that outputs of kernels that are not run read as zeros.
   *ptr =
       reinterpret_cast<unsigned long long>(std::calloc(bytes ? bytes : 1, 1));

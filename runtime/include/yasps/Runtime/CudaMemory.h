@@ -59,7 +59,10 @@ public:
   void download(void *host, std::size_t bytes) const;
 
   /// Sets every byte to zero.
-  void setZero();
+  void setZero() { setZero(length); }
+  /// Sets the first `bytes` bytes to zero (throws std::out_of_range past
+  /// the end).
+  void setZero(std::size_t bytes);
   /// Copies `bytes` bytes from the start of `source` to the start of this
   /// buffer (on the device; throws std::out_of_range past either's end).
   void copyFrom(const DeviceBuffer &source, std::size_t bytes);
