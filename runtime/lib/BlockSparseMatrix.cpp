@@ -8,7 +8,6 @@
 #include <map>
 #include <stdexcept>
 #include <string>
-#include <tuple>
 
 using namespace yasps::runtime;
 
@@ -49,15 +48,17 @@ BlockSparseMatrix::BlockSparseMatrix(
   // blocks. Counting sorts order the ~10^6 coordinates of a large scene in
   // a few passes, where a comparison sort of all of them took most of the
   // structure's build time.
+  // Kept small (24 bytes): the entries are read in sorted, hence random,
+  // order, and a scene's million coordinates make that memory-bound.
   struct Entry {
-    std::int64_t rows, cols, row, col;
-    std::size_t input;
+    std::int64_t row, col;
+    std::uint32_t shape; // index into shapes
+    bool transposed;     // the input coordinate was in the lower triangle
   };
   std::vector<Entry> unordered;
   unordered.reserve(coords.size());
   std::map<std::pair<std::int64_t, std::int64_t>, std::size_t> shapeIds;
-  std::vector<std::size_t> shapeOf;
-  shapeOf.reserve(coords.size());
+  std::vector<std::pair<std::int64_t, std::int64_t>> shapes;
   for (std::size_t k = 0; k < coords.size(); ++k) {
     auto [i, j] = coords[k];
     if (i < 0 || i >= n || j < 0 || j >= n)
@@ -66,10 +67,13 @@ BlockSparseMatrix::BlockSparseMatrix(
           ", " + std::to_string(j) + ") is outside a layout of " +
           std::to_string(n) + " blocks");
     std::int64_t row = std::min(i, j), col = std::max(i, j);
-    Entry e{layout_.blockSize(row), layout_.blockSize(col), row, col, k};
-    shapeOf.push_back(
-        shapeIds.try_emplace({e.rows, e.cols}, shapeIds.size()).first->second);
-    unordered.push_back(e);
+    std::pair<std::int64_t, std::int64_t> shape{layout_.blockSize(row),
+                                                layout_.blockSize(col)};
+    auto [found, added] = shapeIds.try_emplace(shape, shapes.size());
+    if (added)
+      shapes.push_back(shape);
+    unordered.push_back(
+        {row, col, static_cast<std::uint32_t>(found->second), i > j});
   }
   // Shape ids in (rows, cols) order, as the comparison sort had them.
   std::vector<std::size_t> shapeRank(shapeIds.size());
@@ -99,42 +103,38 @@ BlockSparseMatrix::BlockSparseMatrix(
   if (shapeRank.size() > 1) {
     std::vector<std::size_t> start(shapeRank.size() + 1, 0), next(order.size());
     for (std::size_t k : order)
-      ++start[shapeRank[shapeOf[k]] + 1];
+      ++start[shapeRank[unordered[k].shape] + 1];
     for (std::size_t r = 0; r + 1 < start.size(); ++r)
       start[r + 1] += start[r];
     for (std::size_t k : order)
-      next[start[shapeRank[shapeOf[k]]]++] = k;
+      next[start[shapeRank[unordered[k].shape]]++] = k;
     order.swap(next);
   }
-  std::vector<Entry> entries;
-  entries.reserve(order.size());
-  for (std::size_t k : order)
-    entries.push_back(unordered[k]);
-  auto key = [](const Entry &e) {
-    return std::make_tuple(e.rows, e.cols, e.row, e.col);
-  };
 
   if (positions)
-    positions->assign(coords.size(), BlockSlot{0, false});
+    positions->resize(coords.size());
   valueOffset_.push_back(0);
-  for (std::size_t k = 0; k < entries.size(); ++k) {
-    const Entry &e = entries[k];
-    bool newBlock = k == 0 || key(entries[k - 1]) != key(e);
+  const Entry *previous = nullptr;
+  for (std::size_t k : order) {
+    const Entry &e = unordered[k];
+    // Equal shapes and coordinates: the same stored block.
+    bool newBlock = !previous || previous->shape != e.shape ||
+                    previous->row != e.row || previous->col != e.col;
     if (newBlock) {
-      if (groups_.empty() || groups_.back().rows != e.rows ||
-          groups_.back().cols != e.cols)
-        groups_.push_back({e.rows, e.cols, blockRow_.size(), {}, {}});
+      auto [rows, cols] = shapes[e.shape];
+      if (groups_.empty() || groups_.back().rows != rows ||
+          groups_.back().cols != cols)
+        groups_.push_back({rows, cols, blockRow_.size(), {}, {}});
       groups_.back().rowCoordinate.push_back(e.row);
       groups_.back().colCoordinate.push_back(e.col);
       blockRow_.push_back(e.row);
       blockCol_.push_back(e.col);
       valueOffset_.push_back(valueOffset_.back() +
-                             static_cast<std::size_t>(e.rows * e.cols));
+                             static_cast<std::size_t>(rows * cols));
     }
-    if (positions) {
-      auto [i, j] = coords[e.input];
-      (*positions)[e.input] = BlockSlot{blockRow_.size() - 1, i > j};
-    }
+    if (positions)
+      (*positions)[k] = BlockSlot{blockRow_.size() - 1, e.transposed};
+    previous = &e;
   }
   values_.assign(valueOffset_.back(), 0.0);
 
