@@ -1,14 +1,21 @@
 #!/usr/bin/env python3
-"""Compiles the per-instance derivative kernels of stable Neo-Hookean on the
-79,935 bunny tets for GPUs, for timing on a machine without this toolchain.
+"""Compiles bunny kernels for GPUs into kits (runtime/bench/Kit.h), for
+timing on a GPU machine without this toolchain.
 
     python3 bench/gpu_kit.py KIT
 
-Writes into KIT: the kernels' cubins (sm_80, sm_90) and PTX, the launch
-record ``kernels.txt`` that ``yasps-kernel-bench`` reads, the scene's input
-buffers and the CPU kernels' outputs for the first instances (.npy), and the
-formula's inputs ``x.npy`` (N, 12) and ``dm_inv.npy`` (N, 9) with which
-bench/gpu_peers.py times PyTorch and JAX on the same tets.
+Writes two kits under KIT, each with the kernels' cubins (sm_80, sm_90) and
+PTX, the launch record ``kernels.txt``, the scene's input buffers and the
+CPU kernels' values of the first instances (.npy):
+
+- ``snh``: gradient, Hessian and projected Hessian of stable Neo-Hookean on
+  positions over the 79,935 bunny tets (``yasps-kernel-bench``), with the
+  formula's inputs ``x.npy`` (N, 12) and ``dm_inv.npy`` (N, 9) with which
+  bench/gpu_peers.py times PyTorch and JAX on the same tets;
+- ``newton``: the gradient, projected-Hessian and placement-index kernels of
+  bench/newton_system.py's scene (stable Neo-Hookean + inertia on the
+  bunny), its DoF layout and the CPU's Newton direction
+  (``yasps-newton-bench`` runs one Newton iteration's stages on the GPU).
 """
 
 from __future__ import annotations
@@ -17,6 +24,7 @@ import os
 import sys
 import tempfile
 from pathlib import Path
+from typing import Dict, List, Tuple
 
 os.environ.setdefault("YASPS_CACHE_DIR", tempfile.mkdtemp(prefix="yasps-kit-"))
 HERE = Path(__file__).resolve().parent
@@ -28,13 +36,16 @@ import numpy as np  # noqa: E402
 import yasps.gpu  # noqa: E402
 from yasps.emit import emit_scene  # noqa: E402
 from yasps.evaluate import DIFFERENTIATION_PIPELINE, _buffer  # noqa: E402
+from yasps.minimize import DofLayout, assemble  # noqa: E402
 
 from energy_cases import CASES  # noqa: E402
 from meshes import bunny  # noqa: E402
 
-#: Instances whose CPU values the kit keeps for checking the GPU's.
+#: Instances whose CPU values a kit keeps for checking the GPU's.
 CHECKED = 2000
-KERNELS = ("grad", "hess", "hess_proj")
+#: The Newton direction's PCG tolerance (tight, so that both backends'
+#: solutions agree closely).
+NEWTON_TOLERANCE = 1e-10
 
 
 def bunny_snh_inputs():
@@ -49,38 +60,30 @@ def bunny_snh_inputs():
     return cur.reshape(-1, 12), dm_inv.reshape(-1, 9)
 
 
-def main() -> None:
-    kit = Path(sys.argv[1])
+def write_kit(kit: Path, scene, kernels: List[Tuple[str, str, int, np.ndarray]],
+              extra: List[str]) -> None:
+    """Compiles ``kernels`` (label, scene-relative path, instances, CPU
+    values (N, ...)) of ``scene`` and writes the kit with ``extra``
+    directives."""
     kit.mkdir(parents=True, exist_ok=True)
-    arrays = bunny_snh_inputs()
-    np.save(kit / "x.npy", arrays[0])
-    np.save(kit / "dm_inv.npy", arrays[1])
-    case = next(c for c in CASES if c.name == "stable Neo-Hookean (x, 12)")
-    energy = case.build(arrays)
-    scene = energy.scene
-    paths = [energy.path(k) for k in KERNELS]
-    kernels = yasps.gpu.compile_ir(emit_scene(scene), paths, scene.name,
-                                   DIFFERENTIATION_PIPELINE,
-                                   chips=("sm_80", "sm_90"))
-    lines = [f"count {energy.count}"]
-    for (chip, fmt), data in sorted(kernels.binaries.items()):
-        name = f"snh_{chip}.{fmt}"
+    compiled = yasps.gpu.compile_ir(
+        emit_scene(scene, locations=True), [p for _, p, _, _ in kernels],
+        scene.name, DIFFERENTIATION_PIPELINE, chips=("sm_80", "sm_90"))
+    lines = []
+    for (chip, fmt), data in sorted(compiled.binaries.items()):
+        name = f"kernels_{chip}.{fmt}"
         (kit / name).write_bytes(data)
         lines.append(f"image {chip} {fmt} {name}")
-
-    # The CPU kernels' values of the first instances, for the check.
-    cpu = scene.energyDerivatives(energy.attr)
-    references = {"grad": cpu.gradient, "hess": cpu.hessian,
-                  "hess_proj": cpu.projectedHessian}
     written = set()
-    for label, path in zip(KERNELS, paths):
-        kernel = kernels.kernel(path)
+    for label, path, count, values in kernels:
+        kernel = compiled.kernel(path)
         reference = f"{label}_reference.npy"
-        # Column-major per instance; Hessians are symmetric.
-        np.save(kit / reference,
-                np.ascontiguousarray(references[label][:CHECKED]).reshape(-1))
+        # Column-major per instance (vectors and symmetric matrices read the
+        # same either way).
+        np.save(kit / reference, np.ascontiguousarray(
+            values[:CHECKED], dtype=np.float64).reshape(-1))
         lines.append(f"kernel {kernel.name} {label} {kernel.threads_per_block} "
-                     f"{energy.count * kernel.rows * kernel.cols} {reference}")
+                     f"{count} {count * kernel.rows * kernel.cols} {reference}")
         lines += [f"param {kind} {value}" for kind, value in kernel.launch_params]
         for kind, p in kernel.arguments:
             if kind == "out":
@@ -92,9 +95,56 @@ def main() -> None:
                     _buffer(scene, kind, p, None)))
                 written.add(name)
             lines.append(f"buffer {name}")
-        lines.append("end")
-    (kit / "kernels.txt").write_text("\n".join(lines) + "\n")
-    print(f"{kit}: {len(KERNELS)} kernels for {energy.count} tets")
+    (kit / "kernels.txt").write_text("\n".join(lines + extra) + "\n")
+
+
+def snh_kit(kit: Path) -> None:
+    arrays = bunny_snh_inputs()
+    kit.mkdir(parents=True, exist_ok=True)
+    np.save(kit / "x.npy", arrays[0])
+    np.save(kit / "dm_inv.npy", arrays[1])
+    case = next(c for c in CASES if c.name == "stable Neo-Hookean (x, 12)")
+    energy = case.build(arrays)
+    cpu = energy.scene.energyDerivatives(energy.attr)
+    values = {"grad": cpu.gradient, "hess": cpu.hessian,
+              "hess_proj": cpu.projectedHessian}
+    write_kit(kit, energy.scene,
+              [(k, energy.path(k), energy.count, v) for k, v in values.items()],
+              [])
+
+
+def newton_kit(kit: Path) -> None:
+    from newton_system import build
+    scene = build()
+    kernels, energies = [], []
+    for energy in scene.energies:
+        base = "::".join("@" + n for n in energy.owner.path + [energy.name])
+        d = scene.energyDerivatives(energy)
+        count, n = d.gradient.shape
+        values: Dict[str, np.ndarray] = {
+            "grad": d.gradient, "hess_proj": d.projectedHessian,
+            # 1-based in the kernel, 0 for padding.
+            "dofs": d.dofs() + 1}
+        for kind, v in values.items():
+            kernels.append((f"{energy.name}.{kind}", f"{base}__{kind}", count, v))
+        energies.append(f"energy {energy.name} {count} {n} {energy.name}.grad "
+                        f"{energy.name}.hess_proj {energy.name}.dofs")
+    kit.mkdir(parents=True, exist_ok=True)
+    np.save(kit / "layout.npy", DofLayout(scene.minimizeTargets).block_offsets)
+    system, _ = assemble(scene)
+    solution = np.zeros(system.size)
+    _, _, converged = system.solve(solution, NEWTON_TOLERANCE, 10000, 0, None)
+    assert converged, "the CPU's Newton direction did not converge"
+    np.save(kit / "solution.npy", solution)
+    write_kit(kit, scene, kernels, energies + [
+        "layout layout.npy", f"solution solution.npy {NEWTON_TOLERANCE}"])
+
+
+def main() -> None:
+    kit = Path(sys.argv[1])
+    snh_kit(kit / "snh")
+    newton_kit(kit / "newton")
+    print(f"{kit}: snh (stable Neo-Hookean, 79935 tets), newton (bunny scene)")
 
 
 if __name__ == "__main__":

@@ -2,8 +2,9 @@
 # The GPU checks that run without MLIR or the Python extension, on a GPU
 # machine (docs/gpu.md, "On a GPU machine"): the runtime's unit tests with
 # the real driver (GPU solve against the CPU), the SpMV/PCG benchmark on
-# the bunny, cuSPARSE (through PyTorch) on the same matrix, and stable
-# Neo-Hookean's generated derivative kernels against PyTorch and JAX.
+# the bunny, cuSPARSE (through PyTorch) on the same matrix, stable
+# Neo-Hookean's generated derivative kernels against PyTorch and JAX, and
+# one Newton iteration of the bunny scene on the GPU, in stages.
 #
 #   bash scripts/device_check.sh KIT [OUT]
 #
@@ -34,4 +35,7 @@ echo "== stable Neo-Hookean derivatives: yasps kernels, PyTorch, JAX"
   | tee "$out/kernels.log" || status=1
 python3 "$root/bench/gpu_peers.py" "$kit/snh" --yasps-log "$out/kernels.log" \
   2>&1 | tee "$out/peers.log" || status=1
+echo "== one Newton iteration of the bunny scene, in stages"
+"$kit/yasps-newton-bench" "$kit/newton" 2>&1 | tee "$out/newton.log" \
+  || status=1
 exit $status
