@@ -9,9 +9,9 @@ PTX, the launch record ``kernels.txt``, the scene's input buffers and the
 CPU kernels' values of the first instances (.npy):
 
 - ``snh``: gradient, Hessian and projected Hessian of stable Neo-Hookean on
-  positions over the 79,935 bunny tets (``yasps-kernel-bench``), with the
-  formula's inputs ``x.npy`` (N, 12) and ``dm_inv.npy`` (N, 9) with which
-  bench/gpu_peers.py times PyTorch and JAX on the same tets;
+  positions over the 79,935 bunny tets (``yasps-kernel-bench``); its input
+  buffers also give bench/gpu_peers.py the formula's inputs, with which it
+  times PyTorch and JAX on the same tets (``peer_inputs``);
 - ``newton``: the gradient, projected-Hessian and placement-index kernels of
   bench/newton_system.py's scene (stable Neo-Hookean + inertia on the
   bunny), its DoF layout and the CPU's Newton direction
@@ -98,11 +98,22 @@ def write_kit(kit: Path, scene, kernels: List[Tuple[str, str, int, np.ndarray]],
     (kit / "kernels.txt").write_text("\n".join(lines + extra) + "\n")
 
 
+#: The SNH kit's input buffers: the tets' corners (4 points of 3 per tet)
+#: and inverse rest shapes (column-major 3x3 per tet).
+SNH_POSITIONS, SNH_INVERSES = "attr_m.v.x.npy", "attr_m.e.inv.npy"
+
+
+def peer_inputs(kit: Path):
+    """The formula's inputs (bench/energy_cases.py's snh_positions) from the
+    SNH kit's buffers: positions (N, 12) and row-major inverse rest shapes
+    (N, 9)."""
+    x = np.load(kit / SNH_POSITIONS).reshape(-1, 12)
+    inverses = np.load(kit / SNH_INVERSES).reshape(-1, 3, 3)
+    return x, np.ascontiguousarray(np.transpose(inverses, (0, 2, 1))).reshape(-1, 9)
+
+
 def snh_kit(kit: Path) -> None:
     arrays = bunny_snh_inputs()
-    kit.mkdir(parents=True, exist_ok=True)
-    np.save(kit / "x.npy", arrays[0])
-    np.save(kit / "dm_inv.npy", arrays[1])
     case = next(c for c in CASES if c.name == "stable Neo-Hookean (x, 12)")
     energy = case.build(arrays)
     cpu = energy.scene.energyDerivatives(energy.attr)
@@ -111,6 +122,8 @@ def snh_kit(kit: Path) -> None:
     write_kit(kit, energy.scene,
               [(k, energy.path(k), energy.count, v) for k, v in values.items()],
               [])
+    for got, want in zip(peer_inputs(kit), arrays):
+        assert np.array_equal(got, want), "the SNH kit's buffers changed layout"
 
 
 def newton_kit(kit: Path) -> None:

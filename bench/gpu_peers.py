@@ -5,8 +5,9 @@ comparison with yasps' kernels timed by yasps-kernel-bench.
     yasps-kernel-bench KIT > kernels.log
     python3 bench/gpu_peers.py KIT [--yasps-log kernels.log] [--repeat 20]
 
-Loads the kit's formula inputs (bench/gpu_kit.py: positions (N, 12) and
-inverse rest shapes (N, 9) of the bunny's tets), evaluates the gradient
+Takes the formula's inputs from the kit (bench/gpu_kit.py's peer_inputs:
+positions (N, 12) and inverse rest shapes (N, 9) of the bunny's tets),
+evaluates the gradient
 and Hessian of bench/energy_cases.py's independent stable Neo-Hookean
 formula with ``torch.func.vmap`` of ``grad`` / ``hessian`` and with JAX's
 ``jit(vmap(...))``, float64 on the default GPU, checks the first instances
@@ -32,6 +33,7 @@ sys.path.insert(0, str(HERE))
 sys.path.insert(0, str(HERE.parent / "python"))
 
 from energy_cases import ArrayOps, TorchOps, snh_positions  # noqa: E402
+from gpu_kit import peer_inputs  # noqa: E402
 from timing import per_call  # noqa: E402
 
 
@@ -59,7 +61,7 @@ def main() -> None:
     parser.add_argument("--repeat", type=int, default=20)
     parser.add_argument("--device", default="cuda")
     args = parser.parse_args()
-    arrays = [np.load(args.kit / "x.npy"), np.load(args.kit / "dm_inv.npy")]
+    arrays = list(peer_inputs(args.kit))
     ours = yasps_times(args.yasps_log) if args.yasps_log else {}
     results = {}
 
