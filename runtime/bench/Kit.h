@@ -20,6 +20,8 @@
 
 #include "yasps/Runtime/GpuLaunch.h"
 
+#include "BenchMain.h"
+
 #include <algorithm>
 #include <cmath>
 #include <fstream>
@@ -192,13 +194,7 @@ public:
     Npy reference = readNpy(kit.dir + "/" + kernel.reference);
     std::vector<double> got(reference.size());
     output(kernel).download(got.data(), got.size() * sizeof(double));
-    const double *want = reference.as<double>();
-    double diff = 0.0, scale = 0.0;
-    for (std::size_t i = 0; i < got.size(); ++i) {
-      diff = std::max(diff, std::fabs(got[i] - want[i]));
-      scale = std::max(scale, std::fabs(want[i]));
-    }
-    return scale > 0 ? diff / scale : diff;
+    return relativeDifference(got.data(), reference.as<double>(), got.size());
   }
 
 private:

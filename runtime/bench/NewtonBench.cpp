@@ -143,12 +143,8 @@ int run(int argc, char **argv) {
   std::vector<double> direction(host.size());
   x.download(direction.data(), direction.size() * sizeof(double));
   Npy want = readNpy(kit.dir + "/" + kit.solution);
-  double diff = 0.0, scale = 0.0;
-  for (std::size_t i = 0; i < direction.size(); ++i) {
-    diff = std::max(diff, std::fabs(direction[i] - want.as<double>()[i]));
-    scale = std::max(scale, std::fabs(want.as<double>()[i]));
-  }
-  double solutionDifference = scale > 0 ? diff / scale : diff;
+  double solutionDifference =
+      relativeDifference(direction.data(), want.as<double>(), direction.size());
   if (check && !(solved.converged && solutionDifference <= 1e-6))
     throw std::runtime_error("the GPU's Newton direction differs from the "
                              "CPU's by " +

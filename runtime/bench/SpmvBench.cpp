@@ -37,6 +37,7 @@
 #include <thread>
 
 using namespace yasps::runtime;
+using namespace yasps::runtime::bench;
 
 namespace {
 
@@ -201,16 +202,6 @@ void exportCsr(const GlobalSystem &system, const std::vector<double> &x,
   writeNpy(dir + "/y.npy", y, "<f8");
 }
 
-double maxRelativeDifference(const std::vector<double> &a,
-                             const std::vector<double> &b) {
-  double diff = 0.0, scale = 0.0;
-  for (std::size_t i = 0; i < a.size(); ++i) {
-    diff = std::max(diff, std::fabs(a[i] - b[i]));
-    scale = std::max(scale, std::fabs(b[i]));
-  }
-  return diff / scale;
-}
-
 int run(int argc, char **argv) {
   if (argc < 2) {
     std::cerr << "usage: yasps-spmv-bench MESH.msh [--repeat N] "
@@ -300,13 +291,9 @@ int run(int argc, char **argv) {
   }
   CudaContext context(driver, 0);
   GpuSystem gpu(context, system);
-  auto upload = [&](const std::vector<double> &host) {
-    DeviceBuffer buffer(context, host.size() * sizeof(double));
-    buffer.upload(host.data(), host.size() * sizeof(double));
-    return buffer;
-  };
-  DeviceBuffer dgt = upload(gt), dht = upload(ht), dgv = upload(gv),
-               dhv = upload(hv), dx = upload(x);
+  DeviceBuffer dgt = deviceCopy(context, gt), dht = deviceCopy(context, ht),
+               dgv = deviceCopy(context, gv), dhv = deviceCopy(context, hv),
+               dx = deviceCopy(context, x);
   DeviceBuffer dy(context, n * sizeof(double)),
       dsol(context, n * sizeof(double));
   auto assembleGpu = [&] {
@@ -316,12 +303,12 @@ int run(int argc, char **argv) {
   };
   auto sync = [&] { context.synchronize(); };
   double assembleGpuTime = perCall(std::max(repeat / 10, 2), assembleGpu, sync);
-  double check = maxRelativeDifference(gpu.hessianValues(0),
-                                       system.staticHessian().values());
+  double check =
+      relativeDifference(gpu.hessianValues(0), system.staticHessian().values());
   gpu.multiply(dx.pointer(), dy.pointer());
   std::vector<double> gy(n);
   dy.download(gy.data(), n * sizeof(double));
-  check = std::max(check, maxRelativeDifference(gy, y));
+  check = std::max(check, relativeDifference(gy, y));
   if (!(check < 1e-10)) {
     std::printf("  GPU results differ from the CPU's: %.3g relative\n", check);
     return 1;
@@ -358,7 +345,7 @@ int run(int argc, char **argv) {
               "solutions within %.1e\n",
               (long long)gpuSolve.iterations, gpuSolve.relativeResidual,
               solveGpu * 1e3, solveAll / solveGpu,
-              maxRelativeDifference(gsol, solution));
+              relativeDifference(gsol, solution));
   return 0;
 }
 

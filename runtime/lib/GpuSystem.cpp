@@ -31,13 +31,6 @@ std::string spmvKernel(std::int64_t rows, std::int64_t cols) {
   return "yasps_spmv_any";
 }
 
-template <typename T>
-DeviceBuffer uploaded(const CudaContext &context, const std::vector<T> &host) {
-  DeviceBuffer buffer(context, host.size() * sizeof(T));
-  buffer.upload(host.data(), host.size() * sizeof(T));
-  return buffer;
-}
-
 /// Makes `buffer` hold at least `bytes`, reallocating (with room to grow
 /// by half) only when it is smaller: the dynamic part changes size every
 /// Newton iteration, and allocations cost more than the uploads.
@@ -83,6 +76,7 @@ struct GpuSystem::Energy {
 struct GpuSystem::Part {
   struct Group {
     std::int64_t rows, cols, count, first, valueStart;
+    cu::Function spmv; // the SpMV kernel of its shape
   };
   std::vector<Group> groups;
   std::size_t numValues = 0;
@@ -117,8 +111,8 @@ GpuSystem::GpuSystem(const CudaContext &context, const GlobalSystem &host)
   std::vector<long long> starts{0};
   for (std::int64_t b = 0; b < numBlocks; ++b)
     starts.push_back(starts.back() + layout.blockSize(b) * layout.blockSize(b));
-  blockOffset = uploaded(ctx, offsets);
-  inverseStart = uploaded(ctx, starts);
+  blockOffset = deviceCopy(ctx, offsets);
+  inverseStart = deviceCopy(ctx, starts);
   const std::size_t squares = static_cast<std::size_t>(starts.back());
   const std::size_t n = static_cast<std::size_t>(numDofs);
   inverse = DeviceBuffer(ctx, squares * sizeof(double));
@@ -165,10 +159,10 @@ void GpuSystem::uploadPart(Part &part, const BlockSparseMatrix &matrix,
   }
   for (const BlockGroup &group : matrix.groups())
     if (group.size() > 0 && group.rows * group.cols > 0)
-      part.groups.push_back(
-          {group.rows, group.cols, std::int64_t(group.size()),
-           std::int64_t(group.firstBlock),
-           std::int64_t(matrix.valueOffset(group.firstBlock))});
+      part.groups.push_back({group.rows, group.cols, std::int64_t(group.size()),
+                             std::int64_t(group.firstBlock),
+                             std::int64_t(matrix.valueOffset(group.firstBlock)),
+                             function(spmvKernel(group.rows, group.cols))});
   std::vector<long long> diagonal(static_cast<std::size_t>(numBlocks), -1);
   for (std::int64_t b = 0; b < numBlocks; ++b)
     if (matrix.diagonalBlock(b) >= 0)
@@ -231,12 +225,18 @@ cu::Function GpuSystem::function(const std::string &name) const {
 template <typename Args>
 void GpuSystem::launch(const char *kernel, std::int64_t blocks,
                        const Args &args) {
+  launch(function(kernel), blocks, args);
+}
+
+template <typename Args>
+void GpuSystem::launch(cu::Function kernel, std::int64_t blocks,
+                       const Args &args) {
   if (blocks <= 0)
     return;
   ctx.makeCurrent();
   void *params[] = {const_cast<Args *>(&args)};
   ctx.driver().check(ctx.driver().cuLaunchKernel(
-                         function(kernel), static_cast<unsigned>(blocks), 1, 1,
+                         kernel, static_cast<unsigned>(blocks), 1, 1,
                          kThreadsPerBlock, 1, 1, 0, nullptr, params, nullptr),
                      "cuLaunchKernel");
 }
@@ -299,39 +299,29 @@ void GpuSystem::addFactored(std::size_t energy, cu::DevicePtr gradients,
   addLocal(energy, gradients, maps, inner, m, columnMajorMaps);
 }
 
-namespace {
-/// Launches the SpMV kernels of every group of `part` (y += part x).
-template <typename Launch, typename Part>
-void multiplyPart(Launch &&launch, const Part &part, const double *x, double *y,
-                  const PcgState *state) {
-  for (const auto &group : part.groups) {
-    SpmvArgs args{};
-    args.count = group.count;
-    args.rows = group.rows;
-    args.cols = group.cols;
-    args.rowDof = as<const int>(part.rowDof) + group.first;
-    args.colDof = as<const int>(part.colDof) + group.first;
-    args.values = as<const double>(part.values) + group.valueStart;
-    args.x = x;
-    args.y = y;
-    args.state = state;
-    launch(spmvKernel(group.rows, group.cols),
-           ceilDiv(group.count, kThreadsPerBlock), args);
-  }
+void GpuSystem::addProducts(const double *x, double *y, const PcgState *state) {
+  for (const std::unique_ptr<Part> &part : parts)
+    for (const Part::Group &group : part->groups) {
+      SpmvArgs args{};
+      args.count = group.count;
+      args.rows = group.rows;
+      args.cols = group.cols;
+      args.rowDof = as<const int>(part->rowDof) + group.first;
+      args.colDof = as<const int>(part->colDof) + group.first;
+      args.values = as<const double>(part->values) + group.valueStart;
+      args.x = x;
+      args.y = y;
+      args.state = state;
+      launch(group.spmv, ceilDiv(group.count, kThreadsPerBlock), args);
+    }
 }
-} // namespace
 
 void GpuSystem::multiply(cu::DevicePtr x, cu::DevicePtr y) {
   ctx.makeCurrent();
   ctx.driver().check(
       ctx.driver().cuMemsetD8(y, 0, static_cast<std::size_t>(numDofs) * 8),
       "cuMemsetD8");
-  auto run = [&](const std::string &kernel, std::int64_t blocks,
-                 const SpmvArgs &args) {
-    launch(kernel.c_str(), blocks, args);
-  };
-  for (const std::unique_ptr<Part> &part : parts)
-    multiplyPart(run, *part, as<const double>(x), as<double>(y), nullptr);
+  addProducts(as<const double>(x), as<double>(y), nullptr);
 }
 
 PcgResult GpuSystem::solve(cu::DevicePtr x, const PcgOptions &options,
@@ -412,15 +402,10 @@ PcgResult GpuSystem::solve(cu::DevicePtr x, const PcgOptions &options,
   scalar(kPcgBeta, blockBlocks);
   launch("yasps_pcg_direction", vectorBlocks, direction);
 
-  auto run = [&](const std::string &kernel, std::int64_t blocks,
-                 const SpmvArgs &args) {
-    launch(kernel.c_str(), blocks, args);
-  };
   for (std::int64_t k = 0; k <= options.maxIterations; ++k) {
     scalar(kPcgCheck, 0);
     q.setZero();
-    for (const std::unique_ptr<Part> &part : parts)
-      multiplyPart(run, *part, as<const double>(p), as<double>(q), st);
+    addProducts(as<const double>(p), as<double>(q), st);
     launch("yasps_dot", vectorBlocks,
            DotArgs{numDofs, as<const double>(p), as<double>(q), mask,
                    partialSums, st});

@@ -139,14 +139,6 @@ struct Scene {
   }
 };
 
-/// A device copy of `host`.
-template <typename T>
-DeviceBuffer onDevice(const CudaContext &context, const std::vector<T> &host) {
-  DeviceBuffer buffer(context, host.size() * sizeof(T));
-  buffer.upload(host.data(), host.size() * sizeof(T));
-  return buffer;
-}
-
 std::vector<double> download(const DeviceBuffer &buffer) {
   std::vector<double> out(buffer.size() / sizeof(double));
   buffer.download(out.data(), buffer.size());
@@ -192,8 +184,8 @@ protected:
     for (std::size_t e = 0; e < scene.energies.size(); ++e) {
       const Energy &energy = scene.energies[e];
       host->add(e, energy.gradients.data(), energy.hessians.data());
-      DeviceBuffer g = onDevice(*context, energy.gradients);
-      DeviceBuffer h = onDevice(*context, energy.hessians);
+      DeviceBuffer g = deviceCopy(*context, energy.gradients);
+      DeviceBuffer h = deviceCopy(*context, energy.hessians);
       gpu->add(e, g.pointer(), h.pointer());
     }
   }
@@ -259,7 +251,7 @@ TEST_P(GpuSystemTest, MultipliesLikeTheCpu) {
     v = normal(scene.rng);
   ThreadPool pool(1);
   host->multiply(x.data(), expected.data(), pool);
-  DeviceBuffer dx = onDevice(*context, x);
+  DeviceBuffer dx = deviceCopy(*context, x);
   DeviceBuffer dy(*context, x.size() * sizeof(double));
   gpu->multiply(dx.pointer(), dy.pointer());
   expectClose(download(dy), expected, 1e-13, "H x");
@@ -341,9 +333,9 @@ TEST_P(GpuSystemTest, AssemblesFactoredHessians) {
   host->setZero();
   gpu->setZero();
   host->addFactored(2, energy.gradients.data(), maps.data(), inner.data(), m);
-  DeviceBuffer g = onDevice(*context, energy.gradients);
-  DeviceBuffer j = onDevice(*context, maps);
-  DeviceBuffer p = onDevice(*context, inner);
+  DeviceBuffer g = deviceCopy(*context, energy.gradients);
+  DeviceBuffer j = deviceCopy(*context, maps);
+  DeviceBuffer p = deviceCopy(*context, inner);
   gpu->addFactored(2, g.pointer(), j.pointer(), p.pointer(), m);
   expectClose(gpu->hessianValues(0), host->staticHessian().values(), 1e-13,
               "factored Hessian");
@@ -353,7 +345,7 @@ TEST_P(GpuSystemTest, AssemblesFactoredHessians) {
     for (std::int64_t r = 0; r < m; ++r)
       for (std::int64_t c = 0; c < n; ++c)
         columnMajor[(i * n + c) * m + r] = maps[(i * m + r) * n + c];
-  DeviceBuffer jc = onDevice(*context, columnMajor);
+  DeviceBuffer jc = deviceCopy(*context, columnMajor);
   gpu->setZero();
   gpu->addFactored(2, g.pointer(), jc.pointer(), p.pointer(), m, true);
   expectClose(gpu->hessianValues(0), host->staticHessian().values(), 1e-13,
@@ -374,8 +366,9 @@ TEST_P(GpuSystemTest, FollowsANewDynamicPart) {
   scene.energies[3] = scene.randomPairs(90);
   host->setDynamic(scene.maps(3, 4));
   gpu->updateDynamic(*host);
-  if (allocations)
+  if (allocations) {
     EXPECT_EQ(allocations(), before);
+  }
   if (fake)
     dlclose(fake);
   assemble();
@@ -402,8 +395,8 @@ TEST_P(GpuSystemTest, HandlesEmptyEnergiesAndParts) {
   for (std::size_t e = 0; e < 3; ++e) {
     const Energy &energy = scene.energies[e];
     withEmpty.add(e, energy.gradients.data(), energy.hessians.data());
-    DeviceBuffer g = onDevice(*context, energy.gradients);
-    DeviceBuffer h = onDevice(*context, energy.hessians);
+    DeviceBuffer g = deviceCopy(*context, energy.gradients);
+    DeviceBuffer h = deviceCopy(*context, energy.hessians);
     mirror.add(e, g.pointer(), h.pointer());
   }
   DeviceBuffer nothing(*context, 0);

@@ -13,6 +13,8 @@
 
 #include "yasps/Runtime/CudaDriver.h"
 
+#include <vector>
+
 namespace yasps::runtime {
 
 /// A device's primary context, retained while this object lives and made
@@ -76,6 +78,15 @@ private:
   cu::DevicePtr ptr = 0;
   std::size_t length = 0;
 };
+
+/// A device buffer holding a copy of `host`.
+template <typename T>
+DeviceBuffer deviceCopy(const CudaContext &context,
+                        const std::vector<T> &host) {
+  DeviceBuffer buffer(context, host.size() * sizeof(T));
+  buffer.upload(host.data(), host.size() * sizeof(T));
+  return buffer;
+}
 
 } // namespace yasps::runtime
 

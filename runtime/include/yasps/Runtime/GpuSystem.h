@@ -26,6 +26,10 @@
 
 namespace yasps::runtime {
 
+namespace gpu {
+struct PcgState;
+}
+
 /// The binaries of the solver kernels (lib/Gpu/SolverKernels.cu) built
 /// into this library: cubins for sm_80 and sm_90 and PTX. Empty when nvcc
 /// was not found at build time.
@@ -91,6 +95,11 @@ private:
   struct Part;
   template <typename Args>
   void launch(const char *kernel, std::int64_t blocks, const Args &args);
+  template <typename Args>
+  void launch(cu::Function kernel, std::int64_t blocks, const Args &args);
+  /// y += H x (both parts) by the SpMV kernels; `state`, when set, makes
+  /// them no-ops once PCG has stopped.
+  void addProducts(const double *x, double *y, const gpu::PcgState *state);
   cu::Function function(const std::string &name) const;
   void uploadPart(Part &part, const BlockSparseMatrix &matrix,
                   const GlobalSystem &host, std::size_t firstEnergy,
