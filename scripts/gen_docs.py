@@ -1,10 +1,12 @@
 #!/usr/bin/env python3
-"""Regenerates the ODS-generated parts of docs/ (dialect and pass reference).
+"""Regenerates the generated parts of docs/ (dialect, pass and pipeline
+reference).
 
 Each document has a hand-written part and, after the marker line below, a part
-produced by mlir-tblgen from the TableGen sources. Run without arguments to
-rewrite the generated parts; with --check to fail (exit 1) when they are stale,
-as the test suite does.
+produced by mlir-tblgen from the TableGen sources and, for the pass pipelines
+(registered in C++, not in TableGen), from `yasps-opt --help`. Run without
+arguments to rewrite the generated parts; with --check to fail (exit 1) when
+they are stale, as the test suite does.
 """
 
 from __future__ import annotations
@@ -17,13 +19,13 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parent.parent
 MARKER = "<!-- Everything below is generated from ODS by scripts/gen_docs.py. -->"
 
-# (document, TableGen files, mlir-tblgen arguments)
+# (document, TableGen files, mlir-tblgen arguments, with the pipelines)
 DOCUMENTS = [
     ("docs/dialect.md", ["include/yasps/Dialect/Yasps/IR/YaspsOps.td"],
-     ["-gen-dialect-doc", "-dialect=yasps"]),
+     ["-gen-dialect-doc", "-dialect=yasps"], False),
     ("docs/passes.md", ["include/yasps/Dialect/Yasps/Transforms/Passes.td",
                         "include/yasps/Conversion/Passes.td"],
-     ["-gen-pass-doc"]),
+     ["-gen-pass-doc"], True),
 ]
 
 
@@ -39,24 +41,59 @@ def generate(tblgen: str, td: str, args: list[str], llvm_include: str) -> str:
     return "\n".join(lines).strip() + "\n"
 
 
+def pipelines(opt: str) -> str:
+    """The yasps pass pipelines that `opt --help` lists, with their options,
+    as Markdown in the style of mlir-tblgen's pass documentation."""
+    out = subprocess.run([opt, "--help"], check=True, capture_output=True,
+                         text=True).stdout.splitlines()
+    start = next(i for i, l in enumerate(out) if l.strip() == "Pass Pipelines:")
+    indent = len(out[start + 1]) - len(out[start + 1].lstrip())
+    sections = []
+    for line in out[start + 1:]:
+        depth = len(line) - len(line.lstrip())
+        if not line.lstrip().startswith("--"):
+            continue  # an enum option's values, printed less indented
+        if depth < indent:
+            break
+        flag, _, text = line.strip().partition(" - ")
+        name, text = flag.strip().lstrip("-").split("=")[0], text.strip()
+        if depth == indent:
+            sections.append([name, text, []])
+        else:
+            sections[-1][2].append(f"-{name} : {text}")
+    md = ["### Pass pipelines", ""]
+    for name, text, options in sections:
+        if not name.startswith("yasps-"):
+            continue
+        md += [f"#### `-{name}`", "", f"_{text}_", ""]
+        if options:
+            md += ["##### Options", "", "```", *options, "```", ""]
+    return "\n".join(md).strip() + "\n"
+
+
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__)
     parser.add_argument("--check", action="store_true",
                         help="only report whether the documents are current")
     parser.add_argument("--tblgen", default="/usr/lib/llvm-22/bin/mlir-tblgen")
     parser.add_argument("--llvm-include", default="/usr/lib/llvm-22/include")
+    parser.add_argument("--opt", default=str(ROOT / "build/bin/yasps-opt"),
+                        help="the yasps-opt whose pipelines are documented")
     opts = parser.parse_args()
 
     stale = []
-    for doc, tds, args in DOCUMENTS:
+    for doc, tds, args, with_pipelines in DOCUMENTS:
         path = ROOT / doc
         text = path.read_text()
         if MARKER not in text:
             print(f"{doc}: marker line missing:\n  {MARKER}", file=sys.stderr)
             return 1
         head = text.split(MARKER)[0]
-        wanted = head + MARKER + "\n\n" + "\n".join(
-            generate(opts.tblgen, td, args, opts.llvm_include) for td in tds)
+        parts = [generate(opts.tblgen, td, args, opts.llvm_include)
+                 for td in tds]
+        if with_pipelines:
+            parts.append(pipelines(opts.opt))
+        wanted = head + MARKER + "\n\n" + "\n".join(parts)
         if wanted != text:
             stale.append(doc)
             if not opts.check:

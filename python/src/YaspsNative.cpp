@@ -25,6 +25,7 @@
 #include "yasps/Conversion/Passes.h"
 #include "yasps/Dialect/Yasps/IR/Yasps.h"
 #include "yasps/Dialect/Yasps/Transforms/Passes.h"
+#include "yasps/Dialect/Yasps/Transforms/Pipelines.h"
 #include "yasps/Runtime/CpuKernel.h"
 #include "yasps/Runtime/GlobalSystem.h"
 #include "yasps/Runtime/LocalCompression.h"
@@ -70,6 +71,7 @@ MLIRContext &getContext() {
     // nothing for a scene author.
     ctx->printOpOnDiagnostic(false);
     mlir::yasps::registerYaspsPasses();
+    mlir::yasps::registerDifferentiatePipeline();
     mlir::yasps::registerYaspsConversionPasses();
     registerTransformsPasses();
     registerConversionPasses();

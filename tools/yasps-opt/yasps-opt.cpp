@@ -18,12 +18,14 @@
 #include "yasps/Conversion/Passes.h"
 #include "yasps/Dialect/Yasps/IR/Yasps.h"
 #include "yasps/Dialect/Yasps/Transforms/Passes.h"
+#include "yasps/Dialect/Yasps/Transforms/Pipelines.h"
 
 int main(int argc, char **argv) {
   mlir::registerAllPasses();
   mlir::yasps::registerYaspsPasses();
   mlir::yasps::registerYaspsConversionPasses();
   mlir::yasps::registerLoopsToGpuPipeline();
+  mlir::yasps::registerDifferentiatePipeline();
 
   mlir::DialectRegistry registry;
   mlir::registerAllDialects(registry);

@@ -1,0 +1,43 @@
+//===- DifferentiatePipeline.cpp - energies to local derivatives ----------===//
+
+#include "yasps/Dialect/Yasps/Transforms/Passes.h"
+#include "yasps/Dialect/Yasps/Transforms/Pipelines.h"
+
+#include "mlir/Pass/PassRegistry.h"
+#include "mlir/Transforms/Passes.h"
+
+using namespace mlir;
+
+void mlir::yasps::buildDifferentiatePipeline(OpPassManager &pm,
+                                             bool separateReducedHessians) {
+  // yasps-differentiate needs one expression per energy; canonicalize and
+  // cse shrink it (and merge the inlined copies) before it is
+  // differentiated once per parameter.
+  pm.addPass(createYaspsInlineReads());
+  pm.addPass(createCanonicalizerPass());
+  pm.addPass(createCSEPass());
+  YaspsDifferentiateOptions differentiate;
+  differentiate.separateReducedHessians = separateReducedHessians;
+  pm.addPass(createYaspsDifferentiate(differentiate));
+  pm.addPass(createYaspsGenerateIndices());
+}
+
+namespace {
+struct DifferentiatePipelineOptions
+    : public PassPipelineOptions<DifferentiatePipelineOptions> {
+  Option<bool> separateReducedHessians{
+      *this, "separate-reduced-hessians",
+      llvm::cl::desc("Keep the reduced-space factors @E__ij and "
+                     "@E__hess_inner_proj apart (see yasps-differentiate)"),
+      llvm::cl::init(false)};
+};
+} // namespace
+
+void mlir::yasps::registerDifferentiatePipeline() {
+  PassPipelineRegistration<DifferentiatePipelineOptions>(
+      "yasps-differentiate-pipeline",
+      "Local gradients, Hessians and placement indices of every energy",
+      [](OpPassManager &pm, const DifferentiatePipelineOptions &options) {
+        buildDifferentiatePipeline(pm, options.separateReducedHessians);
+      });
+}
