@@ -32,6 +32,7 @@
 #include "yasps/Runtime/ThreadPool.h"
 #include "yasps/Target/CPU/CpuCompiler.h"
 #include "yasps/Target/GPU/GpuCompiler.h"
+#include "yasps/Target/KernelGeneration.h"
 
 #include <nanobind/nanobind.h>
 #include <nanobind/ndarray.h>
@@ -57,6 +58,14 @@ namespace {
 /// Raised for IR that does not parse or verify, or a pipeline that fails.
 struct IRError : std::runtime_error {
   using std::runtime_error::runtime_error;
+};
+
+/// Raised when a kernel is requested for an attribute that does not exist
+/// (mlir::yasps::MissingAttributeError); Python sees `symbol`.
+struct MissingAttribute : IRError {
+  MissingAttribute(const std::string &message, std::string symbol)
+      : IRError(message), symbol(std::move(symbol)) {}
+  std::string symbol;
 };
 
 /// One context for the process: dialects and passes are registered once.
@@ -177,9 +186,18 @@ auto compileVerified(const std::string &ir, const std::string &bufferName,
       parseVerified(ir, bufferName, sourceMgr, diagnostics);
   auto library = compile(*module);
   if (!library) {
-    std::string message = llvm::toString(library.takeError());
-    std::string collected = diagnostics.take();
-    throw IRError(collected.empty() ? message : collected + message);
+    std::string message, missing;
+    llvm::handleAllErrors(
+        library.takeError(),
+        [&](const mlir::yasps::MissingAttributeError &error) {
+          message = error.message();
+          missing = error.getSymbol();
+        },
+        [&](const llvm::ErrorInfoBase &error) { message = error.message(); });
+    message = diagnostics.take() + message;
+    if (!missing.empty())
+      throw MissingAttribute(message, missing);
+    throw IRError(message);
   }
   return *library;
 }
@@ -560,7 +578,23 @@ void expandLocalHessians(
 NB_MODULE(_yasps_native, m) {
   m.doc() = "Bindings over the yasps MLIR compiler (parse, verify, passes).";
 
-  nb::exception<IRError>(m, "IRError", PyExc_ValueError);
+  nb::exception<IRError> irError(m, "IRError", PyExc_ValueError);
+  nb::exception<MissingAttribute> missingAttribute(m, "MissingAttributeError",
+                                                   irError);
+  // Registered after (so tried before) the translator above, which only
+  // sets the message: this one also gives the exception its `symbol`.
+  nb::register_exception_translator(
+      [](const std::exception_ptr &p, void *type) {
+        try {
+          std::rethrow_exception(p);
+        } catch (const MissingAttribute &e) {
+          nb::object error =
+              nb::borrow(static_cast<PyObject *>(type))(e.what());
+          error.attr("symbol") = e.symbol;
+          PyErr_SetObject(static_cast<PyObject *>(type), error.ptr());
+        }
+      },
+      missingAttribute.ptr());
   ::yasps::python::bindGpuRuntime(m);
 
   m.def(
@@ -696,7 +730,8 @@ NB_MODULE(_yasps_native, m) {
         nb::arg("name") = "<yasps>", nb::arg("pre_pipeline") = "",
         "Compiles GPU kernels (cubins per chip, PTX of the newest) for the "
         "attributes of the IR's scene; needs the CUDA toolkit's ptxas, not "
-        "a GPU.");
+        "a GPU. Raises MissingAttributeError (.symbol) for an attribute that "
+        "does not exist after pre_pipeline, IRError for other failures.");
   m.def("compress_local_hessians", &compressLocalHessians, nb::arg("dofs"),
         nb::arg("hessians"),
         "Local Hessians with repeated DoFs merged and padding dropped "
@@ -716,7 +751,9 @@ NB_MODULE(_yasps_native, m) {
         "Compiles CPU kernels for the attributes (scene-relative paths) of "
         "the IR's scene, reusing in-memory and on-disk caches. "
         "lanes: instances evaluated together in SIMD lanes (0: the host's "
-        "vector width in doubles; 1: one at a time).");
+        "vector width in doubles; 1: one at a time). Raises "
+        "MissingAttributeError (.symbol) for an attribute that does not exist "
+        "after pre_pipeline, IRError for other failures.");
   m.def("host_double_lanes", &mlir::yasps::hostDoubleLanes,
         "f64 lanes of the host's widest vector registers");
   nb::class_<PySystem>(m, "GlobalSystem",

@@ -21,6 +21,28 @@
 
 namespace mlir::yasps {
 
+/// A requested attribute that the module does not declare once the
+/// pre-pipeline has run: typically a derivative (`@E__grad`, ...) that
+/// yasps-differentiate did not create because E depends on no target.
+/// Callers react to this failure, so it is a type, not a message.
+class MissingAttributeError : public llvm::ErrorInfo<MissingAttributeError> {
+public:
+  static char ID;
+
+  MissingAttributeError(std::string symbol, std::string scene)
+      : symbol(std::move(symbol)), scene(std::move(scene)) {}
+
+  /// The scene-relative path that was requested, e.g. "@m::@p::@e__grad".
+  const std::string &getSymbol() const { return symbol; }
+
+  void log(llvm::raw_ostream &os) const override;
+  std::error_code convertToErrorCode() const override;
+
+private:
+  std::string symbol;
+  std::string scene;
+};
+
 /// What one buffer argument of a kernel holds.
 struct KernelArgument {
   std::string kind; ///< "out", "attr", "conn", "offsets" or "dof_offsets"
@@ -60,7 +82,8 @@ runPasses(ModuleOp module, const std::string &what,
 /// paths; empty: every energy). `prePipeline` (a yasps-opt pipeline string,
 /// e.g. "yasps-inline-reads,cse,yasps-differentiate") runs first, for
 /// attributes that passes create. `lanes` > 1 evaluates that many
-/// instances at once in SIMD lanes (CPU kernels).
+/// instances at once in SIMD lanes (CPU kernels). A requested attribute that
+/// does not exist after `prePipeline` is a MissingAttributeError.
 llvm::Expected<OwningOpRef<ModuleOp>>
 generateLoopKernels(ModuleOp module, const std::vector<std::string> &attributes,
                     llvm::StringRef prePipeline, int64_t lanes = 1);

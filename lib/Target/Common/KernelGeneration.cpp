@@ -5,6 +5,7 @@
 #include "yasps/Conversion/Passes.h"
 #include "yasps/Dialect/Yasps/Transforms/Passes.h"
 
+#include "mlir/AsmParser/AsmParser.h"
 #include "mlir/Dialect/Func/IR/FuncOps.h"
 #include "mlir/Pass/PassRegistry.h"
 #include "mlir/Transforms/Passes.h"
@@ -15,6 +16,16 @@
 
 using namespace mlir;
 using namespace mlir::yasps;
+
+char MissingAttributeError::ID;
+
+void MissingAttributeError::log(llvm::raw_ostream &os) const {
+  os << symbol << " does not name an attribute of scene @" << scene;
+}
+
+std::error_code MissingAttributeError::convertToErrorCode() const {
+  return llvm::inconvertibleErrorCode();
+}
 
 std::vector<std::vector<std::string>>
 mlir::yasps::describeParams(ArrayAttr params) {
@@ -57,16 +68,41 @@ llvm::Error mlir::yasps::runPasses(
   return llvm::Error::success();
 }
 
+/// A MissingAttributeError for the first of `attributes` that `module`'s
+/// scene does not declare. Paths that do not parse, and modules without
+/// exactly one scene, are left to yasps-lower-to-loops to report.
+static llvm::Error
+checkAttributesExist(ModuleOp module,
+                     const std::vector<std::string> &attributes) {
+  auto scenes = llvm::to_vector(module.getOps<SceneOp>());
+  if (scenes.size() != 1)
+    return llvm::Error::success();
+  SymbolTableCollection tables;
+  for (const std::string &text : attributes) {
+    auto path = dyn_cast_or_null<SymbolRefAttr>(
+        parseAttribute(text, module.getContext()));
+    if (path && !isAttributeDecl(lookupInScene(scenes[0], path, &tables)))
+      return llvm::make_error<MissingAttributeError>(
+          text, scenes[0].getSymName().str());
+  }
+  return llvm::Error::success();
+}
+
 llvm::Expected<OwningOpRef<ModuleOp>>
 mlir::yasps::generateLoopKernels(ModuleOp module,
                                  const std::vector<std::string> &attributes,
                                  StringRef prePipeline, int64_t lanes) {
   OwningOpRef<ModuleOp> kernels(cast<ModuleOp>(module->clone()));
+  if (!prePipeline.empty())
+    if (llvm::Error err = runPasses(*kernels, "kernel generation failed",
+                                    [&](PassManager &pm) {
+                                      return parsePassPipeline(prePipeline, pm);
+                                    }))
+      return std::move(err);
+  if (llvm::Error err = checkAttributesExist(*kernels, attributes))
+    return std::move(err);
   if (llvm::Error err =
           runPasses(*kernels, "kernel generation failed", [&](PassManager &pm) {
-            if (!prePipeline.empty() &&
-                failed(parsePassPipeline(prePipeline, pm)))
-              return failure();
             YaspsLowerToLoopsOptions lowerOptions;
             lowerOptions.attributes.assign(attributes.begin(),
                                            attributes.end());
