@@ -5,18 +5,22 @@
 // rejects: the pipeline inlines it first, then adds the derivatives and
 // their placement indices. Its two points are vertices of a UNION of
 // affine-body vertices (12 parameters) and free ones (3, padded to 12).
+// Each derived attribute records its role and base, and its parameters.
+// CHECK-LABEL: yasps.primitive_union @u
+// CHECK: yasps.attr @x__jac : !yasps.mat<3x12xf64> attributes {yasps.derivative = #yasps.derivative<jac of @w::@u::@x>, yasps.params = [#yasps.param<union @x of @w::@u, width 12>]}
+// CHECK: yasps.attr @x__dofs : !yasps.mat<12x1xf64> attributes {yasps.derivative = #yasps.derivative<dofs of @w::@u::@x>}
 // CHECK-LABEL: yasps.primitive @pp(2) dynamic
-// CHECK: yasps.attr @e__hess_proj : !yasps.mat<24x24xf64> attributes {{{.*}}yasps.projection = "reduced"}
-// CHECK: yasps.attr @e__grad : !yasps.mat<24x1xf64>
-// CHECK: yasps.attr @e__hess : !yasps.mat<24x24xf64>
-// CHECK: yasps.attr @e__dofs : !yasps.mat<24x1xf64>
+// CHECK: yasps.attr @e__hess_proj : !yasps.mat<24x24xf64> attributes {yasps.derivative = #yasps.derivative<hess_proj of @w::@pp::@e>, yasps.params = [#yasps.param<join @p2v[0] of @w::@u::@x, width 12>, #yasps.param<join @p2v[1] of @w::@u::@x, width 12>], yasps.projection = #yasps.projection<reduced>}
+// CHECK: yasps.attr @e__grad : !yasps.mat<24x1xf64> attributes {yasps.derivative = #yasps.derivative<grad of @w::@pp::@e>,
+// CHECK: yasps.attr @e__hess : !yasps.mat<24x24xf64> attributes {yasps.derivative = #yasps.derivative<hess of @w::@pp::@e>,
+// CHECK: yasps.attr @e__dofs : !yasps.mat<24x1xf64> attributes {yasps.derivative = #yasps.derivative<dofs of @w::@pp::@e>}
 
 // The energy depends on its 24 parameters through the 6 entries of the
 // gathered points, linearly: with the option, the reduced-space factors
 // stay apart.
 // SEPARATE-LABEL: yasps.primitive @pp(2) dynamic
-// SEPARATE: yasps.attr @e__ij : !yasps.mat<6x24xf64>
-// SEPARATE: yasps.attr @e__hess_inner_proj : !yasps.mat<6x6xf64> attributes {{{.*}}yasps.projection = "separate"}
+// SEPARATE: yasps.attr @e__ij : !yasps.mat<6x24xf64> attributes {yasps.derivative = #yasps.derivative<ij of @w::@pp::@e>,
+// SEPARATE: yasps.attr @e__hess_inner_proj : !yasps.mat<6x6xf64> attributes {{{.*}}yasps.projection = #yasps.projection<separate>}
 // SEPARATE-NOT: @e__hess_proj
 // SEPARATE: yasps.attr @e__dofs : !yasps.mat<24x1xf64>
 yasps.scene @sc {

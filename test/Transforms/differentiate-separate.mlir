@@ -5,8 +5,8 @@
 // inner map J (6x24, with the parameters' yasps.params) and the projected
 // 6x6 inner Hessian, instead of the 24x24 product J^T P J.
 // CHECK-LABEL: yasps.primitive @pp(2) dynamic
-// CHECK: yasps.attr @e__ij : !yasps.mat<6x24xf64> attributes {yasps.params = {{\[\[}}"join", @p2v, 0, @w::@u::@x, 12], ["join", @p2v, 1, @w::@u::@x, 12]]}
-// CHECK: yasps.attr @e__hess_inner_proj : !yasps.mat<6x6xf64> attributes {{{.*}}yasps.projection = "separate"}
+// CHECK: yasps.attr @e__ij : !yasps.mat<6x24xf64> attributes {{{.*}}yasps.params = [#yasps.param<join @p2v[0] of @w::@u::@x, width 12>, #yasps.param<join @p2v[1] of @w::@u::@x, width 12>]}
+// CHECK: yasps.attr @e__hess_inner_proj : !yasps.mat<6x6xf64> attributes {{{.*}}yasps.projection = #yasps.projection<separate>}
 // CHECK-NEXT: yasps.read @w::@pp::@e__ijac__ijac : !yasps.mat<6x6xf64>
 // CHECK-NEXT: yasps.project clamp %{{.*}} : !yasps.mat<6x6xf64>
 // CHECK-NOT: yasps.matmul

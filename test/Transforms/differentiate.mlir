@@ -6,7 +6,7 @@
 // the Jacobian of the Jacobian.
 
 // CHECK-LABEL: yasps.attr @spring : !yasps.mat<1x1xf64>
-// CHECK: yasps.attr @spring__jac : !yasps.mat<1x6xf64> attributes {yasps.params = {{\[\[}}"join", @e2v, 0, @m::@v::@x, 3], ["join", @e2v, 1, @m::@v::@x, 3]]}
+// CHECK: yasps.attr @spring__jac : !yasps.mat<1x6xf64> attributes {{{.*}}yasps.params = [#yasps.param<join @e2v[0] of @m::@v::@x, width 3>, #yasps.param<join @e2v[1] of @m::@v::@x, width 3>]}
 // CHECK: yasps.join @e2v(@m::@v::@x)
 // CHECK: yasps.norm
 // CHECK: yasps.concat horizontal
@@ -50,7 +50,7 @@ yasps.scene @s {
 // parameters (column-major entries); the Hessian of det on 2x2 is constant:
 // the cofactors of the unit directions fold away.
 
-// CHECK-LABEL: yasps.attr @d__jac : !yasps.mat<1x4xf64> attributes {yasps.params = {{\[\[}}"read", @m::@p::@a]]}
+// CHECK-LABEL: yasps.attr @d__jac : !yasps.mat<1x4xf64> attributes {{{.*}}yasps.params = [#yasps.param<read @m::@p::@a>]}
 // CHECK: %[[A:.*]] = yasps.read @m::@p::@a
 // CHECK: %[[C:.*]] = yasps.cofactor %[[A]]
 // CHECK: yasps.dot %[[C]]
@@ -81,7 +81,7 @@ yasps.scene @s {
 
 // CHECK-LABEL: yasps.attr @c :
 // CHECK-NOT: @c__grad
-// CHECK: yasps.attr @e__jac : !yasps.mat<1x3xf64> attributes {yasps.params = {{\[\[}}"read", @m::@p::@x]]}
+// CHECK: yasps.attr @e__jac : !yasps.mat<1x3xf64> attributes {{{.*}}yasps.params = [#yasps.param<read @m::@p::@x>]}
 // CHECK: yasps.attr @e__grad : !yasps.mat<3x1xf64>
 yasps.scene @s {
   yasps.mesh @m {
@@ -115,18 +115,18 @@ yasps.scene @s {
 // soft member's is the padded identity.
 
 // CHECK-LABEL: yasps.primitive @v(1)
-// CHECK: yasps.attr @x__jac : !yasps.mat<3x12xf64> attributes {yasps.params = {{\[\[}}"join", @v2b, 0, @r::@b::@A, 9], ["join", @v2b, 0, @r::@b::@t, 3]]}
+// CHECK: yasps.attr @x__jac : !yasps.mat<3x12xf64> attributes {{{.*}}yasps.params = [#yasps.param<join @v2b[0] of @r::@b::@A, width 9>, #yasps.param<join @v2b[0] of @r::@b::@t, width 3>]}
 // CHECK: yasps.attr @x__ujac12 : !yasps.mat<3x12xf64>
 // CHECK-LABEL: yasps.mesh @s
 // CHECK: yasps.attr @x__ujac12 : !yasps.mat<3x12xf64> {
 // CHECK: yasps.constant dense<{{\[\[}}1.000000e+00, 0.000000e+00
 // CHECK-LABEL: yasps.primitive @pp(2) dynamic
-// CHECK: yasps.attr @e__jac : !yasps.mat<1x24xf64> attributes {yasps.params = {{\[\[}}"join", @p2v, 0, @w::@u::@x, 12], ["join", @p2v, 1, @w::@u::@x, 12]]}
+// CHECK: yasps.attr @e__jac : !yasps.mat<1x24xf64> attributes {{{.*}}yasps.params = [#yasps.param<join @p2v[0] of @w::@u::@x, width 12>, #yasps.param<join @p2v[1] of @w::@u::@x, width 12>]}
 // CHECK: yasps.join @p2v(@w::@u::@x__jac) : !yasps.mat<2x36xf64>
 // Affine and free vertices are linear in their parameters: the projection
 // happens in reduced space, on the 6x6 Hessian of the two gathered points,
 // then J^T P J brings it to the 24 parameters (paper 5.4).
-// CHECK: yasps.attr @e__hess_proj : !yasps.mat<24x24xf64> attributes {{{.*}}yasps.projection = "reduced"}
+// CHECK: yasps.attr @e__hess_proj : !yasps.mat<24x24xf64> attributes {{{.*}}yasps.projection = #yasps.projection<reduced>}
 // CHECK: yasps.project clamp %{{.*}} : !yasps.mat<6x6xf64>
 // CHECK: yasps.matmul %{{.*}}, %{{.*}} : !yasps.mat<24x6xf64>, !yasps.mat<6x24xf64> -> !yasps.mat<24x24xf64>
 yasps.scene @sc {
@@ -234,7 +234,7 @@ yasps.scene @reuse {
 // nonlinear in the angles, so the Hessian has a curvature term and the full
 // 3x3 Hessian is projected, although the position has only 2 entries.
 
-// CHECK-LABEL: yasps.attr @e__hess_proj : !yasps.mat<3x3xf64> attributes {{{.*}}yasps.projection = "full"}
+// CHECK-LABEL: yasps.attr @e__hess_proj : !yasps.mat<3x3xf64> attributes {{{.*}}yasps.projection = #yasps.projection<full>}
 // CHECK: yasps.project clamp %{{.*}} : !yasps.mat<3x3xf64>
 yasps.scene @pendulum {
   yasps.mesh @m {

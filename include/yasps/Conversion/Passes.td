@@ -27,8 +27,9 @@ def YaspsLowerToLoops : Pass<"yasps-lower-to-loops", "::mlir::ModuleOp"> {
     nothing intermediate is stored (paper section 4.3, Fig. 6 and 9).
 
     The function's `yasps.kernel_args` lists what each buffer argument holds
-    (`out`, `attr`, `conn`, `offsets`, with the symbol it belongs to); the
-    runtime binds buffers by it. `yasps.kernel_shape` is the [rows, cols] of
+    (`#yasps.kernel_arg<kind @symbol>`, kind `out`, `attr`, `conn`,
+    `offsets` or `dof_offsets`, with the symbol it belongs to); the runtime
+    binds buffers by it. `yasps.kernel_shape` is the [rows, cols] of
     each instance's value in `out`. Instance counts are not compiled in: a
     dynamic primitive changes size without a new kernel.
   }];

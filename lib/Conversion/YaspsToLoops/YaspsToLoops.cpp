@@ -55,7 +55,7 @@ public:
   }
 
   /// The buffer argument holding `symbol`'s data, created on first use.
-  Value buffer(StringRef kind, Operation *symbol, Type elementType) {
+  Value buffer(KernelArgKind kind, Operation *symbol, Type elementType) {
     auto key = std::make_pair(kind, symbol);
     auto it = buffers.find(key);
     if (it != buffers.end())
@@ -66,11 +66,11 @@ public:
     buffers[key] = arg;
     MLIRContext *ctx = func.getContext();
     // Scene-wide buffers (the DoF offsets of targets) name the scene.
-    Attribute path = isa<SceneOp>(symbol)
-                         ? Attribute(FlatSymbolRefAttr::get(
-                               ctx, cast<SceneOp>(symbol).getSymName()))
-                         : Attribute(getScenePath(symbol));
-    roles.push_back(ArrayAttr::get(ctx, {StringAttr::get(ctx, kind), path}));
+    SymbolRefAttr path =
+        isa<SceneOp>(symbol)
+            ? FlatSymbolRefAttr::get(ctx, cast<SceneOp>(symbol).getSymName())
+            : getScenePath(symbol);
+    roles.push_back(KernelArgAttr::get(ctx, kind, path));
     return arg;
   }
 
@@ -157,7 +157,7 @@ private:
   /// Entries of a stored attribute, read from its buffer.
   FailureOr<ScalarMatrix> load(OpBuilder &b, Operation *decl, Value index) {
     MatrixType type = getAttributeType(decl);
-    Value data = buffer("attr", decl, type.getElementType());
+    Value data = buffer(KernelArgKind::attr, decl, type.getElementType());
     Value base = offset(b, index, type.getNumElements());
     ScalarMatrix out{type.getRows(), type.getCols(), {}};
     for (int64_t i = 0; i < type.getNumElements(); ++i)
@@ -205,7 +205,7 @@ private:
       }
     if (position < 0)
       return dof.emitOpError() << "names no minimisation target";
-    Value offsets = buffer("dof_offsets", scene, b.getI64Type());
+    Value offsets = buffer(KernelArgKind::dof_offsets, scene, b.getI64Type());
     Value raw = memref::LoadOp::create(b, loc, offsets,
                                        ValueRange{constIndex(b, position)});
     Value first = arith::IndexCastOp::create(b, loc, b.getIndexType(), raw);
@@ -231,7 +231,7 @@ private:
         tables.lookupSymbolIn(primitive, join.getConnectivityAttr()));
     Operation *source = lookupInScene(scene, join.getSource(), &tables);
     int64_t arity = connectivity.getArity();
-    Value indices = buffer("conn", connectivity, b.getI32Type());
+    Value indices = buffer(KernelArgKind::conn, connectivity, b.getI32Type());
     Value base = offset(b, index, arity);
     auto type = cast<MatrixType>(join.getType());
     ScalarMatrix out{type.getRows(), type.getCols(), {}};
@@ -254,7 +254,7 @@ private:
                                         FlatSymbolRefAttr name, MatrixType type,
                                         Value index) {
     Location loc = owner.getLoc();
-    Value offsets = buffer("offsets", owner, b.getI64Type());
+    Value offsets = buffer(KernelArgKind::offsets, owner, b.getI64Type());
     SmallVector<Operation *> members = owner.getMemberOps();
     auto offsetOf = [&](OpBuilder &ib, int64_t member) -> Value {
       Value raw = memref::LoadOp::create(ib, loc, offsets,
@@ -306,7 +306,7 @@ private:
   SymbolTableCollection &tables;
   func::FuncOp func;
   bool symbolicZeros;
-  std::map<std::pair<StringRef, Operation *>, Value> buffers;
+  std::map<std::pair<KernelArgKind, Operation *>, Value> buffers;
   SmallVector<Attribute> roles;
   /// Values already computed, per region: an inner region may reuse the
   /// values of enclosing ones but not those of its siblings.
@@ -661,7 +661,7 @@ LogicalResult LowerToLoopsPass::lowerAttribute(SceneOp scene,
   // Derivative attributes (from yasps-differentiate) get symbolic zeros.
   KernelEmitter emitter(scene, tables, func,
                         /*symbolicZeros=*/decl->hasAttr("yasps.params"));
-  Value out = emitter.buffer("out", decl, type.getElementType());
+  Value out = emitter.buffer(KernelArgKind::out, decl, type.getElementType());
   Value one = arith::ConstantIndexOp::create(b, loc, 1);
   auto ret = func::ReturnOp::create(b, loc);
   b.setInsertionPoint(ret);

@@ -27,24 +27,35 @@ std::error_code MissingAttributeError::convertToErrorCode() const {
   return llvm::inconvertibleErrorCode();
 }
 
+/// `attr` printed without its dialect wrapper: "@m::@v::@x".
+static std::string print(Attribute attr) {
+  std::string text;
+  llvm::raw_string_ostream(text) << attr;
+  return text;
+}
+
 std::vector<std::vector<std::string>>
 mlir::yasps::describeParams(ArrayAttr params) {
   std::vector<std::vector<std::string>> out;
   if (!params)
     return out;
-  for (auto param : params.getAsRange<ArrayAttr>()) {
-    std::vector<std::string> fields;
-    for (Attribute field : param) {
-      std::string text;
-      if (auto str = dyn_cast<StringAttr>(field))
-        text = str.str();
-      else if (auto integer = dyn_cast<IntegerAttr>(field))
-        text = std::to_string(integer.getInt());
-      else
-        llvm::raw_string_ostream(text) << field;
-      fields.push_back(text);
+  for (auto param : params.getAsRange<ParamAttr>()) {
+    std::string kind = stringifyParamKind(param.getKind()).str();
+    std::string width = std::to_string(param.getWidth());
+    switch (param.getKind()) {
+    case ParamKind::read:
+      out.push_back({kind, print(param.getPath())});
+      break;
+    case ParamKind::join:
+      out.push_back({kind, print(param.getVia()),
+                     std::to_string(param.getSlot()), print(param.getPath()),
+                     width});
+      break;
+    case ParamKind::union_:
+      out.push_back({kind, print(param.getPath()),
+                     param.getVia().getValue().str(), width});
+      break;
     }
-    out.push_back(fields);
   }
   return out;
 }
@@ -128,19 +139,17 @@ std::vector<KernelDescription> mlir::yasps::describeKernels(ModuleOp kernels) {
     KernelDescription kernel;
     llvm::raw_string_ostream(kernel.attribute) << of;
     kernel.symbol = func.getSymName().str();
-    for (auto role : args.getAsRange<ArrayAttr>()) {
-      KernelArgument arg;
-      arg.kind = cast<StringAttr>(role[0]).str();
-      llvm::raw_string_ostream(arg.path) << role[1];
-      kernel.arguments.push_back(arg);
-    }
+    for (auto arg : args.getAsRange<KernelArgAttr>())
+      kernel.arguments.push_back(
+          {stringifyKernelArgKind(arg.getKind()).str(), print(arg.getPath())});
     if (auto shape =
             func->getAttrOfType<DenseI64ArrayAttr>("yasps.kernel_shape")) {
       kernel.rows = shape[0];
       kernel.cols = shape[1];
     }
-    if (auto projection = func->getAttrOfType<StringAttr>("yasps.projection"))
-      kernel.projection = projection.str();
+    if (auto projection =
+            func->getAttrOfType<ProjectionKindAttr>("yasps.projection"))
+      kernel.projection = stringifyProjectionKind(projection.getValue()).str();
     if (auto counts = func->getAttrOfType<DictionaryAttr>("yasps.op_counts"))
       for (NamedAttribute entry : counts)
         kernel.opCounts[entry.getName().str()] =

@@ -5,7 +5,7 @@
 // then offset + instance * 3 + entry + 1, as floats.
 // CHECK-LABEL: func.func @yasps_eval_m__v__idx(
 // CHECK-SAME: %{{.*}}: memref<?xf64>, %[[OFFSETS:.*]]: memref<?xi64>)
-// CHECK-SAME: yasps.kernel_args = {{\[\[}}"out", @m::@v::@idx], ["dof_offsets", @s]]
+// CHECK-SAME: yasps.kernel_args = [#yasps.kernel_arg<out @m::@v::@idx>, #yasps.kernel_arg<dof_offsets @s>]
 // CHECK-SAME: yasps.kernel_shape = array<i64: 3, 1>
 // CHECK: scf.parallel (%[[I:.*]]) =
 // CHECK: %[[RAW:.*]] = memref.load %[[OFFSETS]][%c1] : memref<?xi64>

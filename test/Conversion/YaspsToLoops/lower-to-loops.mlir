@@ -5,7 +5,7 @@
 
 // CHECK-LABEL: func.func @yasps_eval_m__v__e(
 // CHECK-SAME: %[[BEGIN:.*]]: index, %[[END:.*]]: index, %[[OUT:.*]]: memref<?xf64>, %[[X:.*]]: memref<?xf64>, %[[K:.*]]: memref<?xf64>)
-// CHECK-SAME: yasps.kernel_args = {{\[\[}}"out", @m::@v::@e], ["attr", @m::@v::@x], ["attr", @k]]
+// CHECK-SAME: yasps.kernel_args = [#yasps.kernel_arg<out @m::@v::@e>, #yasps.kernel_arg<attr @m::@v::@x>, #yasps.kernel_arg<attr @k>]
 // CHECK-SAME: yasps.kernel_of = @m::@v::@e
 // CHECK-DAG: %[[C0:.*]] = arith.constant 0 : index
 // CHECK-DAG: %[[C3:.*]] = arith.constant 3 : index
@@ -42,7 +42,7 @@ yasps.scene @s {
 
 // CHECK-LABEL: func.func @yasps_eval_m__e__len(
 // CHECK-SAME: %{{.*}}: memref<?xf64>, %[[CONN:.*]]: memref<?xi32>, %[[X:.*]]: memref<?xf64>)
-// CHECK-SAME: ["conn", @m::@e::@e2v], ["attr", @m::@v::@x]
+// CHECK-SAME: #yasps.kernel_arg<conn @m::@e::@e2v>, #yasps.kernel_arg<attr @m::@v::@x>
 // CHECK: scf.parallel (%[[I:.*]]) =
 // CHECK: %[[B:.*]] = arith.muli %[[I]], %c2
 // CHECK: %[[J0:.*]] = memref.load %[[CONN]][%[[B]]] : memref<?xi32>
@@ -83,7 +83,7 @@ yasps.scene @s {
 // 0 below offsets[1], member 1 below offsets[2], member 2 otherwise.
 
 // CHECK-LABEL: func.func @yasps_eval_m__u__x(
-// CHECK-SAME: ["offsets", @m::@u], ["attr", @m::@a::@x], ["attr", @m::@b::@x], ["attr", @m::@c::@x]
+// CHECK-SAME: #yasps.kernel_arg<offsets @m::@u>, #yasps.kernel_arg<attr @m::@a::@x>, #yasps.kernel_arg<attr @m::@b::@x>, #yasps.kernel_arg<attr @m::@c::@x>
 // CHECK: scf.parallel (%[[I:.*]]) =
 // CHECK: %[[O1:.*]] = memref.load %[[OFF:.*]][%c1] : memref<?xi64>
 // CHECK: %[[O1I:.*]] = arith.index_cast %[[O1]] : i64 to index

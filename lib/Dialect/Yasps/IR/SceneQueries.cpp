@@ -143,3 +143,15 @@ bool mlir::yasps::hasDynamicInstances(Operation *entity) {
   llvm::SmallPtrSet<Operation *, 4> seen;
   return hasDynamicInstancesImpl(entity, seen);
 }
+
+AttrOp mlir::yasps::lookupDerivative(Operation *entity, DerivativeRole role,
+                                     Operation *of) {
+  SymbolRefAttr path = getScenePath(of);
+  for (auto attr : entity->getRegion(0).front().getOps<AttrOp>())
+    if (auto derivative =
+            attr->getAttrOfType<DerivativeAttr>("yasps.derivative");
+        derivative && derivative.getRole() == role &&
+        derivative.getOf() == path)
+      return attr;
+  return AttrOp();
+}

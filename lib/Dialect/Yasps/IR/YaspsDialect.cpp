@@ -24,6 +24,7 @@ void YaspsDialect::initialize() {
 #define GET_TYPEDEF_LIST
 #include "yasps/Dialect/Yasps/IR/YaspsTypes.cpp.inc"
       >();
+  registerAttributes();
   addOperations<
 #define GET_OP_LIST
 #include "yasps/Dialect/Yasps/IR/YaspsOps.cpp.inc"

@@ -79,8 +79,12 @@ public:
   /// yasps.params of an attribute: one entry per slot.
   ArrayAttr describe(ArrayRef<ParamGroup> groups);
 
+  /// A new, empty attribute `name` after `next`, with `params` and, given
+  /// `role`, `yasps.derivative = <role of next's base>`.
   AttrOp createAttr(AttrOp next, StringRef name, MatrixType type,
-                    Operation *derivedFromOp, ArrayAttr params);
+                    Operation *derivedFromOp, ArrayAttr params,
+                    std::optional<DerivativeRole> role = std::nullopt,
+                    Operation *of = nullptr);
 
 private:
   Operation *baseOf(Operation *decl) {
@@ -241,7 +245,8 @@ FailureOr<AttrOp> Differentiator::innerMap(AttrOp energy) {
   }
   MatrixType scalar = energy.getMatrixType();
   AttrOp map = createAttr(energy, (energy.getSymName() + "__ij").str(),
-                          scalar.withShape(m, n), nullptr, ArrayAttr());
+                          scalar.withShape(m, n), nullptr, ArrayAttr(),
+                          DerivativeRole::ij);
   tables.invalidateSymbolTable(getOwningEntity(energy));
   IRMapping mapping;
   OpBuilder b = OpBuilder::atBlockEnd(&map.getBodyBlock());
@@ -376,29 +381,24 @@ FailureOr<SmallVector<ParamGroup>> Differentiator::groupsOf(AttrOp attr,
 ArrayAttr Differentiator::describe(ArrayRef<ParamGroup> groups) {
   MLIRContext *ctx = scene.getContext();
   SmallVector<Attribute> out;
-  auto i64 = [&](int64_t v) {
-    return IntegerAttr::get(IntegerType::get(ctx, 64), v);
-  };
   for (const ParamGroup &g : groups) {
     for (int64_t slot = 0; slot < g.count; ++slot) {
       switch (g.kind) {
       case GroupKind::Read:
-        out.push_back(ArrayAttr::get(
-            ctx, {StringAttr::get(ctx, "read"), getScenePath(g.base)}));
+        out.push_back(ParamAttr::get(ctx, getScenePath(g.base)));
         break;
       case GroupKind::Join:
-        out.push_back(ArrayAttr::get(
-            ctx, {StringAttr::get(ctx, "join"),
-                  FlatSymbolRefAttr::get(
-                      cast<ConnectivityOp>(g.key).getSymNameAttr()),
-                  i64(slot), getScenePath(g.base), i64(g.width)}));
+        out.push_back(ParamAttr::getJoin(
+            FlatSymbolRefAttr::get(
+                cast<ConnectivityOp>(g.key).getSymNameAttr()),
+            slot, getScenePath(g.base), g.width));
         break;
       case GroupKind::Union:
-        out.push_back(ArrayAttr::get(
-            ctx, {StringAttr::get(ctx, "union"), getScenePath(g.key),
-                  g.base->getAttrOfType<StringAttr>(
-                      SymbolTable::getSymbolAttrName()),
-                  i64(g.width)}));
+        out.push_back(ParamAttr::getUnion(
+            getScenePath(g.key),
+            FlatSymbolRefAttr::get(g.base->getAttrOfType<StringAttr>(
+                SymbolTable::getSymbolAttrName())),
+            g.width));
         break;
       }
     }
@@ -407,13 +407,19 @@ ArrayAttr Differentiator::describe(ArrayRef<ParamGroup> groups) {
 }
 
 AttrOp Differentiator::createAttr(AttrOp next, StringRef name, MatrixType type,
-                                  Operation *derivedFromOp, ArrayAttr params) {
+                                  Operation *derivedFromOp, ArrayAttr params,
+                                  std::optional<DerivativeRole> role,
+                                  Operation *of) {
   OpBuilder b(next->getBlock(), std::next(Block::iterator(next)));
   auto attr = AttrOp::create(b, next.getLoc(), b.getStringAttr(name),
                              TypeAttr::get(type));
   attr.getBody().push_back(new Block());
   if (params)
     attr->setAttr("yasps.params", params);
+  if (role)
+    attr->setAttr("yasps.derivative",
+                  DerivativeAttr::get(b.getContext(), *role,
+                                      getScenePath(of ? of : next)));
   if (derivedFromOp)
     derivedFrom[attr] = derivedFromOp;
   return attr;
@@ -607,8 +613,10 @@ FailureOr<AttrOp> Differentiator::jacobian(AttrOp attr, bool inner,
                             StringAttr::get(entity->getContext(), name)))
     return attr.emitOpError()
            << "cannot add its Jacobian @" << name << ": the name is taken";
-  AttrOp jac = createAttr(attr, name, type.withShape(rc, d), attr,
-                          inner ? ArrayAttr() : describe(*groups));
+  AttrOp jac =
+      inner ? createAttr(attr, name, type.withShape(rc, d), attr, ArrayAttr())
+            : createAttr(attr, name, type.withShape(rc, d), attr,
+                         describe(*groups), DerivativeRole::jac);
   tables.invalidateSymbolTable(entity);
   jacobians[memo] = jac;
 
@@ -742,10 +750,11 @@ void DifferentiatePass::runOnOperation() {
       MatrixType row = (*jac).getMatrixType();
       int64_t d = row.getCols();
       Attribute params = (*jac)->getAttr("yasps.params");
-      auto alias = [&](StringRef suffix, AttrOp of, MatrixType type,
-                       bool transpose) -> AttrOp {
-        AttrOp a = diff.createAttr(*jac, (attr.getSymName() + suffix).str(),
-                                   type, nullptr, cast<ArrayAttr>(params));
+      auto alias = [&](StringRef suffix, DerivativeRole role, AttrOp of,
+                       MatrixType type, bool transpose) -> AttrOp {
+        AttrOp a =
+            diff.createAttr(*jac, (attr.getSymName() + suffix).str(), type,
+                            nullptr, cast<ArrayAttr>(params), role, attr);
         OpBuilder b = OpBuilder::atBlockEnd(&a.getBodyBlock());
         Value v =
             ReadOp::create(b, a.getLoc(), of.getMatrixType(), getScenePath(of));
@@ -759,15 +768,16 @@ void DifferentiatePass::runOnOperation() {
       MatrixType square = row.withShape(d, d);
       AttrOp hessAttr;
       if (*hess) {
-        hessAttr = alias("__hess", *hess, square, false);
+        hessAttr = alias("__hess", DerivativeRole::hess, *hess, square, false);
       } else {
         hessAttr = diff.createAttr(*jac, (attr.getSymName() + "__hess").str(),
-                                   square, nullptr, cast<ArrayAttr>(params));
+                                   square, nullptr, cast<ArrayAttr>(params),
+                                   DerivativeRole::hess, attr);
         OpBuilder b = OpBuilder::atBlockEnd(&hessAttr.getBodyBlock());
         YieldOp::create(b, hessAttr.getLoc(),
                         zeros(b, hessAttr.getLoc(), square));
       }
-      alias("__grad", *jac, row.withShape(d, 1), true);
+      alias("__grad", DerivativeRole::grad, *jac, row.withShape(d, 1), true);
       // The PSD projection of the local Hessian, by the energy's method. In
       // reduced space (paper 5.4) when the parameterisations behind the
       // leaves are linear and the leaves have fewer entries than there are
@@ -787,11 +797,15 @@ void DifferentiatePass::runOnOperation() {
           (attr.getSymName() + (separate ? "__hess_inner_proj" : "__hess_proj"))
               .str(),
           separate ? row.withShape(m, m) : square, nullptr,
-          cast<ArrayAttr>(params));
+          cast<ArrayAttr>(params),
+          separate ? DerivativeRole::hess_inner_proj
+                   : DerivativeRole::hess_proj,
+          attr);
       projected->setAttr("yasps.projection",
-                         StringAttr::get(&getContext(), separate  ? "separate"
-                                                        : reduced ? "reduced"
-                                                                  : "full"));
+                         ProjectionKindAttr::get(
+                             &getContext(), separate  ? ProjectionKind::separate
+                                            : reduced ? ProjectionKind::reduced
+                                                      : ProjectionKind::full));
       Location loc = projected.getLoc();
       if (reduced) {
         FailureOr<AttrOp> innerGrad = diff.jacobian(attr, /*inner=*/true);

@@ -43,7 +43,7 @@ private:
   FailureOr<AttrOp> build(Operation *entity, StringRef name, MatrixType scalar,
                           ArrayAttr params);
   FailureOr<Value> slot(OpBuilder &b, Location loc, Operation *entity,
-                        ArrayAttr fields, MatrixType scalar);
+                        ParamAttr param, MatrixType scalar);
   FailureOr<AttrOp> paddedMemberDofs(Operation *member, StringAttr name,
                                      int64_t width, MatrixType scalar);
   Value zeros(OpBuilder &b, Location loc, MatrixType type) {
@@ -106,21 +106,23 @@ FailureOr<AttrOp> IndexGenerator::dofsOf(Operation *decl) {
     YieldOp::create(b, decl->getLoc(), v);
   } else {
     // Its parameters are those of its Jacobian.
-    auto jac = dyn_cast_or_null<AttrOp>(tables.lookupSymbolIn(
-        entity, StringAttr::get(decl->getContext(), (name + "__jac").str())));
+    AttrOp jac = lookupDerivative(entity, DerivativeRole::jac, decl);
     ArrayAttr params =
         jac ? jac->getAttrOfType<ArrayAttr>("yasps.params") : ArrayAttr();
     if (!params)
       return decl->emitError()
              << "yasps-generate-indices: " << getScenePath(decl)
-             << " has no parameters (no @" << name
-             << "__jac with yasps.params); run yasps-differentiate first";
+             << " has no parameters (no Jacobian with yasps.params); run "
+                "yasps-differentiate first";
     FailureOr<AttrOp> built =
         build(entity, (name + "__dofs").str(), type.getScalarType(), params);
     if (failed(built))
       return failure();
     result = *built;
   }
+  result->setAttr("yasps.derivative",
+                  DerivativeAttr::get(decl->getContext(), DerivativeRole::dofs,
+                                      getScenePath(decl)));
   made[decl] = result;
   return result;
 }
@@ -133,8 +135,8 @@ FailureOr<AttrOp> IndexGenerator::build(Operation *entity, StringRef name,
   Location loc = entity->getLoc();
   SmallVector<Value> parts;
   int64_t rows = 0;
-  for (auto fields : params.getAsRange<ArrayAttr>()) {
-    FailureOr<Value> part = slot(b, loc, entity, fields, scalar);
+  for (auto param : params.getAsRange<ParamAttr>()) {
+    FailureOr<Value> part = slot(b, loc, entity, param, scalar);
     if (failed(part))
       return failure();
     rows += cast<MatrixType>(part->getType()).getRows();
@@ -151,24 +153,21 @@ FailureOr<AttrOp> IndexGenerator::build(Operation *entity, StringRef name,
 }
 
 FailureOr<Value> IndexGenerator::slot(OpBuilder &b, Location loc,
-                                      Operation *entity, ArrayAttr fields,
+                                      Operation *entity, ParamAttr param,
                                       MatrixType scalar) {
-  StringRef kind = cast<StringAttr>(fields[0]).getValue();
-  if (kind == "read") {
-    Operation *target =
-        lookupInScene(scene, cast<SymbolRefAttr>(fields[1]), &tables);
+  if (param.getKind() == ParamKind::read) {
+    Operation *target = lookupInScene(scene, param.getPath(), &tables);
     MatrixType type = getAttributeType(target);
     return DofIndexOp::create(b, loc, type.withShape(type.getNumElements(), 1),
                               getScenePath(target))
         .getResult();
   }
-  int64_t width = cast<IntegerAttr>(fields.getValue().back()).getInt();
-  if (kind == "join") {
-    auto connectivity = cast<ConnectivityOp>(
-        tables.lookupSymbolIn(entity, cast<FlatSymbolRefAttr>(fields[1])));
-    int64_t slotIndex = cast<IntegerAttr>(fields[2]).getInt();
-    Operation *source =
-        lookupInScene(scene, cast<SymbolRefAttr>(fields[3]), &tables);
+  int64_t width = param.getWidth();
+  if (param.getKind() == ParamKind::join) {
+    auto connectivity =
+        cast<ConnectivityOp>(tables.lookupSymbolIn(entity, param.getVia()));
+    int64_t slotIndex = param.getSlot();
+    Operation *source = lookupInScene(scene, param.getPath(), &tables);
     FailureOr<AttrOp> dofs = dofsOf(source);
     if (failed(dofs))
       return failure();
@@ -183,9 +182,9 @@ FailureOr<Value> IndexGenerator::slot(OpBuilder &b, Location loc,
     return pad(b, loc, column, width);
   }
   // A UNION slot: each member's indices, padded to the slot's width.
-  auto unionOp = cast<PrimitiveUnionOp>(
-      lookupInScene(scene, cast<SymbolRefAttr>(fields[1]), &tables));
-  auto name = cast<StringAttr>(fields[2]);
+  auto unionOp =
+      cast<PrimitiveUnionOp>(lookupInScene(scene, param.getPath(), &tables));
+  StringAttr name = param.getVia().getAttr();
   std::string padded =
       (name.getValue() + "__udofs" + std::to_string(width)).str();
   for (Operation *member : unionOp.getMemberOps())
@@ -213,9 +212,7 @@ FailureOr<AttrOp> IndexGenerator::paddedMemberDofs(Operation *member,
   // from no target) contributes only padding.
   bool hasParams = isTarget(decl);
   if (!hasParams) {
-    StringRef base = name.getValue();
-    auto jac = dyn_cast_or_null<AttrOp>(tables.lookupSymbolIn(
-        member, StringAttr::get(member->getContext(), (base + "__jac").str())));
+    AttrOp jac = lookupDerivative(member, DerivativeRole::jac, decl);
     hasParams = jac && jac->getAttrOfType<ArrayAttr>("yasps.params");
   }
   Value value = zeros(b, loc, scalar.withShape(width, 1));
@@ -233,8 +230,15 @@ FailureOr<AttrOp> IndexGenerator::paddedMemberDofs(Operation *member,
 
 FailureOr<AttrOp> IndexGenerator::energyDofs(AttrOp energy, AttrOp grad) {
   auto params = grad->getAttrOfType<ArrayAttr>("yasps.params");
-  return build(getOwningEntity(energy), (energy.getSymName() + "__dofs").str(),
-               energy.getMatrixType().getScalarType(), params);
+  FailureOr<AttrOp> dofs =
+      build(getOwningEntity(energy), (energy.getSymName() + "__dofs").str(),
+            energy.getMatrixType().getScalarType(), params);
+  if (succeeded(dofs))
+    (*dofs)->setAttr("yasps.derivative",
+                     DerivativeAttr::get(energy.getContext(),
+                                         DerivativeRole::dofs,
+                                         getScenePath(energy)));
+  return dofs;
 }
 
 struct GenerateIndicesPass
@@ -248,10 +252,8 @@ struct GenerateIndicesPass
             lookupInScene(scene, energy.getAttribute(), &tables));
         if (!attr)
           continue;
-        auto grad = dyn_cast_or_null<AttrOp>(tables.lookupSymbolIn(
-            getOwningEntity(attr),
-            StringAttr::get(&getContext(),
-                            (attr.getSymName() + "__grad").str())));
+        AttrOp grad =
+            lookupDerivative(getOwningEntity(attr), DerivativeRole::grad, attr);
         // Energies of no target have no derivatives and no indices.
         if (!grad || !grad->getAttrOfType<ArrayAttr>("yasps.params"))
           continue;

@@ -27,6 +27,9 @@
 #define GET_TYPEDEF_CLASSES
 #include "yasps/Dialect/Yasps/IR/YaspsTypes.h.inc"
 
+#define GET_ATTRDEF_CLASSES
+#include "yasps/Dialect/Yasps/IR/YaspsAttrs.h.inc"
+
 #define GET_OP_CLASSES
 #include "yasps/Dialect/Yasps/IR/YaspsOps.h.inc"
 
@@ -68,6 +71,10 @@ getAttributeDependencies(AttrOp attr, SymbolTableCollection &tables);
 /// True for a dynamic primitive and for a primitive union with a dynamic
 /// member: entities whose instance count changes at run time.
 bool hasDynamicInstances(Operation *entity);
+
+/// The attribute of `entity` recorded as `yasps.derivative = <role of
+/// path(of)>`, or null.
+AttrOp lookupDerivative(Operation *entity, DerivativeRole role, Operation *of);
 
 /// True if `ancestor` is `entity` or one of its enclosing entities.
 bool isOnLineageOf(Operation *ancestor, Operation *entity);

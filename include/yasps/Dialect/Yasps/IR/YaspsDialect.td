@@ -32,6 +32,13 @@ def Yasps_Dialect : Dialect {
     owner's lineage (the owner, its mesh, its scene).
   }];
   let useDefaultTypePrinterParser = 1;
+  let useDefaultAttributePrinterParser = 1;
+  // The discardable attributes that passes agree on (yasps.params, ...)
+  // must hold the dialect's typed attributes.
+  let hasOperationAttrVerify = 1;
+  let extraClassDeclaration = [{
+    void registerAttributes();
+  }];
   let hasConstantMaterializer = 1;
 }
 

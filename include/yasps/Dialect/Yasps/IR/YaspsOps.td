@@ -3,6 +3,7 @@
 #ifndef YASPS_DIALECT_YASPS_IR_YASPSOPS_TD
 #define YASPS_DIALECT_YASPS_IR_YASPSOPS_TD
 
+include "yasps/Dialect/Yasps/IR/YaspsAttrs.td"
 include "yasps/Dialect/Yasps/IR/YaspsStructureOps.td"
 include "yasps/Dialect/Yasps/IR/YaspsExprOps.td"
 

@@ -56,12 +56,16 @@ def YaspsDifferentiate : Pass<"yasps-differentiate", "::mlir::ModuleOp"> {
     The unit is the Jacobian `@X__jac` (rc x d) of an attribute X with
     respect to its local parameters: groups of target entries that X reaches
     through its region's leaves. A read of a target gives its r*c entries
-    (`["read", @target]`); a JOIN gives, per gathered instance, the
-    parameters of its source's base attribute (`["join", @conn, slot,
-    @base, width]`): r*c entries of a stored target, or, for a computed
-    source, that source's own parameters; a UNION gives the parameters of
-    the member the instance belongs to, padded to the widest member
-    (`["union", @union, name, width]`, paper 5.2).
+    (`#yasps.param<read @target>`); a JOIN gives, per gathered instance, the
+    parameters of its source's base attribute (`#yasps.param<join
+    @conn[slot] of @base, width w>`): r*c entries of a stored target, or,
+    for a computed source, that source's own parameters; a UNION gives the
+    parameters of the member the instance belongs to, padded to the widest
+    member (`#yasps.param<union @name of @union, width w>`, paper 5.2).
+    Every attribute it adds records what it is, e.g.
+    `yasps.derivative = #yasps.derivative<grad of @m::@t::@E>`, and
+    projected Hessians how they are projected
+    (`yasps.projection = #yasps.projection<reduced>`).
 
     Each Jacobian is built in forward mode from the ops' derivative rules
     (`DifferentiableOpInterface`): one tangent per parameter, seeded with
