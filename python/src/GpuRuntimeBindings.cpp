@@ -125,14 +125,13 @@ dlpackView(const PyBuffer &buffer, const std::vector<std::size_t> &shape,
 }
 
 GpuParam toParam(const std::pair<std::string, std::int64_t> &param) {
-  if (param.first == "index")
-    return {GpuParam::Kind::Index, param.second, 0};
-  if (param.first == "buffer")
-    return {GpuParam::Kind::Buffer, param.second, 0};
-  if (param.first == "constant")
-    return {GpuParam::Kind::Constant, -1, param.second};
-  throw std::invalid_argument("unknown GPU kernel parameter kind '" +
-                              param.first + "'");
+  std::optional<GpuParam::Kind> kind = parseGpuParamKind(param.first);
+  if (!kind)
+    throw std::invalid_argument("unknown GPU kernel parameter kind '" +
+                                param.first + "'");
+  if (*kind == GpuParam::Kind::Constant)
+    return {*kind, -1, param.second};
+  return {*kind, param.second, 0};
 }
 
 void launch(const PyModule &module, const std::string &kernel,

@@ -684,14 +684,12 @@ NB_MODULE(_yasps_native, m) {
               nb::list args, params;
               for (const auto &arg : kernel.arguments)
                 args.append(nb::make_tuple(arg.kind, arg.path));
-              using Kind = mlir::yasps::GpuLaunchParam::Kind;
+              using Kind = ::yasps::runtime::GpuParam::Kind;
               for (const auto &param : kernel.launchParams)
-                params.append(param.kind == Kind::Constant
-                                  ? nb::make_tuple("constant", param.value)
-                                  : nb::make_tuple(param.kind == Kind::Buffer
-                                                       ? "buffer"
-                                                       : "index",
-                                                   param.argument));
+                params.append(nb::make_tuple(
+                    ::yasps::runtime::gpuParamKindName(param.kind),
+                    param.kind == Kind::Constant ? param.value
+                                                 : param.argument));
               d["arguments"] = args;
               d["launch_params"] = params;
               out.append(d);

@@ -123,11 +123,10 @@ inline Kit readKit(const std::string &dir) {
       std::string kind;
       std::int64_t value;
       words >> kind >> value;
-      kit.kernels.back().params.push_back(
-          {kind == "index"    ? GpuParam::Kind::Index
-           : kind == "buffer" ? GpuParam::Kind::Buffer
-                              : GpuParam::Kind::Constant,
-           value, value});
+      std::optional<GpuParam::Kind> parsed = parseGpuParamKind(kind);
+      if (!parsed)
+        throw std::runtime_error("unknown kernel parameter kind " + kind);
+      kit.kernels.back().params.push_back({*parsed, value, value});
     } else if (directive == "buffer") {
       std::string file;
       words >> file;

@@ -41,6 +41,7 @@
 
 using namespace mlir;
 using namespace mlir::yasps;
+using ::yasps::runtime::GpuParam;
 
 // Bumped whenever generated code changes for the same kernels, so that
 // stale binaries in an on-disk cache are never reused.
@@ -100,11 +101,11 @@ llvm::Error describeLaunch(ModuleOp module, GpuKernel &kernel) {
     if (arg && arg.getOwner()->getParentOp() == func) {
       bool buffer = isa<MemRefType>(arg.getType());
       kernel.launchParams.push_back(
-          {buffer ? GpuLaunchParam::Kind::Buffer : GpuLaunchParam::Kind::Index,
+          {buffer ? GpuParam::Kind::Buffer : GpuParam::Kind::Index,
            arg.getArgNumber(), 0});
     } else if (matchPattern(operand, m_Constant(&constant))) {
       kernel.launchParams.push_back(
-          {GpuLaunchParam::Kind::Constant, -1, constant.getInt()});
+          {GpuParam::Kind::Constant, -1, constant.getInt()});
     } else {
       return error("kernel @" + kernel.symbol +
                    " passes a value computed on the host to the GPU");

@@ -12,6 +12,7 @@
 #ifndef YASPS_TARGET_GPU_GPUCOMPILER_H
 #define YASPS_TARGET_GPU_GPUCOMPILER_H
 
+#include "yasps/Runtime/GpuParam.h"
 #include "yasps/Target/KernelGeneration.h"
 
 #include "mlir/IR/DialectRegistry.h"
@@ -22,29 +23,12 @@
 
 namespace mlir::yasps {
 
-/// One kernel parameter as the CUDA driver receives it (cuLaunchKernel's
-/// `kernelParams`, in order).
-struct GpuLaunchParam {
-  enum class Kind {
-    /// An index argument of the loop kernel (0: begin, 1: end): one i64.
-    Index,
-    /// Buffer argument `argument` of the loop kernel: five values, MLIR's
-    /// memref descriptor (allocated and aligned pointer, i64 offset 0, i64
-    /// size, i64 stride 1).
-    Buffer,
-    /// A constant the host computed: one i64 `value`.
-    Constant,
-  };
-  Kind kind;
-  int64_t argument = -1; ///< for Index and Buffer
-  int64_t value = 0;     ///< for Constant
-};
-
 /// One GPU kernel: launch it with `threadsPerBlock` threads per block and
 /// ceil((end - begin) / threadsPerBlock) blocks.
 struct GpuKernel : KernelDescription {
   std::string kernelName; ///< the entry point in the binaries
-  std::vector<GpuLaunchParam> launchParams;
+  /// How to launch it, in the runtime's terms.
+  std::vector<::yasps::runtime::GpuParam> launchParams;
   int64_t threadsPerBlock = 0;
 };
 

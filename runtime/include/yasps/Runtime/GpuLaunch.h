@@ -14,20 +14,13 @@
 #define YASPS_RUNTIME_GPULAUNCH_H
 
 #include "yasps/Runtime/CudaMemory.h"
+#include "yasps/Runtime/GpuParam.h"
 
 #include <cstdint>
 #include <string>
 #include <vector>
 
 namespace yasps::runtime {
-
-/// One recorded cuLaunchKernel parameter (GpuLaunchParam of the compiler).
-struct GpuParam {
-  enum class Kind { Index, Buffer, Constant };
-  Kind kind;
-  std::int64_t argument = -1; ///< Index: 0 begin, 1 end; Buffer: >= 2
-  std::int64_t value = 0;     ///< Constant
-};
 
 /// A device buffer as a loop-kernel argument.
 struct GpuBufferArg {
