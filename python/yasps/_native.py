@@ -1,25 +1,33 @@
-"""Locates the compiled extension module ``_yasps_native``.
+"""Locates the compiled extension modules.
 
-An installed package (``pip install .``) has the extension next to this file.
-In a source checkout the extension lives in the CMake build tree, by default
+The bindings mirror the package's layers: the compiler module links MLIR
+(parsing, passes, kernel generation, the CPU JIT and GPU code generation);
+the runtime module does not (buffers, CUDA devices, the Newton system and its
+solvers). An installed package (``pip install .``) has the extensions next to
+this file. In a source checkout they live in the CMake build tree, by default
 ``<repo>/build/python/yasps``; ``YASPS_BUILD_DIR`` names another build tree.
 """
 
 from __future__ import annotations
 
+import importlib
 import importlib.util
 import os
+from functools import lru_cache
 from pathlib import Path
 from types import ModuleType
 
-_MODULE = "yasps._yasps_native"
+#: The extension of the compiler layer and of the runtime layer.
+COMPILER_MODULE = "_yasps_compiler"
+RUNTIME_MODULE = "_yasps_runtime"
 
 
-def _from_build_tree() -> ModuleType | None:
+def _from_build_tree(name: str) -> ModuleType | None:
     repo = Path(__file__).resolve().parent.parent.parent
     build = Path(os.environ.get("YASPS_BUILD_DIR", repo / "build"))
-    for candidate in sorted((build / "python" / "yasps").glob("_yasps_native*")):
-        spec = importlib.util.spec_from_file_location(_MODULE, candidate)
+    for candidate in sorted((build / "python" / "yasps").glob(name + "*")):
+        spec = importlib.util.spec_from_file_location("yasps." + name,
+                                                      candidate)
         if spec is None or spec.loader is None:
             continue
         module = importlib.util.module_from_spec(spec)
@@ -28,18 +36,27 @@ def _from_build_tree() -> ModuleType | None:
     return None
 
 
-def load() -> ModuleType:
-    """Returns the extension module, or raises ImportError saying how to build it."""
+@lru_cache(maxsize=None)
+def load(name: str) -> ModuleType:
+    """The extension module ``name``, or ImportError saying how to build it."""
     try:
-        from . import _yasps_native  # type: ignore[attr-defined]
-
-        return _yasps_native
+        return importlib.import_module("yasps." + name)
     except ImportError:
         pass
-    module = _from_build_tree()
+    module = _from_build_tree(name)
     if module is None:
         raise ImportError(
-            "the yasps compiler extension (_yasps_native) was not found: "
-            "build it with 'bash scripts/build.sh' (or set YASPS_BUILD_DIR to "
-            "your build tree), or install the package with 'pip install .'")
+            f"the yasps extension module {name} was not found: build it with "
+            "'bash scripts/build.sh' (or set YASPS_BUILD_DIR to your build "
+            "tree), or install the package with 'pip install .'")
     return module
+
+
+def compiler_module() -> ModuleType:
+    """The compiler's bindings (links MLIR)."""
+    return load(COMPILER_MODULE)
+
+
+def runtime_module() -> ModuleType:
+    """The runtime's bindings (no MLIR)."""
+    return load(RUNTIME_MODULE)

@@ -2,7 +2,7 @@
 
 from load_extension import load
 
-compiler = load("_yasps_native")
+compiler = load("_yasps_compiler")
 
 # @e reads only @c, which is not a minimisation target: it gets no
 # derivatives.

@@ -1,0 +1,17 @@
+//===- ThreadPools.h - the runtime's thread pools for Python ----*- C++ -*-===//
+
+#ifndef YASPS_PYTHON_THREADPOOLS_H
+#define YASPS_PYTHON_THREADPOOLS_H
+
+#include "yasps/Runtime/ThreadPool.h"
+
+namespace yasps::python {
+
+/// The pool of `threads` workers, created on first use and kept for the
+/// process (0: the runtime's default pool). Python passes a thread count per
+/// call; pools are too costly to create per call.
+runtime::ThreadPool &poolFor(unsigned threads);
+
+} // namespace yasps::python
+
+#endif // YASPS_PYTHON_THREADPOOLS_H
