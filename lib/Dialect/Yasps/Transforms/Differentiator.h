@@ -1,0 +1,126 @@
+//===- Differentiator.h - forward-mode Jacobians of attributes -*- C++ -*-===//
+//
+// The engine of yasps-differentiate, private to the pass's files: parameter
+// groups, the Jacobian of an attribute by forward mode over its region, and
+// the helpers that the energy derivatives and the projection strategy share.
+//
+//===----------------------------------------------------------------------===//
+
+#ifndef YASPS_LIB_DIALECT_YASPS_TRANSFORMS_DIFFERENTIATOR_H
+#define YASPS_LIB_DIALECT_YASPS_TRANSFORMS_DIFFERENTIATOR_H
+
+#include "yasps/Dialect/Yasps/IR/Yasps.h"
+
+#include <map>
+#include <optional>
+
+namespace mlir::yasps::differentiation {
+
+enum class GroupKind { Read, Join, Union };
+
+/// A group of `count` parameter slots of `width` parameters each.
+struct ParamGroup {
+  GroupKind kind;
+  Operation *key;  ///< target (read), connectivity (join), union entity
+  Operation *base; ///< the attribute whose parameters a slot holds
+  int64_t count;   ///< slots: JOIN arity, else 1
+  int64_t width;   ///< parameters per slot
+  int64_t offset = 0;
+  int64_t leafEntries = 0; ///< entries of the leaf value (inner variables)
+
+  int64_t size() const { return count * width; }
+};
+
+class Differentiator {
+public:
+  Differentiator(SceneOp scene, DenseSet<Operation *> targets,
+                 SymbolTableCollection &tables)
+      : scene(scene), targets(std::move(targets)), tables(tables) {}
+
+  /// `X__jac`, or null when X depends on no target. With `inner`, the
+  /// Jacobian `X__ijac` with respect to the entries of X's leaf values (the
+  /// inner variables of the reduced-space projection) instead.
+  FailureOr<AttrOp> jacobian(AttrOp attr, bool inner = false,
+                             bool symmetric = false);
+
+  /// The parameter groups of a computed attribute; with `inner`, one group
+  /// per leaf with the leaf's entries as parameters.
+  FailureOr<SmallVector<ParamGroup>> groupsOf(AttrOp attr, bool inner = false);
+
+  /// True if the parameterisations behind E's leaves are linear (their
+  /// second Jacobians are structurally zero): then the Hessian is
+  /// J^T H_inner J exactly, and projecting H_inner suffices (paper 5.4).
+  FailureOr<bool> curvatureFree(AttrOp energy);
+
+  /// `E__ij`: d(leaf entries)/d(parameters), m x n, rows in the order of
+  /// the inner groups.
+  FailureOr<AttrOp> innerMap(AttrOp energy);
+
+  /// yasps.params of an attribute: one entry per slot.
+  ArrayAttr describe(ArrayRef<ParamGroup> groups);
+
+  /// A new, empty attribute `name` after `next`, with `params` and, given
+  /// `role`, `yasps.derivative = <role of next (or of)>`, inserted through
+  /// the symbol table collection, which stays valid. Fails, with an error,
+  /// when the name is taken.
+  FailureOr<AttrOp>
+  createAttr(AttrOp next, StringRef name, MatrixType type,
+             Operation *derivedFromOp, ArrayAttr params,
+             std::optional<DerivativeRole> role = std::nullopt,
+             Operation *of = nullptr);
+
+private:
+  Operation *baseOf(Operation *decl) {
+    for (auto it = derivedFrom.find(decl); it != derivedFrom.end();
+         it = derivedFrom.find(decl))
+      decl = it->second;
+    return decl;
+  }
+  FailureOr<int64_t> paramCount(Operation *base);
+  FailureOr<Value> seed(OpBuilder &b, Operation *leaf, const ParamGroup &group,
+                        int64_t slot, int64_t local);
+  FailureOr<Operation *> unionJacobian(Operation *member, StringAttr name,
+                                       int64_t width);
+  /// A unit matrix at column-major entry `local` of the leaf's value.
+  Value unitSeed(OpBuilder &b, Operation *leaf, int64_t local);
+  /// The leaves of a cloned region that belong to each group.
+  SmallVector<std::pair<Operation *, const ParamGroup *>>
+  leavesOf(AttrOp clone, ArrayRef<ParamGroup> groups);
+
+  SceneOp scene;
+  DenseSet<Operation *> targets;
+  SymbolTableCollection &tables;
+  DenseMap<Operation *, Operation *> derivedFrom;
+  std::map<std::pair<Operation *, bool>, AttrOp> jacobians;
+  DenseMap<Operation *, int64_t> counts;
+  /// Gathers of a source's Jacobian, one per leaf, shared by directions.
+  DenseMap<Operation *, Value> gathered;
+  /// Padded member Jacobians of UNIONs that are structurally zero.
+  DenseSet<Operation *> zeroUnionJacobians;
+};
+
+/// A constant matrix of `type` from its entries in row-major order.
+Value constantMatrix(OpBuilder &b, Location loc, MatrixType type,
+                     ArrayRef<double> rowMajor);
+
+/// The zero matrix of `type`.
+Value zeros(OpBuilder &b, Location loc, MatrixType type);
+
+/// Adds `@E__grad`, `@E__hess` and the projected Hessian of `energy`'s
+/// computed attribute `attr`; false when it depends on no target.
+FailureOr<bool> differentiateEnergy(Differentiator &diff, EnergyOp energy,
+                                    AttrOp attr, bool separateReducedHessians);
+
+/// Adds the PSD projection of E's local Hessian `hessAttr`, by E's method:
+/// in reduced space (paper 5.4) where the parameterisations behind E's
+/// leaves are linear and the leaves have fewer entries than there are
+/// parameters, else of the full Hessian. `@E__hess_proj` records which
+/// (yasps.projection); with `separateReducedHessians` the reduced factors
+/// stay apart (`@E__ij`, `@E__hess_inner_proj`).
+LogicalResult addProjectedHessian(Differentiator &diff, EnergyOp energy,
+                                  AttrOp attr, AttrOp jac, AttrOp hessAttr,
+                                  bool separateReducedHessians);
+
+} // namespace mlir::yasps::differentiation
+
+#endif // YASPS_LIB_DIALECT_YASPS_TRANSFORMS_DIFFERENTIATOR_H
