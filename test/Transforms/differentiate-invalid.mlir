@@ -40,3 +40,23 @@ yasps.scene @s {
   yasps.energy @m::@p::@e
   yasps.minimize [@m::@p::@h]
 }
+
+// -----
+
+// A derivative's name that an attribute of the scene already has.
+yasps.scene @s {
+  yasps.mesh @m {
+    yasps.primitive @p(1) {
+      yasps.data_attr @x : !yasps.mat<1x1xf64>
+      yasps.const_attr @e__grad : !yasps.mat<1x1xf64>
+      // expected-error @+1 {{cannot add @e__grad: the name is taken}}
+      yasps.attr @e : !yasps.mat<1x1xf64> {
+        %x = yasps.read @m::@p::@x : !yasps.mat<1x1xf64>
+        %e = yasps.squared_norm %x : !yasps.mat<1x1xf64>
+        yasps.yield %e : !yasps.mat<1x1xf64>
+      }
+    }
+  }
+  yasps.energy @m::@p::@e
+  yasps.minimize [@m::@p::@x]
+}
