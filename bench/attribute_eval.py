@@ -97,14 +97,14 @@ def main() -> None:
         result = F.compute(threads=1).value
 
         # The kernel alone, as the runtime launches it.
-        from yasps import compiler
-        from yasps.emit import emit_scene
-        from yasps.evaluate import _buffer
-        native = compiler._module()
+        from yasps.compiler.cpu import compile_cpu
+        from yasps.ir import emit_scene
+        from yasps.runtime.inputs import host_input
         path = "@bunny::@tets::@F"
-        library = native.compile_cpu(emit_scene(s), [path], cache)
+        library = compile_cpu(emit_scene(s), [path], s.name)
         out = np.empty(len(tets) * 9)
-        buffers = [_buffer(s, k, p, out) for k, p in dict(library.kernels)[path]]
+        buffers = [out if a.kind == "out" else host_input(s, a)
+                   for a in library.kernel(path).arguments]
         kernel = median(lambda: library.launch(path, len(tets), buffers, 1),
                              args.repeat)
         end_to_end = median(lambda: F.compute(threads=1), args.repeat)

@@ -28,8 +28,10 @@ import numpy as np
 
 import yasps
 from yasps import energies as E
-from yasps.emit import emit_scene
-from yasps.evaluate import _buffer, _compile, DIFFERENTIATION_PIPELINE
+from yasps.compiler.cpu import compile_cpu
+from yasps.compiler.pipelines import DIFFERENTIATION_PIPELINE
+from yasps.ir import emit_scene
+from yasps.runtime.inputs import host_input
 
 MU, LAM = 1.0, 10.0             # stable Neo-Hookean
 MASS = 2.0                      # inertia and gravity
@@ -495,17 +497,17 @@ class YaspsEnergy:
         on every instance on one thread into a fresh output buffer."""
         paths = [self.path(n) for n in names]
         t0 = time.perf_counter()
-        library, _ = _compile(emit_scene(self.scene), paths, self.scene,
+        kernels = compile_cpu(emit_scene(self.scene), paths, self.scene.name,
                               DIFFERENTIATION_PIPELINE)
         seconds = time.perf_counter() - t0
         launches = []
         for path in paths:
-            rows, cols = library.shape(path)
-            out = np.empty(self.count * rows * cols)
-            buffers = [_buffer(self.scene, kind, p, out)
-                       for kind, p in dict(library.kernels)[path]]
-            launches.append(partial(library.launch, path, self.count, buffers, 1))
-        return seconds, library, launches
+            kernel = kernels.kernel(path)
+            out = np.empty(self.count * kernel.rows * kernel.cols)
+            buffers = [out if a.kind == "out" else host_input(self.scene, a)
+                       for a in kernel.arguments]
+            launches.append(partial(kernels.launch, path, self.count, buffers, 1))
+        return seconds, kernels.library, launches
 
     def derivatives(self):
         """yasps' local gradients (N, n) and Hessians (N, n, n), one thread."""

@@ -38,10 +38,10 @@ sys.path.insert(0, str(HERE))
 import numpy as np  # noqa: E402
 
 import yasps  # noqa: E402
-from yasps import compiler  # noqa: E402
-from yasps.emit import emit_scene  # noqa: E402
-from yasps.evaluate import DIFFERENTIATION_PIPELINE, run_on_gpu  # noqa: E402
-from yasps.minimize import assemble  # noqa: E402
+from yasps.compiler.pipelines import DIFFERENTIATION_PIPELINE  # noqa: E402
+from yasps.ir import emit_scene  # noqa: E402
+from yasps.runtime import cpu_backend, gpu_backend  # noqa: E402
+from yasps.solve import assemble  # noqa: E402
 
 from newton_system import build  # noqa: E402
 from gpu_kit import bunny_snh_inputs  # noqa: E402
@@ -53,8 +53,8 @@ def spmv(repeat: int) -> None:
     import scipy.sparse as sparse
 
     s = build()
-    system, _ = assemble(s, on_gpu=True)
-    host, _ = assemble(s)
+    system, _ = assemble(s, gpu_backend())
+    host, _ = assemble(s, cpu_backend())
     n = system.size
     x = np.random.default_rng(1).normal(size=n)
     want, got = np.empty(n), np.empty(n)
@@ -118,7 +118,7 @@ def derivatives(repeat: int) -> None:
         vmap as torch_vmap
 
     from energy_cases import CASES, ArrayOps, TorchOps, snh_positions
-    from yasps.gpu_runtime import session
+    from yasps.runtime.gpu import session
 
     jax.config.update("jax_enable_x64", True)
     arrays = bunny_snh_inputs()
@@ -132,16 +132,15 @@ def derivatives(repeat: int) -> None:
     paths = [energy.path(k) for k in names]
     kernels = gpu.kernels(emit_scene(energy.scene), paths, energy.scene.name,
                           DIFFERENTIATION_PIPELINE)
-    native = compiler._module()
     sync = gpu.device.synchronize
     yasps_seconds = {}
     for name, path in zip(names, paths):
         k = kernels.kernel(path)
         size = count * k.rows * k.cols
-        out = native.gpu_allocate(gpu.device, size)
-        run = partial(run_on_gpu, gpu, kernels, energy.scene, path, count,
-                      size, out)
-        run()
+        # One output buffer, reused by every timed call.
+        run = partial(gpu_backend().run, kernels, energy.scene, path, count,
+                      None, ("bench", path))
+        out = run()
         host = np.empty(size)
         out.download(host)
         want = check.gradient if name == "grad" else check.hessian

@@ -33,10 +33,12 @@ sys.path.insert(0, str(HERE))
 
 import numpy as np  # noqa: E402
 
-import yasps.gpu  # noqa: E402
-from yasps.emit import emit_scene  # noqa: E402
-from yasps.evaluate import DIFFERENTIATION_PIPELINE, _buffer  # noqa: E402
-from yasps.minimize import DofLayout, assemble  # noqa: E402
+import yasps.compiler.gpu  # noqa: E402
+from yasps.compiler.pipelines import DIFFERENTIATION_PIPELINE  # noqa: E402
+from yasps.ir import emit_scene  # noqa: E402
+from yasps.runtime import cpu_backend  # noqa: E402
+from yasps.runtime.inputs import host_input  # noqa: E402
+from yasps.solve import DofLayout, assemble  # noqa: E402
 
 from energy_cases import CASES  # noqa: E402
 from meshes import bunny  # noqa: E402
@@ -66,7 +68,7 @@ def write_kit(kit: Path, scene, kernels: List[Tuple[str, str, int, np.ndarray]],
     values (N, ...)) of ``scene`` and writes the kit with ``extra``
     directives."""
     kit.mkdir(parents=True, exist_ok=True)
-    compiled = yasps.gpu.compile_ir(
+    compiled = yasps.compiler.gpu.compile_ir(
         emit_scene(scene, locations=True), [p for _, p, _, _ in kernels],
         scene.name, DIFFERENTIATION_PIPELINE, chips=("sm_80", "sm_90"))
     lines = []
@@ -85,14 +87,15 @@ def write_kit(kit: Path, scene, kernels: List[Tuple[str, str, int, np.ndarray]],
         lines.append(f"kernel {kernel.name} {label} {kernel.threads_per_block} "
                      f"{count} {count * kernel.rows * kernel.cols} {reference}")
         lines += [f"param {kind} {value}" for kind, value in kernel.launch_params]
-        for kind, p in kernel.arguments:
+        for argument in kernel.arguments:
+            kind, p = argument.kind, argument.path
             if kind == "out":
                 lines.append("buffer out")
                 continue
             name = f"{kind}_{p.replace('@', '').replace('::', '.')}.npy"
             if name not in written:
                 np.save(kit / name, np.ascontiguousarray(
-                    _buffer(scene, kind, p, None)))
+                    host_input(scene, argument)))
                 written.add(name)
             lines.append(f"buffer {name}")
     (kit / "kernels.txt").write_text("\n".join(lines + extra) + "\n")
@@ -144,7 +147,7 @@ def newton_kit(kit: Path) -> None:
                         f"{energy.name}.hess_proj {energy.name}.dofs")
     kit.mkdir(parents=True, exist_ok=True)
     np.save(kit / "layout.npy", DofLayout(scene.minimizeTargets).block_offsets)
-    system, _ = assemble(scene)
+    system, _ = assemble(scene, cpu_backend())
     solution = np.zeros(system.size)
     _, _, converged = system.solve(solution, NEWTON_TOLERANCE, 10000, 0, None)
     assert converged, "the CPU's Newton direction did not converge"

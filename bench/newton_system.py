@@ -30,7 +30,8 @@ import scipy.sparse as sparse  # noqa: E402
 import yasps  # noqa: E402
 from timing import median  # noqa: E402
 from yasps import energies as E  # noqa: E402
-from yasps.minimize import assemble  # noqa: E402
+from yasps.runtime import cpu_backend  # noqa: E402
+from yasps.solve import assemble  # noqa: E402
 from meshes import bunny  # noqa: E402
 
 
@@ -82,7 +83,7 @@ def main() -> None:
     print(f"  PCG: {info['iterations']} iterations to relative residual "
           f"{info['relativeResidual']:.2e}")
 
-    system, _ = assemble(s, threads=1)
+    system, _ = assemble(s, cpu_backend(), threads=1)
     nnz = system.non_zeros
     rows, cols = np.empty(nnz, np.int64), np.empty(nnz, np.int64)
     values = np.empty(nnz)

@@ -39,7 +39,7 @@ def main() -> None:
     parser.add_argument("--repeat", type=int, default=5)
     args = parser.parse_args()
     n = args.count
-    lanes = yasps.compiler._module().host_double_lanes()
+    lanes = yasps.compiler.native().host_double_lanes()
     print(f"{n} instances, one thread, median of {args.repeat}; time per "
           f"instance with 1 lane / {lanes} lanes (speed-up)")
     print(f"{'energy':34s}" + "".join(f"{k:>26s}" for k in KERNELS))

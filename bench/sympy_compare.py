@@ -44,8 +44,8 @@ import sympy as sp  # noqa: E402
 from energy_cases import CASES, Case, SympyOps, YaspsEnergy, check_agrees  # noqa: E402
 from timing import median  # noqa: E402
 from yasps import compiler  # noqa: E402
-from yasps.emit import emit_scene  # noqa: E402
-from yasps.evaluate import DIFFERENTIATION_PIPELINE  # noqa: E402
+from yasps.compiler.pipelines import DIFFERENTIATION_PIPELINE  # noqa: E402
+from yasps.ir import emit_scene  # noqa: E402
 
 #: SymPy's CSE result: (temporary, expression) pairs, then the gradient's
 #: and the row-major Hessian's expressions in those temporaries.
@@ -83,7 +83,7 @@ def yasps_counts(energy: YaspsEnergy) -> Tuple[float, float, int, int]:
     CSE), the time to compile the Hessian kernel from scratch (no cache),
     and that kernel's multiplications and additions."""
     ir = emit_scene(energy.scene)
-    native = compiler._module()
+    native = compiler.native()
     t0 = time.perf_counter()
     compiler.run_pipeline(ir, DIFFERENTIATION_PIPELINE + ",canonicalize,cse")
     symbolic = time.perf_counter() - t0

@@ -11,7 +11,8 @@ import pytest
 from conftest import REPO, running_example
 
 import yasps
-import yasps.gpu
+import yasps.compiler.gpu
+import yasps.runtime.native
 
 sys.path.insert(0, str(REPO / "examples"))
 import drop  # noqa: E402
@@ -49,7 +50,7 @@ def elf_function_symbols(data: bytes) -> set:
     return names
 
 
-def check_binaries(kernels: yasps.gpu.GpuKernels, chips) -> None:
+def check_binaries(kernels: yasps.compiler.gpu.GpuKernels, chips) -> None:
     names = {k.name for k in kernels.kernels}
     for chip in chips:
         assert names <= elf_function_symbols(kernels.binaries[(chip, "cubin")])
@@ -61,13 +62,13 @@ def check_binaries(kernels: yasps.gpu.GpuKernels, chips) -> None:
 
 def test_running_example_compiles_for_gpus():
     s = running_example()
-    kernels = yasps.gpu.compile_scene(s)
+    kernels = yasps.compiler.gpu.compile_scene(s)
     paths = {k.attribute for k in kernels.kernels}
-    assert paths == set(yasps.gpu.scene_kernel_paths(s))
+    assert paths == set(yasps.compiler.gpu.scene_kernel_paths(s))
     # Every energy, with derivatives for those of the targets; the union's
     # kernels decode their members like the CPU's.
     assert any(p.endswith("__hess_proj") for p in paths)
-    check_binaries(kernels, yasps.gpu.DEFAULT_CHIPS)
+    check_binaries(kernels, yasps.compiler.gpu.DEFAULT_CHIPS)
     for k in kernels.kernels:
         kinds = [kind for kind, _ in k.launch_params]
         assert kinds.count("buffer") == len(k.arguments), k.attribute
@@ -76,10 +77,10 @@ def test_running_example_compiles_for_gpus():
 
 def test_demo_scene_compiles_for_gpus_and_caches():
     s = drop.build(1)[0]
-    first = yasps.gpu.compile_scene(s)
-    check_binaries(first, yasps.gpu.DEFAULT_CHIPS)
+    first = yasps.compiler.gpu.compile_scene(s)
+    check_binaries(first, yasps.compiler.gpu.DEFAULT_CHIPS)
     assert not first.stats["from_disk"]
-    again = yasps.gpu.compile_scene(s)
+    again = yasps.compiler.gpu.compile_scene(s)
     assert again.stats["from_disk"]
     assert again.binaries == first.binaries
 
@@ -91,7 +92,7 @@ def test_projection_scratch_is_per_thread():
     p = s.addMesh("m").addPrimitive("p", numInstances=4)
     h = p.addAttribute("h", rows=6, cols=6)
     p.addAttribute("proj", computed_attribute=h.project())
-    kernels = yasps.gpu.compile_scene(s, ["@m::@p::@proj"], chips=["sm_90"],
+    kernels = yasps.compiler.gpu.compile_scene(s, ["@m::@p::@proj"], chips=["sm_90"],
                                       keep_ptx=False)
     k = kernels.kernel("@m::@p::@proj")
     assert [kind for kind, _ in k.launch_params].count("buffer") == 2
@@ -102,7 +103,7 @@ def test_the_gpu_solver_kernels_are_built_for_sm80_and_sm90():
     """The runtime's hand-written solver kernels (assembly, SpMV per block
     shape, block-Jacobi, PCG) are built into it as sm_80 and sm_90 cubins
     and PTX."""
-    native = yasps.compiler._module()
+    native = yasps.runtime.native.native()
     images = native.gpu_solver_images()
     names = set(native.gpu_solver_kernel_names())
     assert {"yasps_assemble", "yasps_spmv_3x3", "yasps_spmv_any",

@@ -21,7 +21,8 @@ import pytest
 from conftest import REPO, running_example
 
 import yasps
-import yasps.gpu_runtime
+import yasps.runtime.gpu
+import yasps.runtime.native
 
 STATUS = yasps.gpu_status()
 needs_gpu = pytest.mark.skipif(
@@ -71,7 +72,7 @@ def test_without_a_gpu_the_cpu_is_used_and_gpu_says_why(monkeypatch):
 def test_a_gpu_without_the_toolchain_falls_back_to_the_cpu(monkeypatch):
     """A usable GPU is not enough: without ptxas (or the runtime's solver
     kernels) "auto" stays on the CPU and "gpu" says what is missing."""
-    module = sys.modules["yasps.backend"]
+    module = sys.modules["yasps.runtime.backend"]
     monkeypatch.setattr(module, "gpu_status", lambda: module.GpuStatus(
         True, "", (("Some GPU", "sm_90", 1 << 30),)))
     monkeypatch.setattr(module.shutil, "which", lambda name, path=None: None)
@@ -126,8 +127,8 @@ def test_device_copies_are_uploaded_only_when_values_change():
         # without a copy; views cannot reach past their buffer.
         r = length.compute()
         print(r.__dlpack_device__(), type(r.__dlpack__()).__name__)
-        buffer = yasps.compiler._module().gpu_allocate(
-            yasps.gpu_runtime.session().device, 2)
+        buffer = yasps.runtime.native.native().gpu_allocate(
+            yasps.runtime.gpu.session().device, 2)
         try:
             buffer.dlpack_view([3], [1])
         except IndexError as err:

@@ -6,7 +6,14 @@ import pytest
 
 import yasps
 from yasps import energies as E
-from yasps.minimize import DofLayout, assemble
+from yasps.runtime import cpu_backend
+from yasps.solve import DofLayout, NoDerivativesError
+from yasps.solve import assemble as assemble_on
+
+
+def assemble(s, **kw):
+    """The system assembled on the CPU, whose dense() the checks read."""
+    return assemble_on(s, cpu_backend(), **kw)
 
 from conftest import box_mesh
 
@@ -267,8 +274,8 @@ def compressed_reference(s):
 def test_local_compression_before_projection():
     s = pendulum_pairs_scene()
     pairs = s.energies[0]
-    from yasps.evaluate import _compressed_sizes, _projectors
-    sizes = _compressed_sizes(s.energyDerivatives(pairs).dofs())
+    from yasps.solve.compression import _projectors, compressed_sizes
+    sizes = compressed_sizes(s.energyDerivatives(pairs).dofs())
     # Self pair: 2 angles; bob-point 5; bob-bob 4; point-point 6 (of 6).
     np.testing.assert_array_equal(sizes, [2, 5, 4, 6])
     _, H = system_arrays(assemble(s)[0])
@@ -357,3 +364,32 @@ def test_assembly_and_solve_on_a_cloth_patch():
     want = np.linalg.solve(H_ref, g_ref)
     np.testing.assert_allclose(dx.reshape(-1), want, rtol=1e-8,
                                atol=1e-8 * np.abs(want).max())
+
+
+def test_an_energy_without_targets_has_no_derivatives_and_is_left_out():
+    """The compiler makes no derivative kernels for an energy that reads no
+    minimisation target: its derivatives raise NoDerivativesError (a
+    SceneError), and the Newton system is that of the other energies."""
+    positions = rng.standard_normal((3, 3))
+
+    def build(with_constant_energy: bool):
+        s = yasps.scene("s")
+        p = s.addMesh("m").addPrimitive("p", numInstances=3)
+        x = p.addAttribute("x", rows=3)
+        x.updateValue(positions)
+        c = p.addConstant("c", rows=3)
+        c.updateValue(np.ones((3, 3)))
+        s.addEnergy(p.addAttribute("e", computed_attribute=(x - c).squaredNorm()))
+        if with_constant_energy:
+            s.addEnergy(p.addAttribute("k", computed_attribute=c.squaredNorm()))
+        s.addMinimizeTarget(x)
+        return s
+
+    s = build(True)
+    with pytest.raises(NoDerivativesError, match="depends on no minimisation"):
+        s.energyDerivatives(s.m.p["k"])
+    assert issubclass(NoDerivativesError, yasps.SceneError)
+    (dx,) = s.minimizeEnergy(tolerance=1e-12)
+    (reference,) = build(False).minimizeEnergy(tolerance=1e-12)
+    x = s.m.p["x"].value
+    assert np.allclose(dx, reference) and np.allclose(dx, x - 1.0)

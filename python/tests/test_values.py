@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 import yasps
-from yasps.values import from_column_major, to_column_major
+from yasps.frontend.values import from_column_major, to_column_major
 
 
 def test_layout_is_column_major_per_instance():

@@ -12,24 +12,52 @@ Build a scene with the API of the YASPS paper (section 4, appendix F)::
     x.updateValue(np.zeros((4, 3)))
     print(s.ir())
 
-See docs/python.md for the guide and the API reference.
+The package is layered, each layer importing only those before it:
+``frontend`` (this API) -> ``ir`` -> ``compiler`` -> ``runtime`` (the
+backends) -> ``solve`` -> ``sim``. See docs/python.md for the guide and
+docs/architecture.md for the layers.
 """
 
-from . import config
-from .attribute import (Attribute, concat, constant, hstack, identity, select,
-                        vstack, zeros)
-from .backend import BackendError, backend, gpu_status
-from .errors import (IRError, LineageError, SceneError, ShapeError,
-                     ValueUpdateError, YaspsError)
-from .minimize import SolverError
-from .scene import Connectivity, Entity, Mesh, Primitive, PrimitiveUnion, Scene, scene
+from . import compiler, config, ir, runtime, solve
+from .compiler.pipelines import DIFFERENTIATION_PIPELINE
+from .frontend import energies
+from .frontend.attribute import (Attribute, concat, constant, hstack,
+                                 identity, select, vstack, zeros)
+from .frontend.errors import (IRError, LineageError, SceneError, ShapeError,
+                              ValueUpdateError, YaspsError)
+from .frontend.scene import (Connectivity, Entity, Mesh, Primitive,
+                             PrimitiveUnion, Scene, scene)
+from .frontend.services import Services, install
+from .runtime import BackendError, backend, gpu_status
+from .solve import SolverError
+
+
+def _differentiate(s: Scene) -> None:
+    compiler.run_pipeline(ir.emit_scene(s, locations=True),
+                          DIFFERENTIATION_PIPELINE, s.name)
+
+
+# The frontend's methods that need IR, kernels or a solver run on the
+# backend that runtime.current() picks at each call.
+install(Services(
+    emit=lambda s, locations: ir.emit_scene(s, locations=locations),
+    verify=lambda s: compiler.verify(ir.emit_scene(s, locations=True),
+                                     name=s.name),
+    differentiate=_differentiate,
+    compute=lambda attr, threads: runtime.compute(attr, runtime.current(),
+                                                  threads),
+    energy_derivatives=lambda s, energy, threads: solve.energy_derivatives(
+        s, energy, runtime.current(), threads),
+    minimize_energy=lambda s, *args: solve.minimize_energy(
+        s, runtime.current(), *args),
+))
 
 __all__ = [
-    "Attribute", "BackendError", "backend", "Connectivity", "config", "Entity", "IRError", "LineageError", "Mesh",
-    "Primitive", "PrimitiveUnion", "Scene", "SceneError", "ShapeError",
-    "SolverError",
-    "ValueUpdateError", "YaspsError", "concat", "constant", "gpu_status", "hstack",
-    "identity", "scene", "select", "vstack", "zeros",
+    "Attribute", "BackendError", "backend", "Connectivity", "config",
+    "Entity", "IRError", "LineageError", "Mesh", "Primitive",
+    "PrimitiveUnion", "Scene", "SceneError", "ShapeError", "SolverError",
+    "ValueUpdateError", "YaspsError", "concat", "constant", "energies",
+    "gpu_status", "hstack", "identity", "scene", "select", "vstack", "zeros",
 ]
 
 __version__ = "0.1.0"

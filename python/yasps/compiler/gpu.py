@@ -8,8 +8,8 @@ toolkit's ``ptxas`` but no GPU or driver::
     kernels = yasps.gpu.compile_scene(scene)
     cubin = kernels.binaries[("sm_90", "cubin")]
 
-``yasps.gpu_runtime`` loads and launches them on a device (the GPU backend of
-``Attribute.compute()``, see ``yasps.backend``).
+``yasps.runtime.gpu`` loads and launches them on a device (the GPU backend,
+see ``yasps.runtime.backend``).
 """
 
 from __future__ import annotations
@@ -17,10 +17,12 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import Dict, List, Optional, Sequence, Tuple
 
-from . import compiler, config
-from .emit import emit_scene
-from .errors import SceneError
-from .evaluate import DIFFERENTIATION_PIPELINE
+from .. import config
+from ..ir import emit_scene
+from .errors import native, translated
+from .params import KernelArgument, Param, decode_params, kernel_arguments
+from .pipelines import DIFFERENTIATION_PIPELINE
+from .specs import scene_kernel_paths
 
 #: Compute capabilities compiled by default: Ampere (A100) and Hopper (H100).
 DEFAULT_CHIPS: Tuple[str, ...] = ("sm_80", "sm_90")
@@ -32,7 +34,7 @@ class GpuKernel:
     attribute: str          #: scene-relative path of the attribute it evaluates
     name: str               #: the entry point's symbol in the binaries
     threads_per_block: int  #: launch with ceil(count / this) blocks
-    arguments: List[Tuple[str, str]]  #: buffers (kind, path), as on the CPU
+    arguments: List[KernelArgument]  #: its buffers, as on the CPU
     #: cuLaunchKernel's parameters in order: ("index", i) is argument i of the
     #: loop kernel (0: first instance, 1: end), ("buffer", i) a memref
     #: descriptor of buffer argument i (pointer, pointer, 0, size, 1), and
@@ -51,6 +53,8 @@ class GpuKernels:
     kernels: List[GpuKernel]
     binaries: Dict[Tuple[str, str], bytes]
     stats: Dict[str, object] = field(default_factory=dict)
+    #: the IR and pipeline they were compiled from (for params())
+    source: Tuple[str, str, str] = ("", "", "")
 
     def kernel(self, attribute: str) -> GpuKernel:
         """The kernel evaluating ``attribute`` (a scene-relative path)."""
@@ -59,29 +63,13 @@ class GpuKernels:
                 return k
         raise KeyError(f"no GPU kernel for {attribute}")
 
-
-def scene_kernel_paths(scene) -> List[str]:
-    """The attributes a scene's simulation evaluates: every energy, and for
-    energies that depend on a minimisation target their gradient, Hessian,
-    projected Hessian and placement indices (``__dofs``)."""
-    if not scene.energies:
-        raise SceneError(f"scene '{scene.name}' has no energies (addEnergy)")
-    paths = []
-    bases = ["::".join("@" + n for n in e.owner.path + [e.name])
-             for e in scene.energies]
-    derived = [False] * len(bases)
-    if scene.minimizeTargets:
-        ir = emit_scene(scene, locations=True)
-        params = compiler._module().attribute_params(
-            ir, DIFFERENTIATION_PIPELINE, [b + "__grad" for b in bases],
-            scene.name)
-        derived = [bool(p) for p in params]
-    for base, has_derivatives in zip(bases, derived):
-        paths.append(base)
-        if has_derivatives:
-            paths += [base + "__grad", base + "__hess", base + "__hess_proj",
-                      base + "__dofs"]
-    return paths
+    def params(self, attribute: str) -> List[Param]:
+        """The local parameter groups of a derivative kernel (asked of the
+        compiler: the binaries do not carry them)."""
+        ir, pipeline, name = self.source
+        with translated():
+            return decode_params(native().attribute_params(
+                ir, pipeline, [attribute], name)[0])
 
 
 def compile_scene(scene, attributes: Optional[Sequence[str]] = None,
@@ -90,7 +78,7 @@ def compile_scene(scene, attributes: Optional[Sequence[str]] = None,
     """Compiles CUDA kernels for ``attributes`` (scene-relative paths such as
     ``"@m::@tets::@elastic__grad"``; default: ``scene_kernel_paths``).
     Binaries are cached on disk with the CPU objects (``config.cache_dir``).
-    Raises ``compiler.IRError`` if lowering or ptxas fails."""
+    Raises ``IRError`` if lowering or ptxas fails."""
     paths = list(attributes) if attributes is not None \
         else scene_kernel_paths(scene)
     pipeline = DIFFERENTIATION_PIPELINE if scene.minimizeTargets else ""
@@ -103,16 +91,14 @@ def compile_ir(ir: str, paths: Sequence[str], name: str, pipeline: str = "",
                keep_ptx: bool = True) -> GpuKernels:
     """``compile_scene`` for IR that is already emitted (``name`` labels
     diagnostics)."""
-    native = compiler._module()
-    try:
-        library = native.compile_gpu(ir, list(paths), list(chips), keep_ptx,
-                                     config.cache_dir or "", name, pipeline)
-    except native.IRError as err:
-        raise compiler.IRError(str(err)) from None
+    with translated():
+        library = native().compile_gpu(ir, list(paths), list(chips), keep_ptx,
+                                       config.cache_dir or "", name, pipeline)
     kernels = [GpuKernel(k["attribute"], k["name"], k["threads_per_block"],
-                         [tuple(a) for a in k["arguments"]],
+                         kernel_arguments(k["arguments"]),
                          [tuple(p) for p in k["launch_params"]],
                          k["rows"], k["cols"], k["projection"])
                for k in library.kernels]
     binaries = {(chip, fmt): data for chip, fmt, data in library.binaries}
-    return GpuKernels(kernels, binaries, dict(library.stats))
+    return GpuKernels(kernels, binaries, dict(library.stats),
+                      (ir, pipeline, name))

@@ -21,10 +21,10 @@ from typing import Any, Dict, List, Optional, Sequence, Union
 
 import numpy as np
 
-from . import compiler
 from . import values as _values
-from .attribute import Attribute
+from .attribute import PROJECTION_METHODS, Attribute
 from .errors import LineageError, SceneError, ShapeError
+from .services import services
 
 _NAME = re.compile(r"^[A-Za-z_][A-Za-z0-9_]*$")
 
@@ -217,11 +217,6 @@ class Scene(Entity):
         self._energies: List[tuple] = []  # (attribute, dynamic, projection)
         self._targets: List[Attribute] = []
         self._energy_counter = 0
-        # The runtime system of the static energies and what it was built
-        # from (yasps.minimize), reused while the structure is unchanged.
-        self._static_system = None
-        # The GPU mirror of _static_system's system: (system, GpuSystem).
-        self._gpu_system = None
 
     @property
     def meshes(self) -> Dict[str, "Mesh"]:
@@ -259,8 +254,6 @@ class Scene(Entity):
         positive semi-definite: ``clamp`` (negative eigenvalues to zero, the
         default), ``abs`` or ``none``. An anonymous expression is named
         ``energy<k>`` on its owner. Returns the registered attribute."""
-        from .attribute import PROJECTION_METHODS
-
         if projection not in PROJECTION_METHODS:
             raise SceneError(f"addEnergy: projection must be one of "
                              f"{', '.join(PROJECTION_METHODS)}, got "
@@ -321,12 +314,8 @@ class Scene(Entity):
         if self._energies:
             # Differentiate now (paper 4.7), so that an energy the compiler
             # cannot differentiate is reported here; kernels come later.
-            from .emit import emit_scene
-            from .evaluate import DIFFERENTIATION_PIPELINE
-
             try:
-                compiler.run_pipeline(emit_scene(self, locations=True),
-                                      DIFFERENTIATION_PIPELINE, self._name)
+                services().differentiate(self)
             except Exception:
                 self._targets = self._targets[:len(self._targets) - len(new)]
                 raise
@@ -344,10 +333,8 @@ class Scene(Entity):
         """Per-instance value, local gradient and local Hessian of a
         registered energy with respect to its local parameters (entries of
         the minimisation targets it reads or gathers), for tests and
-        debugging. Returns a :class:`yasps.evaluate.LocalDerivatives`."""
-        from .evaluate import energy_derivatives
-
-        return energy_derivatives(self, energy, threads)
+        debugging. Returns a :class:`yasps.solve.LocalDerivatives`."""
+        return services().energy_derivatives(self, energy, threads)
 
     def minimizeEnergy(self, tolerance: float = 1e-6, maxIterations: int = 1000,
                        threads: Optional[int] = None,
@@ -363,9 +350,8 @@ class Scene(Entity):
         per target, None or a boolean mask of its instances ``(N,)`` or
         entries ``(N, rows, cols)``. Raises :class:`yasps.SolverError` if
         PCG does not converge."""
-        from .minimize import minimize_energy
-
-        return minimize_energy(self, tolerance, maxIterations, threads, fixed)
+        return services().minimize_energy(self, tolerance, maxIterations,
+                                          threads, fixed)
 
     # ------------------------------------------------------------------ IR
 
@@ -376,17 +362,13 @@ class Scene(Entity):
         first (raising :class:`~yasps.errors.IRError`); ``locations`` adds
         the Python file and line that created each attribute.
         """
-        from .emit import emit_scene
-
         if verify:
             self.verify()
-        return emit_scene(self, locations=locations)
+        return services().emit(self, locations)
 
     def verify(self) -> None:
         """Has the C++ compiler parse and verify the scene's IR."""
-        from .emit import emit_scene
-
-        compiler.verify(emit_scene(self, locations=True), name=self._name)
+        services().verify(self)
 
 
 class Mesh(Entity):

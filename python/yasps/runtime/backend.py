@@ -11,11 +11,12 @@ chooses:
 - ``"gpu"``: the GPU, or ``BackendError`` saying why it cannot be used.
 
 ``yasps.backend()`` names the active one and ``yasps.gpu_status()`` says
-what the driver reported. On the GPU, ``Attribute.compute()`` launches the
-CUDA kernels of ``yasps.gpu`` on device copies of the stored values, which
-are uploaded again only when they change, and ``minimizeEnergy`` assembles
-the Newton system and solves it by PCG on the device; energy derivatives
-still run on the CPU (docs/gpu.md).
+what the driver reported; ``yasps.runtime.current()`` is the backend object
+itself. On the GPU, ``Attribute.compute()`` launches the CUDA kernels of
+``yasps.compiler.gpu`` on device copies of the stored values, which are
+uploaded again only when they change, and ``minimizeEnergy`` differentiates,
+assembles the Newton system and solves it by PCG on the device
+(docs/gpu.md).
 """
 
 from __future__ import annotations
@@ -25,8 +26,9 @@ import shutil
 from dataclasses import dataclass
 from typing import List, Tuple
 
-from . import compiler, config
-from .errors import YaspsError
+from .. import config
+from ..frontend.errors import YaspsError
+from .native import native
 
 BACKENDS = ("auto", "cpu", "gpu")
 
@@ -47,7 +49,7 @@ class GpuStatus:
 
 def gpu_status() -> GpuStatus:
     """Loads the CUDA driver (once per process) and reports on it."""
-    usable, reason, devices = compiler._module().cuda_status()
+    usable, reason, devices = native().cuda_status()
     return GpuStatus(usable, reason, tuple(tuple(d) for d in devices))
 
 
@@ -56,7 +58,7 @@ def gpu_toolchain_missing() -> str:
     can): kernels are serialised by the CUDA toolkit's ``ptxas`` (in
     ``$CUDA_ROOT/bin``, ``/usr/local/cuda/bin`` or on ``PATH``), and the
     GPU solve needs the runtime's solver kernels, built by ``nvcc``."""
-    if not compiler._module().gpu_solver_images():
+    if not native().gpu_solver_images():
         return ("this build of yasps has no GPU solver kernels (nvcc was not "
                 "found when it was built)")
     roots = [os.environ.get("CUDA_ROOT"), "/usr/local/cuda"]

@@ -20,6 +20,7 @@ import numpy as np
 
 from .errors import LineageError, ShapeError, ValueUpdateError
 from . import values as _values
+from .services import services
 
 if TYPE_CHECKING:  # pragma: no cover
     from .scene import Entity
@@ -31,7 +32,8 @@ NAMED_KINDS = ("data", "constant", "computed", "join", "union")
 #: PSD projection methods of :meth:`Attribute.project`.
 PROJECTION_METHODS = ("clamp", "abs", "none")
 
-_PACKAGE_DIR = os.path.dirname(os.path.abspath(__file__))
+#: The yasps package: frames in it are not the user's.
+_PACKAGE_DIR = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 
 Operand = Union["Attribute", numbers.Real, np.ndarray, Sequence]
 
@@ -178,9 +180,7 @@ class Attribute:
         compiled kernel; ``.value`` of the result is an ``(N, rows, cols)``
         array. Intermediate attributes are not stored. ``threads``
         overrides ``yasps.config.num_threads`` (0: every core)."""
-        from .evaluate import compute
-
-        return compute(self, threads)
+        return services().compute(self, threads)
 
     def _invalidate_values(self) -> None:
         self._values = None

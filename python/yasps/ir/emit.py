@@ -11,8 +11,10 @@ from typing import Dict, List, Optional, Tuple
 
 import numpy as np
 
-from .attribute import Attribute
-from .scene import Connectivity, Entity, Mesh, Primitive, PrimitiveUnion, Scene
+from ..frontend.attribute import Attribute
+from ..frontend.scene import (Connectivity, Entity, Mesh, Primitive,
+                              PrimitiveUnion, Scene)
+from .symbols import entity_path, symbol_path
 
 _INDENT = "  "
 
@@ -25,15 +27,6 @@ _TO_SCALAR = {"det", "trace", "norm", "squared_norm", "sum"}
 
 def mat_type(attr: Attribute) -> str:
     return f"!yasps.mat<{attr.rows}x{attr.cols}xf64>"
-
-
-def symbol_path(attr: Attribute) -> str:
-    """Scene-relative symbol path of a named attribute, e.g. @m::@v::@x."""
-    return "::".join("@" + name for name in attr.owner.path + [attr.name])
-
-
-def entity_path(entity: Entity) -> str:
-    return "::".join("@" + name for name in entity.path)
 
 
 def _float(value: float) -> str:

@@ -1,0 +1,76 @@
+"""CPU kernels: the C++ compiler JIT-compiles them (and caches their objects
+on disk); this module keeps the compiled libraries of this process."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Dict, List, Sequence
+
+from .. import config
+from .errors import native, translated
+from .params import KernelArgument, Param, decode_params, kernel_arguments
+
+
+@dataclass(frozen=True)
+class KernelInfo:
+    """What a compiled kernel computes and takes, whatever its target."""
+    attribute: str                 #: scene-relative path it evaluates
+    arguments: List[KernelArgument]  #: its buffers, in launch order
+    rows: int                      #: rows of each instance's value
+    cols: int                      #: its columns (column-major in memory)
+    projection: str                #: "full"/"reduced"/"separate", or ""
+
+
+@dataclass
+class CpuKernels:
+    """Compiled CPU kernels of some attributes and how this request for them
+    was served (``stats``: cache hits and compile times)."""
+    library: object
+    stats: dict
+    _info: Dict[str, KernelInfo] = field(default_factory=dict)
+
+    def kernel(self, path: str) -> KernelInfo:
+        """The kernel evaluating ``path``."""
+        if path not in self._info:
+            arguments = dict(self.library.kernels)[path]
+            rows, cols = self.library.shape(path)
+            self._info[path] = KernelInfo(path, kernel_arguments(arguments),
+                                          rows, cols,
+                                          self.library.projection(path))
+        return self._info[path]
+
+    def params(self, path: str) -> List[Param]:
+        """The local parameter groups of a derivative kernel."""
+        return decode_params(self.library.params(path))
+
+    def launch(self, path: str, count: int, buffers: list,
+               threads: int) -> None:
+        """Runs the kernel of ``path`` on instances [0, count)."""
+        self.library.launch(path, count, buffers, threads)
+
+
+#: Compiled libraries by (IR text, attributes, pipeline, settings): a scene
+#: evaluated again with the same structure skips parsing, passes and the
+#: kernel cache lookup. Instance counts are part of the IR text, so a dynamic
+#: primitive that changes size falls through to the compiler's own cache,
+#: which is keyed by the kernels alone.
+_libraries: Dict[tuple, object] = {}
+
+
+def compile_cpu(ir: str, paths: Sequence[str], name: str,
+                pipeline: str = "") -> CpuKernels:
+    """The CPU kernels of ``paths`` (scene-relative attribute paths) of the
+    scene in ``ir``, after ``pipeline``; compiled once per process."""
+    key = (ir, tuple(paths), pipeline, config.cache_dir, config.opt_level,
+           config.simd_lanes)
+    library = _libraries.get(key)
+    if library is not None:
+        return CpuKernels(library, dict(library.stats, from_memory=True,
+                                        from_disk=False, lower_seconds=0.0,
+                                        codegen_seconds=0.0))
+    with translated():
+        library = native().compile_cpu(ir, list(paths), config.cache_dir or "",
+                                       config.opt_level, name, pipeline,
+                                       config.simd_lanes)
+    _libraries[key] = library
+    return CpuKernels(library, dict(library.stats))

@@ -1,0 +1,72 @@
+"""Typed views of the metadata the compiler attaches to kernels: the
+arguments a kernel takes and the local parameters of a derivative kernel.
+This module is the one decoder of the bindings' records."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import List, Sequence, Tuple, Union
+
+#: Kinds of kernel arguments: a stored attribute's values, a connectivity's
+#: indices, a union's member offsets, the targets' first DoFs, the output.
+ARGUMENT_KINDS = ("attr", "conn", "offsets", "dof_offsets", "out")
+
+
+@dataclass(frozen=True)
+class KernelArgument:
+    """One buffer a kernel reads or writes, in launch order."""
+    kind: str  #: one of ARGUMENT_KINDS
+    path: str  #: scene-relative symbol it comes from ("" for dof_offsets/out)
+
+
+def kernel_arguments(record: Sequence[Tuple[str, str]]) -> List[KernelArgument]:
+    """The typed arguments of a kernel from the bindings' (kind, path) pairs."""
+    out = []
+    for kind, path in record:
+        if kind not in ARGUMENT_KINDS:
+            raise ValueError(f"unknown kernel argument kind {kind!r}")
+        out.append(KernelArgument(kind, path))
+    return out
+
+
+@dataclass(frozen=True)
+class ReadParam:
+    """The entries of a minimisation target read directly."""
+    target: str  #: the target's path
+
+
+@dataclass(frozen=True)
+class JoinParam:
+    """The parameters of the instance a JOIN gathers at ``slot``."""
+    connectivity: str  #: the connectivity's name on the energy's owner
+    slot: int          #: which of its indices
+    base: str          #: the path of the attribute whose parameters these are
+    width: int         #: parameters per slot (the base's, padded)
+
+
+@dataclass(frozen=True)
+class UnionParam:
+    """The parameters of the union member an instance belongs to."""
+    union: str      #: the union's path
+    attribute: str  #: the attribute's name on every member
+    width: int      #: parameters per slot (the widest member's)
+
+
+Param = Union[ReadParam, JoinParam, UnionParam]
+
+
+def decode_param(fields: Sequence[str]) -> Param:
+    """One parameter group from the bindings' record of ``yasps.params``."""
+    kind = fields[0]
+    if kind == "read":
+        return ReadParam(fields[1])
+    if kind == "join":
+        return JoinParam(fields[1], int(fields[2]), fields[3], int(fields[4]))
+    if kind == "union":
+        return UnionParam(fields[1], fields[2], int(fields[3]))
+    raise ValueError(f"unknown parameter group kind {kind!r}")
+
+
+def decode_params(records: Sequence[Sequence[str]]) -> List[Param]:
+    """Every parameter group of a derivative kernel, in order."""
+    return [decode_param(r) for r in records]

@@ -1,0 +1,90 @@
+"""The backend protocol: what the layers below ask of a processor.
+
+A backend compiles kernels for its processor, runs them on a scene's stored
+values, keeps their outputs in its own memory (NumPy arrays on the CPU,
+device buffers on the GPU), mirrors the Newton system there, assembles local
+derivatives into it and solves it. ``yasps.runtime.current()`` is the one
+place that picks a backend; code below this layer asks the backend it is
+given and never checks which one it is.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any, Optional, Protocol, Sequence, Tuple
+
+import numpy as np
+
+#: (instances, rows, cols) of a kernel output: each instance a column-major
+#: rows x cols block, instance after instance.
+Shape = Tuple[int, int, int]
+
+
+@dataclass
+class LocalInputs:
+    """One energy's contribution to the Newton system, in the memory of the
+    backend that computed it: local gradients (count x n) and either the
+    projected local Hessians (count x n x n) or their factors J (count x m x
+    n) and P (count x m x m), each instance column-major."""
+    backend: "Backend"
+    count: int
+    n: int
+    gradient: Any
+    hessian: Optional[Any] = None
+    inner_map: Optional[Any] = None
+    inner_hessian: Optional[Any] = None
+    inner_size: int = 0
+
+
+class Backend(Protocol):
+    """A processor that evaluates kernels and solves the Newton system."""
+
+    #: "cpu" or "gpu"
+    name: str
+
+    @property
+    def host(self) -> "Backend":
+        """The backend that runs host-side steps (the CPU)."""
+
+    @property
+    def derivatives(self) -> "Backend":
+        """The backend that computes local derivatives for assembly."""
+
+    def compile(self, ir: str, paths: Sequence[str], name: str,
+                pipeline: str = "") -> Any:
+        """Kernels of ``paths`` for this processor, compiled once; the
+        result has ``kernel(path)`` (a KernelInfo-like record), ``params``
+        and ``stats``."""
+
+    def run(self, kernels: Any, scene: Any, path: str, count: int,
+            threads: Optional[int] = None, reuse: object = None) -> Any:
+        """Runs the kernel of ``path`` on ``count`` instances; returns its
+        output in this backend's memory. With ``reuse``, the output's memory
+        is kept under that key and handed out again by the next call with
+        it (for outputs consumed before then)."""
+
+    def to_host(self, array: Any, shape: Shape) -> np.ndarray:
+        """An output as an (N, rows, cols) NumPy array."""
+
+    def dlpack_source(self, array: Any, shape: Shape) -> Any:
+        """An object exporting the output through DLPack, without a copy."""
+
+    def stats(self, kernels: Any) -> dict:
+        """How the kernels were obtained and the last run's transfers."""
+
+    def system(self, scene: Any, host_system: Any) -> Any:
+        """The Newton system to assemble into: ``host_system`` (a runtime
+        GlobalSystem, which owns the structure) or its mirror here."""
+
+    def add(self, system: Any, energy_index: int, inputs: LocalInputs,
+            threads: Optional[int]) -> None:
+        """Assembles one energy's local derivatives into ``system``."""
+
+    def synchronize(self, system: Any = None) -> None:
+        """Waits for this backend's queued work (on ``system`` if given)."""
+
+    def solve(self, system: Any, x: np.ndarray, tolerance: float,
+              max_iterations: int, threads: Optional[int],
+              fixed: Optional[np.ndarray]) -> Tuple[int, float, bool]:
+        """PCG on the assembled system into ``x``: (iterations, relative
+        residual, converged)."""

@@ -1,0 +1,93 @@
+"""The CPU backend: JIT-compiled kernels run by the runtime's thread pool on
+the stored NumPy values; the Newton system is the runtime's GlobalSystem."""
+
+from __future__ import annotations
+
+from typing import Optional, Sequence, Tuple
+
+import numpy as np
+
+from .. import config
+from ..compiler.cpu import CpuKernels, compile_cpu
+from ..frontend.values import from_column_major
+from .base import LocalInputs, Shape
+from .inputs import host_input
+
+
+def _threads(threads: Optional[int]) -> int:
+    return config.num_threads if threads is None else threads
+
+
+class CpuBackend:
+    """Kernels and the Newton system on the host."""
+
+    name = "cpu"
+
+    @property
+    def host(self) -> "CpuBackend":
+        return self
+
+    @property
+    def derivatives(self) -> "CpuBackend":
+        return self
+
+    def compile(self, ir: str, paths: Sequence[str], name: str,
+                pipeline: str = "") -> CpuKernels:
+        return compile_cpu(ir, paths, name, pipeline)
+
+    def run(self, kernels: CpuKernels, scene, path: str, count: int,
+            threads: Optional[int] = None, reuse: object = None) -> np.ndarray:
+        kernel = kernels.kernel(path)
+        out = np.empty(count * kernel.rows * kernel.cols, dtype=np.float64)
+        buffers = [out if a.kind == "out" else host_input(scene, a)
+                   for a in kernel.arguments]
+        kernels.launch(path, count, buffers, _threads(threads))
+        return out
+
+    def to_host(self, array: np.ndarray, shape: Shape) -> np.ndarray:
+        # A view of the output buffer: no copy.
+        return from_column_major(array, shape[1], shape[2], copy=False)
+
+    def from_host(self, array: np.ndarray) -> np.ndarray:
+        return array
+
+    def dlpack_source(self, array: np.ndarray, shape: Shape) -> np.ndarray:
+        return self.to_host(array, shape)
+
+    def stats(self, kernels: CpuKernels) -> dict:
+        return dict(kernels.stats)
+
+    def system(self, scene, host_system):
+        return host_system
+
+    def add(self, system, energy_index: int, inputs: LocalInputs,
+            threads: Optional[int]) -> None:
+        add_host_arrays(system, energy_index, inputs, (_threads(threads),))
+
+    def synchronize(self, system=None) -> None:
+        """CPU work is done when its call returns."""
+
+    def solve(self, system, x: np.ndarray, tolerance: float,
+              max_iterations: int, threads: Optional[int],
+              fixed: Optional[np.ndarray]) -> Tuple[int, float, bool]:
+        return system.solve(x, tolerance, max_iterations, _threads(threads),
+                            fixed)
+
+
+def add_host_arrays(system, energy_index: int, inputs: LocalInputs,
+                    options: tuple = ()) -> None:
+    """Assembles local derivatives held in host memory into ``system`` (a
+    GlobalSystem, or a GpuSystem, which uploads them); ``options`` are the
+    system's further arguments (the CPU's thread count)."""
+    count, n, m = inputs.count, inputs.n, inputs.inner_size
+    gradient = np.ascontiguousarray(inputs.gradient).reshape(count, n)
+    if inputs.inner_map is not None:
+        # Hessians kept as factors: J^T P J is formed while assembling.
+        maps = np.ascontiguousarray(
+            from_column_major(inputs.inner_map, m, n, copy=False))
+        inner = np.ascontiguousarray(inputs.inner_hessian).reshape(count, m, m)
+        system.add_factored(energy_index, gradient, maps, inner, m, *options)
+    else:
+        # Symmetric: row- and column-major storage agree.
+        hessian = np.ascontiguousarray(inputs.hessian).reshape(count, n, n)
+        system.add(energy_index, gradient, hessian, *options)

@@ -1,0 +1,87 @@
+"""Evaluating attributes with compiled kernels (``attr.compute()``).
+
+The scene is emitted as IR, the attribute's kernel is compiled (or found in
+the in-memory or on-disk cache) for the active backend, which runs it over
+all instances of the attribute's owner with the stored values,
+connectivities and union offsets as buffers. Intermediate attributes are
+never stored.
+"""
+
+from __future__ import annotations
+
+from typing import Any, Dict, List, Optional, Tuple
+
+import numpy as np
+
+from ..frontend.attribute import Attribute
+from ..frontend.errors import SceneError
+from ..frontend.scene import Entity
+from ..ir import emit_scene
+from .base import Backend, Shape
+
+#: Name under which an unnamed expression is evaluated.
+_TEMPORARY = "__yasps_compute"
+
+
+class ComputedValue:
+    """The result of :meth:`Attribute.compute`: ``value``, an ``(N, rows,
+    cols)`` NumPy array, and ``stats``.
+
+    It is also a DLPack array of the same values (``torch.from_dlpack(r)``,
+    ``cupy.from_dlpack(r)``, ``np.from_dlpack(r)``): on the GPU backend a
+    view of the result in device memory, without a copy; on the CPU the
+    NumPy array. On the GPU, ``value`` is copied back on first use only."""
+
+    def __init__(self, attribute: Attribute, output: Any, shape: Shape,
+                 stats: dict, backend: Backend):
+        self.attribute = attribute
+        #: The kernel's output in the backend's memory (column-major per
+        #: instance) and its (N, rows, cols).
+        self._output = output
+        self._shape = shape
+        self._backend = backend
+        self._value: Optional[np.ndarray] = None
+        #: How the kernel was obtained: cache hits and compile times.
+        self.stats = stats
+
+    @property
+    def value(self) -> np.ndarray:
+        """The values, shape ``(N, rows, cols)`` (copied from the GPU the
+        first time they are read)."""
+        if self._value is None:
+            self._value = self._backend.to_host(self._output, self._shape)
+        return self._value
+
+    def __dlpack__(self, **kwargs):
+        return self._backend.dlpack_source(self._output,
+                                           self._shape).__dlpack__(**kwargs)
+
+    def __dlpack_device__(self):
+        return self._backend.dlpack_source(self._output,
+                                           self._shape).__dlpack_device__()
+
+    def __repr__(self) -> str:
+        return (f"<yasps.ComputedValue of {self.attribute.describe()} on the "
+                f"{self._backend.name.upper()}: {self._shape}>")
+
+
+def compute(attr: Attribute, backend: Backend,
+            threads: Optional[int] = None) -> ComputedValue:
+    """Evaluates ``attr`` on every instance of its owner on ``backend``."""
+    owner = attr.owner
+    if owner is None:
+        raise SceneError(f"{attr.describe()} belongs to no entity; add it to "
+                         "one with addAttribute(name, computed_attribute=...)")
+    scene = owner.scene
+    extra: Dict[Entity, List[Tuple[str, Attribute]]] = {}
+    if not attr.isNamed:
+        extra = {owner: [(_TEMPORARY, attr)]}
+        path = "::".join("@" + n for n in owner.path + [_TEMPORARY])
+    else:
+        path = "::".join("@" + n for n in owner.path + [attr.name])
+    ir = emit_scene(scene, locations=True, extra=extra)
+    count = owner.numInstances
+    kernels = backend.compile(ir, [path], scene.name)
+    output = backend.run(kernels, scene, path, count, threads)
+    return ComputedValue(attr, output, (count, attr.rows, attr.cols),
+                         backend.stats(kernels), backend)

@@ -1,0 +1,215 @@
+"""The GPU backend: kernels compiled for the device's chip, launched on
+device copies of the stored values; the Newton system mirrored on the device
+(``GpuSystem``), assembled there and solved by PCG.
+
+One session per process holds the device's context, the loaded modules
+(kernels compiled for the device's compute capability by ``yasps.gpu``) and
+device copies of the scene's stored values. A copy is uploaded again only
+when its source changed: attributes and connectivities carry versions that
+``updateValue`` and ``updateConnectivity`` bump; union and DoF offsets are a
+few integers, compared by value. Results stay on the device until read.
+"""
+
+from __future__ import annotations
+
+import weakref
+from typing import Dict, List, Optional, Sequence, Tuple
+
+import numpy as np
+
+from .. import config
+from ..compiler.gpu import GpuKernels, compile_ir
+from ..frontend.values import from_column_major
+from .backend import gpu_status
+from .base import LocalInputs, Shape
+from .cpu import CpuBackend, add_host_arrays
+from .inputs import host_input, source_of
+from .native import native
+
+
+class GpuSession:
+    """The device, its modules and the device copies of stored values."""
+
+    def __init__(self, ordinal: int = 0):
+        self._native = native()
+        self.device = self._native.GpuDevice(ordinal)
+        self.chip = gpu_status().devices[ordinal][1]
+        self._libraries: Dict[Tuple[str, str, str], GpuKernels] = {}
+        self._modules: Dict[str, object] = {}
+        # (kind, path) -> (what the copy was made from, device buffer, and
+        # the source object, held so that its id is not reused by another
+        # object while the copy is cached)
+        self._copies: Dict[Tuple[str, str], Tuple[object, object, object]] = {}
+        #: (kind, path) of every upload, in order (for tests and tuning).
+        self.uploads: List[Tuple[str, str]] = []
+        # Reused outputs (see output()), by key.
+        self._outputs: Dict[object, object] = {}
+
+    def kernels(self, ir: str, paths, name: str,
+                pipeline: str = "") -> GpuKernels:
+        """The kernels of ``paths`` (one path or a list, compiled into one
+        module) for this device, compiled once."""
+        paths = (paths,) if isinstance(paths, str) else tuple(paths)
+        key = (ir, paths, pipeline)
+        if key not in self._libraries:
+            self._libraries[key] = compile_ir(ir, list(paths), name, pipeline,
+                                              chips=(self.chip,),
+                                              keep_ptx=False)
+        return self._libraries[key]
+
+    def module(self, kernels: GpuKernels):
+        """The loaded module of a library (the cubin or PTX that fits)."""
+        key = kernels.stats.get("key") or str(id(kernels))
+        if key not in self._modules:
+            chip, fmt = self._native.gpu_select_image(list(kernels.binaries),
+                                                      self.chip)
+            self._modules[key] = self._native.gpu_load_module(
+                self.device, kernels.binaries[(chip, fmt)])
+        return self._modules[key]
+
+    def copy_of(self, kind: str, path: str, source: object,
+                host: np.ndarray):
+        """A device copy of ``host``, the value of ``source`` (an attribute,
+        a connectivity, or None for small arrays compared by value)."""
+        token: object = (id(source), getattr(source, "_version", None)) \
+            if source is not None else host.tobytes()
+        cached = self._copies.get((kind, path))
+        if cached is not None and cached[0] == token:
+            return cached[1]
+        host = np.ascontiguousarray(host)
+        if cached is not None and cached[1].bytes >= host.nbytes:
+            # New values of the same size (a simulation step): the copy's
+            # memory is reused.
+            buffer = cached[1]
+            buffer.upload(host)
+        else:
+            buffer = self._native.gpu_upload(self.device, host)
+        self._copies[(kind, path)] = (token, buffer, source)
+        self.uploads.append((kind, path))
+        return buffer
+
+    def output(self, key: object, size: int):
+        """A device buffer of at least ``size`` doubles kept under ``key``
+        and handed out again by later calls: for outputs that are consumed
+        before the next call with the same key (the local derivatives that
+        assembly reads), so that a Newton loop does not allocate."""
+        buffer = self._outputs.get(key)
+        if buffer is None or buffer.bytes < 8 * size:
+            buffer = self._native.gpu_allocate(self.device,
+                                               max(size + size // 2, 1))
+            self._outputs[key] = buffer
+        return buffer
+
+    def allocate(self, size: int):
+        """A fresh device buffer of ``size`` doubles (a result handed to the
+        user, which nothing else may overwrite)."""
+        return self._native.gpu_allocate(self.device, size)
+
+    def launch(self, kernels: GpuKernels, path: str, count: int,
+               buffers: List[object]) -> None:
+        """Runs the kernel of ``path`` on ``count`` instances."""
+        kernel = kernels.kernel(path)
+        self._native.gpu_launch(self.module(kernels), kernel.name,
+                                kernel.launch_params, buffers, 0, count,
+                                kernel.threads_per_block)
+
+
+_session: Optional[GpuSession] = None
+
+
+def session() -> GpuSession:
+    """The process's GPU session, opened on first use."""
+    global _session
+    if _session is None:
+        _session = GpuSession()
+    return _session
+
+
+class GpuBackend:
+    """Kernels and the Newton system on the GPU session's device."""
+
+    name = "gpu"
+
+    def __init__(self, host: CpuBackend):
+        self._host = host
+        # The GpuSystem mirroring each scene's host system, made once per
+        # static structure: scene -> (host system, GpuSystem).
+        self._systems: "weakref.WeakKeyDictionary" = weakref.WeakKeyDictionary()
+        #: (kind, path) of the uploads of the last run()
+        self.last_uploads: List[Tuple[str, str]] = []
+
+    @property
+    def host(self) -> CpuBackend:
+        return self._host
+
+    @property
+    def derivatives(self):
+        """The device, or the host when ``config.gpu_derivatives`` is off
+        (derivatives computed there and uploaded for assembly)."""
+        return self if config.gpu_derivatives else self._host
+
+    def compile(self, ir: str, paths: Sequence[str], name: str,
+                pipeline: str = "") -> GpuKernels:
+        return session().kernels(ir, paths, name, pipeline)
+
+    def run(self, kernels: GpuKernels, scene, path: str, count: int,
+            threads: Optional[int] = None, reuse: object = None):
+        gpu = session()
+        kernel = kernels.kernel(path)
+        size = count * kernel.rows * kernel.cols
+        out = gpu.output(reuse, size) if reuse is not None else \
+            gpu.allocate(size)
+        before = len(gpu.uploads)
+        buffers = [out if a.kind == "out" else
+                   gpu.copy_of(a.kind, a.path, source_of(scene, a),
+                               host_input(scene, a))
+                   for a in kernel.arguments]
+        gpu.launch(kernels, path, count, buffers)
+        self.last_uploads = gpu.uploads[before:]
+        return out
+
+    def to_host(self, array, shape: Shape) -> np.ndarray:
+        count, rows, cols = shape
+        host = np.empty(count * rows * cols, dtype=np.float64)
+        array.download(host)
+        return from_column_major(host, rows, cols, copy=False)
+
+    def dlpack_source(self, array, shape: Shape):
+        count, rows, cols = shape
+        # Entry (i, r, c) lies at i * rows * cols + c * rows + r.
+        return array.dlpack_view([count, rows, cols], [rows * cols, 1, rows])
+
+    def stats(self, kernels: GpuKernels) -> dict:
+        return dict(kernels.stats, backend="gpu", device=session().chip,
+                    uploaded=list(self.last_uploads))
+
+    def system(self, scene, host_system):
+        cached = self._systems.get(scene)
+        if cached is not None and cached[0] is host_system:
+            # Same static structure: only the dynamic part is uploaded again.
+            cached[1].update_dynamic()
+            return cached[1]
+        mirror = native().GpuSystem(session().device, host_system)
+        self._systems[scene] = (host_system, mirror)
+        return mirror
+
+    def add(self, system, energy_index: int, inputs: LocalInputs,
+            threads: Optional[int]) -> None:
+        if inputs.backend is not self:
+            # Computed on the host (compressed, or gpu_derivatives off).
+            add_host_arrays(system, energy_index, inputs)
+        elif inputs.inner_map is not None:
+            system.add_factored_device(energy_index, inputs.gradient,
+                                       inputs.inner_map, inputs.inner_hessian,
+                                       inputs.inner_size, column_major=True)
+        else:
+            system.add_device(energy_index, inputs.gradient, inputs.hessian)
+
+    def synchronize(self, system=None) -> None:
+        (system if system is not None else session().device).synchronize()
+
+    def solve(self, system, x: np.ndarray, tolerance: float,
+              max_iterations: int, threads: Optional[int],
+              fixed: Optional[np.ndarray]) -> Tuple[int, float, bool]:
+        return system.solve(x, tolerance, max_iterations, fixed)
+

@@ -1,0 +1,145 @@
+"""The global Newton system: DoF layout and assembly.
+
+The DoFs are the entries of the minimisation targets, target after target
+(the paper's appendix A.1), each target instance one block of r*c DoFs. Every
+energy's local parameters are mapped to DoFs (-1 for UNION padding) by the
+generated ``@E__dofs`` kernels (appendix A.3, ``yasps-generate-indices``),
+from the same parameter groups that differentiation produced; the C++ runtime
+builds the block-sparse structure from them (appendix B) and the backend
+assembles the local gradients and projected Hessians into it (on the GPU,
+into a device mirror of the system, from derivatives computed there).
+"""
+
+from __future__ import annotations
+
+import time
+import weakref
+from typing import Dict, List, Optional
+
+import numpy as np
+
+from ..frontend.attribute import Attribute
+from ..frontend.errors import SceneError
+from ..frontend.scene import Mesh, Primitive, PrimitiveUnion, Scene
+from ..frontend.values import from_column_major
+from ..ir import emit_scene
+from ..runtime import Backend
+from ..runtime.native import native
+from .derivatives import NoDerivativesError, assembly_inputs
+
+
+class DofLayout:
+    """Where each target's entries sit in the global vector."""
+
+    def __init__(self, targets: List[Attribute]):
+        self.targets = targets
+        self.offset: Dict[int, int] = {}
+        blocks = [0]
+        for t in targets:
+            self.offset[id(t)] = blocks[-1]
+            rc = t.rows * t.cols
+            blocks += list(blocks[-1] + rc * np.arange(1, t.owner.numInstances + 1))
+        self.block_offsets = np.asarray(blocks, dtype=np.int64)
+        self.size = int(blocks[-1])
+
+    def split(self, x: np.ndarray) -> List[np.ndarray]:
+        """Per target, its part of ``x`` as an ``(N, rows, cols)`` array."""
+        out = []
+        for t in self.targets:
+            start = self.offset[id(t)]
+            n = t.owner.numInstances * t.rows * t.cols
+            out.append(from_column_major(x[start:start + n].copy(), t.rows, t.cols))
+        return out
+
+
+def _static_structure_key(scene, layout: DofLayout, static_energies) -> tuple:
+    """What the DoF maps of the static energies depend on: the scene's
+    structure without the instance counts of dynamic primitives, the DoF
+    layout, the indices of every connectivity and the member counts of every
+    union (paper 10.6: only dynamic instances change between steps)."""
+    connectivities, unions = [], []
+    pending = list(scene._symbols.values())
+    while pending:
+        entity = pending.pop()
+        if isinstance(entity, PrimitiveUnion):
+            unions.append(tuple(m.numInstances for m in entity.members))
+        if isinstance(entity, Primitive) and not entity.isDynamic:
+            connectivities += [(id(c), c._version)
+                               for c in entity._connectivities.values()]
+        if isinstance(entity, (Mesh, Primitive, PrimitiveUnion)):
+            pending += list(entity._symbols.values())
+    return (emit_scene(scene, dynamic_counts=False),
+            layout.block_offsets.tobytes(), tuple(sorted(connectivities)),
+            tuple(unions), tuple(id(e) for e in static_energies))
+
+
+#: The runtime system of each scene's static energies and the key of what
+#: it was built from, reused while the structure is unchanged.
+_static_systems: "weakref.WeakKeyDictionary[Scene, tuple]" = \
+    weakref.WeakKeyDictionary()
+
+
+def assemble(scene: Scene, backend: Backend, threads: Optional[int] = None,
+             timings: Optional[Dict[str, float]] = None,
+             report: Optional[Dict[str, object]] = None):
+    """The system assembled on ``backend`` and its DoF layout: the runtime's
+    GlobalSystem on the CPU, its device mirror (a ``GpuSystem``) on the GPU.
+    ``timings``, if given, receives the seconds spent on derivatives,
+    indices and assembly; ``report`` whether the static structure was
+    rebuilt and how many energies were differentiated off the host.
+
+    The system keeps static energies (instances fixed from step to step) and
+    dynamic ones (``dynamic_instances``, e.g. collision pairs) apart: the
+    static part's DoF maps and block structure are reused for as long as
+    the scene's structure and connectivities are unchanged, and only the
+    dynamic part is re-indexed on every call."""
+    clock = time.perf_counter
+    spent = {"derivatives": 0.0, "indices": 0.0, "assembly": 0.0}
+    targets = scene.minimizeTargets
+    if not targets:
+        raise SceneError(f"scene '{scene.name}' has no minimisation targets "
+                         "(addMinimizeTarget)")
+    layout = DofLayout(targets)
+    static, dynamic = [], []
+    for energy, is_dynamic, _ in scene._energies:
+        start = clock()
+        try:
+            contribution = assembly_inputs(scene, energy, backend, threads)
+        except NoDerivativesError:
+            continue
+        spent["derivatives"] += clock() - start
+        (dynamic if is_dynamic else static).append((energy, contribution))
+    # Launches may return at once: time the derivatives, not their launch.
+    start = clock()
+    backend.synchronize()
+    spent["derivatives"] += clock() - start
+    off_host = sum(inputs.backend is not backend.host
+                   for _, (inputs, _) in static + dynamic)
+
+    start = clock()
+    key = _static_structure_key(scene, layout, [e for e, _ in static])
+    cached = _static_systems.get(scene)
+    rebuilt = cached is None or cached[0] != key
+    if rebuilt:
+        host_system = native().GlobalSystem(
+            layout.block_offsets, [dofs() for _, (_, dofs) in static])
+        _static_systems[scene] = (key, host_system)
+    else:
+        host_system = cached[1]
+    host_system.set_dynamic([dofs() for _, (_, dofs) in dynamic])
+    spent["indices"] += clock() - start
+
+    start = clock()
+    system = backend.system(scene, host_system)
+    system.set_zero()
+    for k, (_, (inputs, _)) in enumerate(static + dynamic):
+        backend.add(system, k, inputs, threads)
+    # The local derivatives are reused by the next call: let assembly finish.
+    backend.synchronize(system)
+    spent["assembly"] += clock() - start
+    if timings is not None:
+        timings.update(spent)
+    if report is not None:
+        report["staticStructureRebuilt"] = rebuilt
+        report["energiesDifferentiatedOnGpu"] = off_host
+    return system, layout

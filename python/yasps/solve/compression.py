@@ -1,0 +1,63 @@
+"""Local Hessians compressed before their projection (paper 7.2): the rows
+and columns of parameters that share a DoF are merged and UNION padding is
+dropped, so each instance is projected as the k x k matrix it adds to the
+global system, by a kernel compiled for that size when it is first met.
+Runs on the host."""
+
+from __future__ import annotations
+
+from typing import Dict, Tuple
+
+import numpy as np
+
+from ..frontend.scene import Scene
+from ..ir import emit_scene
+from ..runtime import cpu_backend
+from ..runtime.native import native
+
+_projectors: Dict[Tuple[int, str], tuple] = {}
+
+
+def compressed_sizes(dofs: np.ndarray) -> np.ndarray:
+    """Distinct DoFs >= 0 per row of a DoF map (the runtime's count)."""
+    return native().compressed_sizes(np.ascontiguousarray(dofs,
+                                                          dtype=np.int64))
+
+
+def _projector(k: int, method: str):
+    """A kernel projecting k x k symmetric matrices by ``method``, compiled
+    the first time this size is met (paper 7.2) and cached."""
+    key = (k, method)
+    if key not in _projectors:
+        s = Scene(f"yasps_project_{k}_{method}")
+        p = s.addMesh("m").addPrimitive("p", numInstances=1)
+        h = p.addAttribute("h", rows=k, cols=k)
+        p.addAttribute("proj", computed_attribute=h.project(method))
+        path = "@m::@p::@proj"
+        _projectors[key] = (cpu_backend().compile(emit_scene(s), [path], s.name), path)
+    return _projectors[key]
+
+
+def project_compressed(dofs: np.ndarray, hess: np.ndarray, method: str,
+                       threads: int) -> np.ndarray:
+    """Projected local Hessians, each projected as the k x k matrix it adds
+    to the global system (repeated DoFs merged, padding dropped) and written
+    back at the first parameter of each DoF."""
+    runtime = native()
+    count, n = dofs.shape
+    out = np.zeros((count, n, n))
+    hess = np.ascontiguousarray(hess)
+    for k, instances, matrices in runtime.compress_local_hessians(dofs, hess):
+        if k == 0:
+            continue
+        kernels, path = _projector(int(k), method)
+        projected = np.empty(matrices.size)
+        # Symmetric matrices: row- and column-major storage agree.
+        given = {"out": projected,
+                 "attr": np.ascontiguousarray(matrices).reshape(-1)}
+        kernels.launch(path, len(instances),
+                       [given[a.kind] for a in kernels.kernel(path).arguments],
+                       threads)
+        runtime.expand_local_hessians(dofs, int(k), instances,
+                                      projected.reshape(matrices.shape), out)
+    return out

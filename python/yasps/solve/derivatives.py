@@ -1,0 +1,187 @@
+"""Local derivatives of an energy, per instance, from its generated
+kernels (gradient, Hessian, projected Hessian or its factors, placement
+indices): as host arrays for users (:func:`energy_derivatives`), and in the
+backend's memory for assembly (:func:`assembly_inputs`)."""
+
+from __future__ import annotations
+
+from typing import Callable, List, Optional, Tuple
+
+import numpy as np
+
+from .. import config
+from ..compiler import MissingAttributeError
+from ..compiler.specs import DerivativeKernels, derivative_kernels
+from ..frontend.attribute import Attribute
+from ..frontend.errors import SceneError
+from ..frontend.scene import Scene
+from ..runtime import Backend, LocalInputs, compute
+from .compression import compressed_sizes, project_compressed
+from .params import ParamResolver, ParamSlot
+
+
+class NoDerivativesError(SceneError):
+    """An energy that reads no minimisation target has no derivatives
+    (assembly leaves it out)."""
+
+
+class LocalDerivatives:
+    """Per-instance value, gradient and Hessian of one energy with respect to
+    its local parameters (see :meth:`Scene.energyDerivatives`)."""
+
+    def __init__(self, energy, value, gradient, hessian, projected, params,
+                 inner_map=None, inner_projected=None, dofs=None):
+        self.energy = energy
+        self._dofs = dofs
+        self._projected = projected
+        #: Energy of every instance, shape (N,); None if not computed.
+        self.value = value
+        #: Gradient of every instance, shape (N, n).
+        self.gradient = gradient
+        #: Hessian of every instance, shape (N, n, n); None if not computed.
+        self.hessian = hessian
+        #: The parameter groups, in order.
+        self.params = params
+        #: With ``config.separate_reduced_hessians`` and a reduced-space
+        #: projection: the inner maps J, shape (N, m, n), and the projected
+        #: inner Hessians P, shape (N, m, m); otherwise None.
+        self.innerMap = inner_map
+        self.projectedInnerHessian = inner_projected
+
+    @property
+    def projectedHessian(self) -> np.ndarray:
+        """PSD-projected Hessians by the energy's projection method, shape
+        (N, n, n) (formed as J^T P J from the factors if kept separate)."""
+        if self._projected is None and self.innerMap is not None:
+            J, P = self.innerMap, self.projectedInnerHessian
+            return np.einsum("nki,nkl,nlj->nij", J, P, J)
+        return self._projected
+
+    def dofs(self) -> np.ndarray:
+        """The global DoF of each local parameter of every instance, shape
+        (N, n), -1 for UNION padding: the placement indices of paper A.3,
+        computed by the generated ``@E__dofs`` kernel (counted from 1 there,
+        0 for padding)."""
+        return self._dofs()
+
+    def locations(self, i: int):
+        """(target attribute, target instance, entry) of each local parameter
+        of energy instance ``i`` (entries column-major), None for the zero
+        padding of UNION slots."""
+        out = []
+        for slot in self.params:
+            out += slot.locations(i)
+        return out
+
+
+class _Outputs:
+    """An energy's derivative kernels compiled for one backend, run on
+    demand; ``reuse`` keeps each output's memory for the next call (the
+    assembly inputs of a Newton loop)."""
+
+    def __init__(self, scene: Scene, energy: Attribute, backend: Backend,
+                 threads: Optional[int], assembly_only: bool, reuse: bool):
+        self.spec: DerivativeKernels = derivative_kernels(scene, energy,
+                                                          assembly_only)
+        self.scene, self.energy, self.backend = scene, energy, backend
+        self.threads, self.reuse = threads, reuse
+        self.count = energy.owner.numInstances
+        try:
+            self.kernels = backend.compile(self.spec.ir, self.spec.paths,
+                                           scene.name, self.spec.pipeline)
+        except MissingAttributeError:
+            raise NoDerivativesError(f"{energy.describe()} depends on no "
+                                     "minimisation target") from None
+        self._dofs: Optional[np.ndarray] = None
+
+    def shape(self, role: str) -> Tuple[int, int, int]:
+        kernel = self.kernels.kernel(self.spec.path(role))
+        return self.count, kernel.rows, kernel.cols
+
+    def run(self, role: str):
+        path = self.spec.path(role)
+        return self.backend.run(self.kernels, self.scene, path, self.count,
+                                self.threads,
+                                ("derivatives", path) if self.reuse else None)
+
+    def host(self, role: str) -> np.ndarray:
+        return np.array(self.backend.to_host(self.run(role), self.shape(role)))
+
+    def dofs(self) -> np.ndarray:
+        """The (count, n) DoF map, -1 for padding (computed once)."""
+        if self._dofs is None:
+            # 1-based in the kernel, 0 for padding; exact integers in f64.
+            host = self.backend.to_host(self.run("dofs"), self.shape("dofs"))
+            self._dofs = host[:, :, 0].astype(np.int64) - 1
+        return self._dofs
+
+    def needs_compression(self) -> bool:
+        """Whether assembly must merge repeated DoFs of some instance
+        before a full projection (paper 7.2)."""
+        if not self.spec.compress or self.kernels.kernel(
+                self.spec.path("hess_proj")).projection != "full":
+            return False
+        dofs = self.dofs()
+        return bool((compressed_sizes(dofs) < dofs.shape[1]).any())
+
+    def inputs(self) -> LocalInputs:
+        """Gradients and projected Hessians (or their factors) as the fused
+        kernels compute them."""
+        n = self.shape("grad")[1]
+        gradient = self.run("grad")
+        if self.spec.separate:
+            m = self.shape("hess_inner_proj")[1]
+            return LocalInputs(self.backend, self.count, n, gradient,
+                               inner_map=self.run("ij"),
+                               inner_hessian=self.run("hess_inner_proj"),
+                               inner_size=m)
+        return LocalInputs(self.backend, self.count, n, gradient,
+                           self.run("hess_proj"))
+
+    def compressed_inputs(self) -> LocalInputs:
+        """Gradients and Hessians projected after compression, on the host."""
+        method = next(m for e, _, m in self.scene._energies
+                      if e is self.energy)
+        threads = config.num_threads if self.threads is None else self.threads
+        projected = project_compressed(self.dofs(), self.host("hess"), method,
+                                       threads)
+        return LocalInputs(self.backend, self.count, self.shape("grad")[1],
+                           self.run("grad"), projected)
+
+
+def assembly_inputs(scene: Scene, energy: Attribute, backend: Backend,
+                    threads: Optional[int] = None
+                    ) -> Tuple[LocalInputs, Callable[[], np.ndarray]]:
+    """What assembly needs of a registered energy, computed by the backend
+    that differentiates for ``backend``: the local gradients and projected
+    Hessians (or their factors) and the DoF map (computed when first asked
+    for). Raises NoDerivativesError for an energy without derivatives."""
+    where = backend.derivatives
+    outputs = _Outputs(scene, energy, where, threads, True, True)
+    if not outputs.needs_compression():
+        return outputs.inputs(), outputs.dofs
+    if where.host is not where:
+        # Compression runs on the host: the energy is differentiated there.
+        outputs = _Outputs(scene, energy, where.host, threads, True, True)
+        if not outputs.needs_compression():
+            return outputs.inputs(), outputs.dofs
+    return outputs.compressed_inputs(), outputs.dofs
+
+
+def energy_derivatives(scene: Scene, energy: Attribute, backend: Backend,
+                       threads: Optional[int] = None) -> LocalDerivatives:
+    """Values, local gradients, Hessians and projected Hessians (or their
+    factors) of a registered energy, per instance, as host arrays."""
+    outputs = _Outputs(scene, energy, backend, threads, False, False)
+    spec = outputs.spec
+    resolver = ParamResolver(scene, spec.ir)
+    params: List[ParamSlot] = [
+        ParamSlot(p, energy.owner, resolver)
+        for p in outputs.kernels.params(spec.path("grad"))]
+    results = {path[len(spec.base) + 2:]: outputs.host(path[len(spec.base) + 2:])
+               for path in spec.evaluated}
+    value = compute(energy, backend, threads).value[:, 0, 0]
+    return LocalDerivatives(energy, value, results["grad"][:, :, 0],
+                            results.get("hess"), results.get("hess_proj"),
+                            params, results.get("ij"),
+                            results.get("hess_inner_proj"), outputs.dofs)
