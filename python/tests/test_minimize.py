@@ -393,3 +393,26 @@ def test_an_energy_without_targets_has_no_derivatives_and_is_left_out():
     (reference,) = build(False).minimizeEnergy(tolerance=1e-12)
     x = s.m.p["x"].value
     assert np.allclose(dx, reference) and np.allclose(dx, x - 1.0)
+
+
+@pytest.mark.parametrize("factored", [False, True])
+def test_new_pair_counts_run_no_compiler(monkeypatch, factored):
+    """Dynamic instance counts are not part of what is compiled: once warm,
+    minimizeEnergy and compute() with any number of collision pairs ask the
+    C++ compiler for nothing (no parse, no pass, no LLVM), with dense or
+    factored projected Hessians."""
+    monkeypatch.setattr(yasps.config, "separate_reduced_hessians", factored)
+    s, pp, p2v, *_ = mixed_scene([[0, 3], [1, 4]])
+    barrier = pp["b"]
+    s.minimizeEnergy()
+    barrier.compute()
+    before = yasps.compiler.invocations()
+    counts = np.random.default_rng(3)
+    for _ in range(25):
+        n = int(counts.integers(0, 200))
+        pp.updateNumInstances(n)
+        p2v.updateConnectivity(np.stack([counts.integers(0, 3, n),
+                                         counts.integers(3, 5, n)], axis=1))
+        s.minimizeEnergy()
+        assert barrier.compute().value.shape == (n, 1, 1)
+    assert yasps.compiler.invocations() == before

@@ -11,7 +11,7 @@ on no minimisation target has no derivatives) as
 
 from __future__ import annotations
 
-from .errors import MissingAttributeError, native, translated
+from .errors import MissingAttributeError, invocations, native, translated
 from ..frontend.errors import IRError
 
 
@@ -21,7 +21,7 @@ def verify(ir: str, name: str = "<yasps>") -> None:
     Raises:
         IRError: with the compiler's diagnostics if the IR is invalid.
     """
-    with translated():
+    with translated("verify"):
         native().verify(ir, name)
 
 
@@ -36,9 +36,10 @@ def run_pipeline(ir: str, pipeline: str, name: str = "<yasps>") -> str:
         IRError: if the IR is invalid or a pass fails.
         ValueError: if the pipeline does not parse.
     """
-    with translated():
+    with translated("run_pipeline"):
         return native().run_pipeline(ir, pipeline, name)
 
 
-__all__ = ["IRError", "MissingAttributeError", "native", "run_pipeline",
+__all__ = ["IRError", "MissingAttributeError", "invocations", "native",
+           "run_pipeline",
            "verify"]

@@ -51,9 +51,9 @@ class CpuKernels:
 
 #: Compiled libraries by (IR text, attributes, pipeline, settings): a scene
 #: evaluated again with the same structure skips parsing, passes and the
-#: kernel cache lookup. Instance counts are part of the IR text, so a dynamic
-#: primitive that changes size falls through to the compiler's own cache,
-#: which is keyed by the kernels alone.
+#: kernel cache lookup. The IR is ir.kernel_ir's, without the counts of
+#: dynamic primitives, so new numbers of collision pairs find their library
+#: here.
 _libraries: Dict[tuple, object] = {}
 
 
@@ -68,7 +68,7 @@ def compile_cpu(ir: str, paths: Sequence[str], name: str,
         return CpuKernels(library, dict(library.stats, from_memory=True,
                                         from_disk=False, lower_seconds=0.0,
                                         codegen_seconds=0.0))
-    with translated():
+    with translated("compile_cpu"):
         library = native().compile_cpu(ir, list(paths), config.cache_dir or "",
                                        config.opt_level, name, pipeline,
                                        config.simd_lanes)

@@ -2,9 +2,10 @@
 
 from __future__ import annotations
 
+from collections import Counter
 from contextlib import contextmanager
 from types import ModuleType
-from typing import Iterator
+from typing import Dict, Iterator
 
 from .._native import compiler_module
 from ..frontend.errors import IRError
@@ -13,6 +14,17 @@ from ..frontend.errors import IRError
 def native() -> ModuleType:
     """The compiler's extension module (links MLIR)."""
     return compiler_module()
+
+
+_invocations: Counter = Counter()
+
+
+def invocations() -> Dict[str, int]:
+    """How often this process asked the C++ compiler to parse IR and run
+    passes on it, by request (compile_cpu, compile_gpu, attribute_params,
+    run_pipeline, verify): each one is a parse and a pass pipeline, even
+    when the disk cache then has the kernels."""
+    return dict(_invocations)
 
 
 class MissingAttributeError(IRError):
@@ -25,9 +37,11 @@ class MissingAttributeError(IRError):
 
 
 @contextmanager
-def translated() -> Iterator[None]:
-    """Re-raises the compiler's exceptions as yasps' own."""
+def translated(request: str) -> Iterator[None]:
+    """Counts one ``request`` to the compiler and re-raises its exceptions
+    as yasps' own."""
     module = native()
+    _invocations[request] += 1
     try:
         yield
     except getattr(module, "MissingAttributeError", ()) as err:

@@ -18,7 +18,7 @@ from dataclasses import dataclass, field
 from typing import Dict, List, Optional, Sequence, Tuple
 
 from .. import config
-from ..ir import emit_scene
+from ..ir import kernel_ir
 from .errors import native, translated
 from .params import KernelArgument, Param, decode_params, kernel_arguments
 from .pipelines import DIFFERENTIATION_PIPELINE
@@ -67,7 +67,7 @@ class GpuKernels:
         """The local parameter groups of a derivative kernel (asked of the
         compiler: the binaries do not carry them)."""
         ir, pipeline, name = self.source
-        with translated():
+        with translated("attribute_params"):
             return decode_params(native().attribute_params(
                 ir, pipeline, [attribute], name)[0])
 
@@ -82,7 +82,7 @@ def compile_scene(scene, attributes: Optional[Sequence[str]] = None,
     paths = list(attributes) if attributes is not None \
         else scene_kernel_paths(scene)
     pipeline = DIFFERENTIATION_PIPELINE if scene.minimizeTargets else ""
-    return compile_ir(emit_scene(scene, locations=True), paths, scene.name,
+    return compile_ir(kernel_ir(scene), paths, scene.name,
                       pipeline, chips, keep_ptx)
 
 
@@ -91,7 +91,7 @@ def compile_ir(ir: str, paths: Sequence[str], name: str, pipeline: str = "",
                keep_ptx: bool = True) -> GpuKernels:
     """``compile_scene`` for IR that is already emitted (``name`` labels
     diagnostics)."""
-    with translated():
+    with translated("compile_gpu"):
         library = native().compile_gpu(ir, list(paths), list(chips), keep_ptx,
                                        config.cache_dir or "", name, pipeline)
     kernels = [GpuKernel(k["attribute"], k["name"], k["threads_per_block"],

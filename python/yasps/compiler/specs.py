@@ -5,13 +5,13 @@ simulation."""
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import List
+from typing import Dict, List, Tuple
 
 from .. import config
 from ..frontend.attribute import Attribute
 from ..frontend.errors import SceneError
 from ..frontend.scene import Scene
-from ..ir import emit_scene, symbol_path
+from ..ir import kernel_ir, symbol_path
 from .errors import native, translated
 from .pipelines import DIFFERENTIATION_PIPELINE, differentiation_pipeline
 
@@ -38,6 +38,20 @@ class DerivativeKernels:
         return f"{self.base}__{role}"
 
 
+#: Whether an energy's projected Hessian has factors, by (IR, pipeline,
+#: energy): asked of the compiler once per scene structure.
+_factored: Dict[Tuple[str, str, str], bool] = {}
+
+
+def _has_inner_factors(ir: str, pipeline: str, base: str, name: str) -> bool:
+    key = (ir, pipeline, base)
+    if key not in _factored:
+        with translated("attribute_params"):
+            _factored[key] = bool(native().attribute_params(
+                ir, pipeline, [base + "__hess_inner_proj"], name)[0])
+    return _factored[key]
+
+
 def derivative_kernels(scene: Scene, energy: Attribute,
                        assembly_only: bool) -> DerivativeKernels:
     """The kernels of ``energy``'s local derivatives; ``assembly_only``
@@ -50,13 +64,10 @@ def derivative_kernels(scene: Scene, energy: Attribute,
         raise SceneError(f"scene '{scene.name}' has no minimisation targets "
                          "(addMinimizeTarget)")
     base = symbol_path(energy)
-    ir = emit_scene(scene, locations=True)
+    ir = kernel_ir(scene)
     pipeline = differentiation_pipeline()
-    separate = False
-    if config.separate_reduced_hessians:
-        with translated():
-            separate = bool(native().attribute_params(
-                ir, pipeline, [base + "__hess_inner_proj"], scene.name)[0])
+    separate = config.separate_reduced_hessians and \
+        _has_inner_factors(ir, pipeline, base, scene.name)
     projected = [base + "__ij", base + "__hess_inner_proj"] if separate \
         else [base + "__hess_proj"]
     evaluated = [base + "__grad"] + \
@@ -78,8 +89,8 @@ def scene_kernel_paths(scene: Scene) -> List[str]:
     bases = [symbol_path(e) for e in scene.energies]
     derived = [False] * len(bases)
     if scene.minimizeTargets:
-        ir = emit_scene(scene, locations=True)
-        with translated():
+        ir = kernel_ir(scene)
+        with translated("attribute_params"):
             params = native().attribute_params(
                 ir, DIFFERENTIATION_PIPELINE, [b + "__grad" for b in bases],
                 scene.name)

@@ -212,3 +212,15 @@ def emit_scene(scene: Scene, locations: bool = False,
         lines.append(f"{_INDENT}yasps.minimize [{targets}]")
     lines.append("}")
     return "\n".join(lines) + "\n"
+
+
+def kernel_ir(scene: Scene,
+              extra: Optional[Dict[Entity, List[Tuple[str, Attribute]]]] = None
+              ) -> str:
+    """The IR that kernels are compiled from: the scene with source
+    locations, and without what changes between Newton iterations. Kernels
+    take instance counts at launch and read connectivities, union offsets
+    and values from buffers, so dynamic primitives are written with 0
+    instances: a new number of collision pairs gives the same text, which
+    the compiled libraries are cached by."""
+    return emit_scene(scene, locations=True, extra=extra, dynamic_counts=False)

@@ -16,7 +16,7 @@ import numpy as np
 from ..frontend.attribute import Attribute
 from ..frontend.errors import SceneError
 from ..frontend.scene import Entity
-from ..ir import emit_scene
+from ..ir import kernel_ir
 from .base import Backend, Shape
 
 #: Name under which an unnamed expression is evaluated.
@@ -79,7 +79,7 @@ def compute(attr: Attribute, backend: Backend,
         path = "::".join("@" + n for n in owner.path + [_TEMPORARY])
     else:
         path = "::".join("@" + n for n in owner.path + [attr.name])
-    ir = emit_scene(scene, locations=True, extra=extra)
+    ir = kernel_ir(scene, extra)
     count = owner.numInstances
     kernels = backend.compile(ir, [path], scene.name)
     output = backend.run(kernels, scene, path, count, threads)

@@ -77,7 +77,7 @@ class ParamResolver:
     def slots(self, attr: Attribute) -> List[ParamSlot]:
         path = symbol_path(attr)
         if path not in self.cache:
-            with translated():
+            with translated("attribute_params"):
                 self.cache[path] = decode_params(native().attribute_params(
                     self.ir, DIFFERENTIATION_PIPELINE, [path + "__jac"],
                     self.scene.name)[0])
