@@ -66,12 +66,21 @@ def test_running_example_compiles_for_gpus():
     paths = {k.attribute for k in kernels.kernels}
     assert paths == set(yasps.compiler.gpu.scene_kernel_paths(s))
     # Every energy, with derivatives for those of the targets; the union's
-    # kernels decode their members like the CPU's.
-    assert any(p.endswith("__hess_proj") for p in paths)
+    # kernels decode their members like the CPU's. The barrier over soft and
+    # affine vertices keeps its projected Hessian factored (J and P).
+    assert any(p.endswith("__hess_inner_proj") for p in paths)
+    assert any(p.endswith("__ij") for p in paths)
     check_binaries(kernels, yasps.compiler.gpu.DEFAULT_CHIPS)
     for k in kernels.kernels:
         kinds = [kind for kind, _ in k.launch_params]
-        assert kinds.count("buffer") == len(k.arguments), k.attribute
+        # Every buffer the kernel reads is an argument, the output among
+        # them; inputs it does not read (the affine values behind a linear
+        # map J) are left out of the launch.
+        buffers = [i for kind, i in k.launch_params if kind == "buffer"]
+        assert len(set(buffers)) == len(buffers), k.attribute
+        assert all(2 <= i < 2 + len(k.arguments) for i in buffers), k.attribute
+        out = 2 + [a.kind for a in k.arguments].index("out")
+        assert out in buffers, k.attribute
         assert ("index", 0) in k.launch_params and ("index", 1) in k.launch_params
 
 

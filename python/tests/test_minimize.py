@@ -174,31 +174,30 @@ def test_non_convergence_is_reported():
     assert err.value.solution[0].shape == s.m.v["x"].value.shape
 
 
-def test_separate_reduced_hessians_match_the_formed_products():
-    """With config.separate_reduced_hessians the barrier over free and
-    affine-body vertices keeps J (6x24) and P(H_inner) (6x6) apart; the
-    runtime forms J^T P J while assembling, with the same system and
-    solution as the formed products."""
+def test_factored_and_dense_reduced_hessians_agree(monkeypatch):
+    """The barrier over free and affine-body vertices: by default (the cost
+    rule, 2 m (n + m) <= n^2 with n = 24, m = 6) it keeps J (6x24),
+    P(H_inner) and H_inner (6x6) apart and the runtime forms J^T P J while
+    assembling; forced dense, the kernels form the products. Gradients,
+    Hessians, projected Hessians and Newton directions agree."""
     pairs = [[0, 3], [1, 4], [2, 3]]
     s, pp, *_ = mixed_scene(pairs)
     barrier = s.energies[-1]
+    monkeypatch.setattr(yasps.config, "separate_reduced_hessians", False)
     formed = s.energyDerivatives(barrier)
     assert formed.innerMap is None
-    want = s.minimizeEnergy(tolerance=1e-12)
-    yasps.config.separate_reduced_hessians = True
-    try:
-        factors = s.energyDerivatives(barrier)
-        assert factors.innerMap.shape == (3, 6, 24)
-        assert factors.projectedInnerHessian.shape == (3, 6, 6)
-        scale = np.abs(formed.projectedHessian).max()
-        np.testing.assert_allclose(factors.projectedHessian,
-                                   formed.projectedHessian, rtol=0,
-                                   atol=1e-12 * scale)
-        got = s.minimizeEnergy(tolerance=1e-12)
-    finally:
-        yasps.config.separate_reduced_hessians = False
+    want = s.minimizeEnergy(tolerance=1e-14)
+    monkeypatch.setattr(yasps.config, "separate_reduced_hessians", None)
+    factors = s.energyDerivatives(barrier)
+    assert factors.innerMap.shape == (3, 6, 24)
+    assert factors.projectedInnerHessian.shape == (3, 6, 6)
+    for name in ("gradient", "hessian", "projectedHessian"):
+        a, b = getattr(factors, name), getattr(formed, name)
+        np.testing.assert_allclose(a, b, rtol=0,
+                                   atol=1e-12 * np.abs(b).max(), err_msg=name)
+    got = s.minimizeEnergy(tolerance=1e-14)
     for a, b in zip(got, want):
-        np.testing.assert_allclose(a, b, rtol=1e-9, atol=1e-12)
+        np.testing.assert_allclose(a, b, rtol=0, atol=1e-12 * np.abs(b).max())
 
 
 def test_generated_placement_indices_match_the_parameter_locations():

@@ -19,9 +19,12 @@
 - ``separate_reduced_hessians``: where the reduced-space projection applies
   (paper 5.4), keep each local Hessian as its factors, the inner map J and
   the projected inner Hessian P, and form J^T P J only while assembling
-  (paper 7.2, 10.9). Saves memory when the parameters far outnumber the
-  inner variables (e.g. vertices driven by many cage points); costs some
-  arithmetic during assembly. Off by default.
+  (paper 7.2, 10.9). Saves compile time and memory when the parameters far
+  outnumber the inner variables (collision pairs on affine bodies, vertices
+  driven by many cage points); costs some arithmetic during assembly.
+  ``None``, the default, decides per energy (factors when they hold at most
+  half the values of the dense local Hessian); ``True`` or ``False`` forces
+  it.
 - ``compress_local_hessians``: before a full (not reduced-space) projection
   in assembly, merge the rows and columns of parameters that share a DoF
   and drop UNION padding, then project the k x k matrix with a kernel
@@ -52,6 +55,6 @@ num_threads: int = 0
 opt_level: int = 3
 backend: str = os.environ.get("YASPS_BACKEND", "auto").strip().lower() or "auto"
 simd_lanes: int = 0
-separate_reduced_hessians: bool = False
+separate_reduced_hessians: Optional[bool] = None
 compress_local_hessians: bool = True
 gpu_derivatives: bool = True

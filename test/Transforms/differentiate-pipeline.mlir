@@ -1,5 +1,5 @@
 // RUN: yasps-opt %s --yasps-differentiate-pipeline | FileCheck %s
-// RUN: yasps-opt %s --yasps-differentiate-pipeline=separate-reduced-hessians=true | FileCheck %s --check-prefix=SEPARATE
+// RUN: yasps-opt %s --yasps-differentiate-pipeline=hessian-factors=always | FileCheck %s --check-prefix=SEPARATE
 
 // The energy reads a computed attribute, which yasps-differentiate alone
 // rejects: the pipeline inlines it first, then adds the derivatives and

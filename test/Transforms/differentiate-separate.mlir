@@ -1,11 +1,19 @@
-// RUN: yasps-opt %s -yasps-differentiate=separate-reduced-hessians=true -canonicalize -cse | FileCheck %s
+// RUN: yasps-opt %s -yasps-differentiate=hessian-factors=always -canonicalize -cse | FileCheck %s
+// RUN: yasps-opt %s -yasps-differentiate=hessian-factors=auto -canonicalize -cse | FileCheck %s
+// RUN: yasps-opt %s -yasps-differentiate=hessian-factors=never -canonicalize -cse | FileCheck %s --check-prefix=NEVER
 
-// With separate-reduced-hessians, the barrier over free and affine-body
-// vertices keeps its reduced-space factors apart (paper 7.2, 10.9): the
-// inner map J (6x24, with the parameters' yasps.params) and the projected
-// 6x6 inner Hessian, instead of the 24x24 product J^T P J.
+// With hessian-factors=always, or auto (2 m (n + m) = 360 <= n^2 = 576),
+// the barrier over free and affine-body vertices keeps its reduced-space
+// factors apart (paper 7.2, 10.9): the inner map J (6x24, with the
+// parameters' yasps.params), the unprojected and the projected 6x6 inner
+// Hessian, instead of the 24x24 product J^T P J. With never, the kernel
+// forms the product.
+// NEVER: yasps.attr @e__hess_proj : !yasps.mat<24x24xf64> attributes {{{.*}}yasps.projection = #yasps.projection<reduced>}
+// NEVER-NOT: @e__hess_inner
 // CHECK-LABEL: yasps.primitive @pp(2) dynamic
 // CHECK: yasps.attr @e__ij : !yasps.mat<6x24xf64> attributes {{{.*}}yasps.params = [#yasps.param<join @p2v[0] of @w::@u::@x, width 12>, #yasps.param<join @p2v[1] of @w::@u::@x, width 12>]}
+// CHECK: yasps.attr @e__hess_inner : !yasps.mat<6x6xf64> attributes {yasps.derivative = #yasps.derivative<hess_inner of @w::@pp::@e>
+// CHECK-NEXT: yasps.read @w::@pp::@e__ijac__ijac : !yasps.mat<6x6xf64>
 // CHECK: yasps.attr @e__hess_inner_proj : !yasps.mat<6x6xf64> attributes {{{.*}}yasps.projection = #yasps.projection<separate>}
 // CHECK-NEXT: yasps.read @w::@pp::@e__ijac__ijac : !yasps.mat<6x6xf64>
 // CHECK-NEXT: yasps.project clamp %{{.*}} : !yasps.mat<6x6xf64>

@@ -21,7 +21,7 @@ from .. import config
 from ..ir import kernel_ir
 from .errors import native, translated
 from .params import KernelArgument, Param, decode_params, kernel_arguments
-from .pipelines import DIFFERENTIATION_PIPELINE
+from .pipelines import differentiation_pipeline
 from .specs import scene_kernel_paths
 
 #: Compute capabilities compiled by default: Ampere (A100) and Hopper (H100).
@@ -81,7 +81,7 @@ def compile_scene(scene, attributes: Optional[Sequence[str]] = None,
     Raises ``IRError`` if lowering or ptxas fails."""
     paths = list(attributes) if attributes is not None \
         else scene_kernel_paths(scene)
-    pipeline = DIFFERENTIATION_PIPELINE if scene.minimizeTargets else ""
+    pipeline = differentiation_pipeline() if scene.minimizeTargets else ""
     return compile_ir(kernel_ir(scene), paths, scene.name,
                       pipeline, chips, keep_ptx)
 

@@ -11,8 +11,12 @@ from .. import config
 DIFFERENTIATION_PIPELINE = "yasps-differentiate-pipeline"
 
 
+#: yasps-differentiate's hessian-factors for config.separate_reduced_hessians.
+_FACTORS = {None: "auto", True: "always", False: "never"}
+
+
 def differentiation_pipeline() -> str:
-    """DIFFERENTIATION_PIPELINE with the options of ``config``."""
-    if config.separate_reduced_hessians:
-        return DIFFERENTIATION_PIPELINE + "{separate-reduced-hessians=true}"
-    return DIFFERENTIATION_PIPELINE
+    """DIFFERENTIATION_PIPELINE with the options of ``config``: whether
+    reduced-space Hessians stay factored (``separate_reduced_hessians``)."""
+    factors = _FACTORS[config.separate_reduced_hessians]
+    return f"{DIFFERENTIATION_PIPELINE}{{hessian-factors={factors}}}"

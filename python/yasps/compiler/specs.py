@@ -5,7 +5,7 @@ simulation."""
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Dict, List, Tuple
+from typing import Dict, List, Set, Tuple
 
 from .. import config
 from ..frontend.attribute import Attribute
@@ -13,7 +13,7 @@ from ..frontend.errors import SceneError
 from ..frontend.scene import Scene
 from ..ir import kernel_ir, symbol_path
 from .errors import native, translated
-from .pipelines import DIFFERENTIATION_PIPELINE, differentiation_pipeline
+from .pipelines import differentiation_pipeline
 
 
 @dataclass
@@ -38,18 +38,22 @@ class DerivativeKernels:
         return f"{self.base}__{role}"
 
 
-#: Whether an energy's projected Hessian has factors, by (IR, pipeline,
-#: energy): asked of the compiler once per scene structure.
-_factored: Dict[Tuple[str, str, str], bool] = {}
+#: The energies whose projected Hessians are factored, by (IR, pipeline):
+#: asked of the compiler once per scene structure, for all energies at once.
+_factored: Dict[Tuple[str, str], Set[str]] = {}
 
 
-def _has_inner_factors(ir: str, pipeline: str, base: str, name: str) -> bool:
-    key = (ir, pipeline, base)
+def _has_inner_factors(scene: Scene, ir: str, pipeline: str,
+                       base: str) -> bool:
+    key = (ir, pipeline)
     if key not in _factored:
+        bases = [symbol_path(e) for e in scene.energies]
         with translated("attribute_params"):
-            _factored[key] = bool(native().attribute_params(
-                ir, pipeline, [base + "__hess_inner_proj"], name)[0])
-    return _factored[key]
+            params = native().attribute_params(
+                ir, pipeline, [b + "__hess_inner_proj" for b in bases],
+                scene.name)
+        _factored[key] = {b for b, p in zip(bases, params) if p}
+    return base in _factored[key]
 
 
 def derivative_kernels(scene: Scene, energy: Attribute,
@@ -66,12 +70,14 @@ def derivative_kernels(scene: Scene, energy: Attribute,
     base = symbol_path(energy)
     ir = kernel_ir(scene)
     pipeline = differentiation_pipeline()
-    separate = config.separate_reduced_hessians and \
-        _has_inner_factors(ir, pipeline, base, scene.name)
+    separate = config.separate_reduced_hessians is not False and \
+        _has_inner_factors(scene, ir, pipeline, base)
     projected = [base + "__ij", base + "__hess_inner_proj"] if separate \
         else [base + "__hess_proj"]
+    # Factored: the local Hessian is J^T H_inner J, formed on the host.
+    hessian = [base + ("__hess_inner" if separate else "__hess")]
     evaluated = [base + "__grad"] + \
-        ([] if assembly_only else [base + "__hess"]) + projected
+        ([] if assembly_only else hessian) + projected
     compress = assembly_only and not separate and config.compress_local_hessians
     paths = evaluated + ([base + "__hess"] if compress else []) \
         + [base + "__dofs"]
@@ -81,23 +87,23 @@ def derivative_kernels(scene: Scene, energy: Attribute,
 
 def scene_kernel_paths(scene: Scene) -> List[str]:
     """The attributes a scene's simulation evaluates: every energy, and for
-    energies that depend on a minimisation target their gradient, Hessian,
-    projected Hessian and placement indices (``__dofs``)."""
+    energies that depend on a minimisation target what assembly reads (the
+    gradient, the projected Hessian or its factors, the unprojected Hessian
+    where compression needs it, and the placement indices ``__dofs``), after
+    ``differentiation_pipeline()``."""
     if not scene.energies:
         raise SceneError(f"scene '{scene.name}' has no energies (addEnergy)")
     paths = []
     bases = [symbol_path(e) for e in scene.energies]
     derived = [False] * len(bases)
     if scene.minimizeTargets:
-        ir = kernel_ir(scene)
         with translated("attribute_params"):
             params = native().attribute_params(
-                ir, DIFFERENTIATION_PIPELINE, [b + "__grad" for b in bases],
-                scene.name)
+                kernel_ir(scene), differentiation_pipeline(),
+                [b + "__grad" for b in bases], scene.name)
         derived = [bool(p) for p in params]
-    for base, has_derivatives in zip(bases, derived):
+    for energy, base, has_derivatives in zip(scene.energies, bases, derived):
         paths.append(base)
         if has_derivatives:
-            paths += [base + "__grad", base + "__hess", base + "__hess_proj",
-                      base + "__dofs"]
+            paths += derivative_kernels(scene, energy, True).paths
     return paths

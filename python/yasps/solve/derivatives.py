@@ -181,7 +181,12 @@ def energy_derivatives(scene: Scene, energy: Attribute, backend: Backend,
     results = {path[len(spec.base) + 2:]: outputs.host(path[len(spec.base) + 2:])
                for path in spec.evaluated}
     value = compute(energy, backend, threads).value[:, 0, 0]
+    hessian = results.get("hess")
+    if spec.separate:
+        # Linear parameterisations: the local Hessian is J^T H_inner J.
+        J = results["ij"]
+        hessian = np.einsum("nki,nkl,nlj->nij", J, results["hess_inner"], J)
     return LocalDerivatives(energy, value, results["grad"][:, :, 0],
-                            results.get("hess"), results.get("hess_proj"),
+                            hessian, results.get("hess_proj"),
                             params, results.get("ij"),
                             results.get("hess_inner_proj"), outputs.dofs)

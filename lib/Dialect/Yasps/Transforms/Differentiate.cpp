@@ -29,6 +29,14 @@ struct DifferentiatePass
 } // namespace
 
 void DifferentiatePass::runOnOperation() {
+  std::optional<HessianFactors> factors = parseHessianFactors(hessianFactors);
+  if (!factors) {
+    getOperation().emitError()
+        << "yasps-differentiate: hessian-factors must be never, always or "
+           "auto, not '"
+        << hessianFactors << "'";
+    return signalPassFailure();
+  }
   SymbolTableCollection tables;
   for (auto scene : getOperation().getOps<SceneOp>()) {
     auto minimize = scene.getBodyBlock().getOps<MinimizeOp>();
@@ -49,7 +57,7 @@ void DifferentiatePass::runOnOperation() {
         return signalPassFailure();
       }
       if (failed(
-              differentiateEnergy(diff, energy, attr, separateReducedHessians)))
+              differentiateEnergy(diff, energy, attr, *factors)))
         return signalPassFailure();
     }
   }

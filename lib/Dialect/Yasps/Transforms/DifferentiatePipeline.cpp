@@ -9,7 +9,7 @@
 using namespace mlir;
 
 void mlir::yasps::buildDifferentiatePipeline(OpPassManager &pm,
-                                             bool separateReducedHessians) {
+                                             StringRef hessianFactors) {
   // yasps-differentiate needs one expression per energy; canonicalize and
   // cse shrink it (and merge the inlined copies) before it is
   // differentiated once per parameter.
@@ -17,7 +17,7 @@ void mlir::yasps::buildDifferentiatePipeline(OpPassManager &pm,
   pm.addPass(createCanonicalizerPass());
   pm.addPass(createCSEPass());
   YaspsDifferentiateOptions differentiate;
-  differentiate.separateReducedHessians = separateReducedHessians;
+  differentiate.hessianFactors = hessianFactors.str();
   pm.addPass(createYaspsDifferentiate(differentiate));
   pm.addPass(createYaspsGenerateIndices());
 }
@@ -25,11 +25,12 @@ void mlir::yasps::buildDifferentiatePipeline(OpPassManager &pm,
 namespace {
 struct DifferentiatePipelineOptions
     : public PassPipelineOptions<DifferentiatePipelineOptions> {
-  Option<bool> separateReducedHessians{
-      *this, "separate-reduced-hessians",
-      llvm::cl::desc("Keep the reduced-space factors @E__ij and "
-                     "@E__hess_inner_proj apart (see yasps-differentiate)"),
-      llvm::cl::init(false)};
+  Option<std::string> hessianFactors{
+      *this, "hessian-factors",
+      llvm::cl::desc("Keep the reduced-space factors @E__ij, "
+                     "@E__hess_inner_proj and @E__hess_inner apart: never, "
+                     "always or auto (see yasps-differentiate)"),
+      llvm::cl::init("never")};
 };
 } // namespace
 
@@ -38,6 +39,6 @@ void mlir::yasps::registerDifferentiatePipeline() {
       "yasps-differentiate-pipeline",
       "Local gradients, Hessians and placement indices of every energy",
       [](OpPassManager &pm, const DifferentiatePipelineOptions &options) {
-        buildDifferentiatePipeline(pm, options.separateReducedHessians);
+        buildDifferentiatePipeline(pm, options.hessianFactors);
       });
 }

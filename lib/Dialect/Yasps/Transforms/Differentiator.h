@@ -106,20 +106,27 @@ Value constantMatrix(OpBuilder &b, Location loc, MatrixType type,
 /// The zero matrix of `type`.
 Value zeros(OpBuilder &b, Location loc, MatrixType type);
 
+/// Whether the reduced-space factors of a projected Hessian stay apart
+/// (yasps-differentiate's hessian-factors option).
+enum class HessianFactors { never, always, automatic };
+
+/// The option's value from its spelling (never, always, auto).
+std::optional<HessianFactors> parseHessianFactors(StringRef spelling);
+
 /// Adds `@E__grad`, `@E__hess` and the projected Hessian of `energy`'s
 /// computed attribute `attr`; false when it depends on no target.
 FailureOr<bool> differentiateEnergy(Differentiator &diff, EnergyOp energy,
-                                    AttrOp attr, bool separateReducedHessians);
+                                    AttrOp attr, HessianFactors factors);
 
 /// Adds the PSD projection of E's local Hessian `hessAttr`, by E's method:
 /// in reduced space (paper 5.4) where the parameterisations behind E's
 /// leaves are linear and the leaves have fewer entries than there are
 /// parameters, else of the full Hessian. `@E__hess_proj` records which
-/// (yasps.projection); with `separateReducedHessians` the reduced factors
-/// stay apart (`@E__ij`, `@E__hess_inner_proj`).
+/// (yasps.projection); as `factors` says, the reduced factors stay apart
+/// (`@E__ij`, `@E__hess_inner_proj`, `@E__hess_inner`).
 LogicalResult addProjectedHessian(Differentiator &diff, EnergyOp energy,
                                   AttrOp attr, AttrOp jac, AttrOp hessAttr,
-                                  bool separateReducedHessians);
+                                  HessianFactors factors);
 
 } // namespace mlir::yasps::differentiation
 

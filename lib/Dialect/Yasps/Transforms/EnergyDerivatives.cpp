@@ -15,8 +15,7 @@ using namespace mlir::yasps::differentiation;
 
 FailureOr<bool>
 differentiation::differentiateEnergy(Differentiator &diff, EnergyOp energy,
-                                     AttrOp attr,
-                                     bool separateReducedHessians) {
+                                     AttrOp attr, HessianFactors factors) {
   // Gradient = Jacobian of E (1 x d), transposed; Hessian = Jacobian of
   // the gradient's row.
   FailureOr<AttrOp> jac = diff.jacobian(attr);
@@ -66,7 +65,7 @@ differentiation::differentiateEnergy(Differentiator &diff, EnergyOp energy,
       failed(alias("__grad", DerivativeRole::grad, *jac, row.withShape(d, 1),
                    true)) ||
       failed(addProjectedHessian(diff, energy, attr, *jac, *hessAttr,
-                                 separateReducedHessians)))
+                                 factors)))
     return failure();
   return true;
 }

@@ -10,6 +10,7 @@
 #include "Differentiator.h"
 
 #include "mlir/IR/IRMapping.h"
+#include "llvm/ADT/StringSwitch.h"
 
 using namespace mlir;
 using namespace mlir::yasps;
@@ -115,10 +116,36 @@ FailureOr<AttrOp> Differentiator::innerMap(AttrOp energy) {
   return map;
 }
 
+std::optional<HessianFactors>
+differentiation::parseHessianFactors(StringRef spelling) {
+  return llvm::StringSwitch<std::optional<HessianFactors>>(spelling)
+      .Case("never", HessianFactors::never)
+      .Case("always", HessianFactors::always)
+      .Case("auto", HessianFactors::automatic)
+      .Default(std::nullopt);
+}
+
+/// Whether reduced factors of m inner variables and d parameters stay
+/// apart: the factors J (m x d) and P (m x m) are cheaper to compute, store
+/// and assemble than the d x d product when they hold at most half its
+/// values (a 48 x 48 Hessian of point-triangle pairs on affine bodies
+/// against its 12 x 48 and 12 x 12 factors).
+static bool keepFactors(HessianFactors factors, int64_t m, int64_t d) {
+  switch (factors) {
+  case HessianFactors::never:
+    return false;
+  case HessianFactors::always:
+    return true;
+  case HessianFactors::automatic:
+    return 2 * m * (d + m) <= d * d;
+  }
+  llvm_unreachable("unknown HessianFactors");
+}
+
 LogicalResult
 differentiation::addProjectedHessian(Differentiator &diff, EnergyOp energy,
                                      AttrOp attr, AttrOp jac, AttrOp hessAttr,
-                                     bool separateReducedHessians) {
+                                     HessianFactors factors) {
   MatrixType row = jac.getMatrixType();
   int64_t d = row.getCols();
   MatrixType square = row.withShape(d, d);
@@ -135,7 +162,7 @@ differentiation::addProjectedHessian(Differentiator &diff, EnergyOp energy,
   for (const ParamGroup &g : *groups)
     m += g.leafEntries;
   bool reduced = *reducible && m < d;
-  bool separate = reduced && separateReducedHessians;
+  bool separate = reduced && keepFactors(factors, m, d);
   FailureOr<AttrOp> created = diff.createAttr(
       jac,
       (attr.getSymName() + (separate ? "__hess_inner_proj" : "__hess_proj"))
@@ -175,9 +202,22 @@ differentiation::addProjectedHessian(Differentiator &diff, EnergyOp energy,
   Value pi = ProjectOp::create(pb, loc, energy.getProjection(), hi);
   if (separate) {
     // J (@E__ij) stays an attribute of its own; the runtime forms
-    // J^T P J while it assembles.
+    // J^T P J while it assembles. The unprojected H_inner is kept too:
+    // with linear parameterisations J^T H_inner J is the local Hessian,
+    // without a d x d forward-mode Jacobian.
     (*map)->setAttr("yasps.params", params);
     YieldOp::create(pb, loc, pi);
+    FailureOr<AttrOp> inner = diff.createAttr(
+        jac, (attr.getSymName() + "__hess_inner").str(), innerType, nullptr,
+        params, DerivativeRole::hess_inner, attr);
+    if (failed(inner))
+      return failure();
+    OpBuilder ib = OpBuilder::atBlockEnd(&inner->getBodyBlock());
+    Value h = *innerHess ? ReadOp::create(ib, loc, innerType,
+                                          getScenePath(*innerHess))
+                               .getResult()
+                         : zeros(ib, loc, innerType);
+    YieldOp::create(ib, loc, h);
     return success();
   }
   Value j = ReadOp::create(pb, loc, row.withShape(m, d), getScenePath(*map));

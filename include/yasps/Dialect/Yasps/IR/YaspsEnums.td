@@ -67,7 +67,8 @@ def Yasps_DerivativeRole : I32EnumAttr<"DerivativeRole",
       I32EnumAttrCase<"hess_proj", 3>,
       I32EnumAttrCase<"hess_inner_proj", 4>,
       I32EnumAttrCase<"ij", 5>,
-      I32EnumAttrCase<"dofs", 6>
+      I32EnumAttrCase<"dofs", 6>,
+      I32EnumAttrCase<"hess_inner", 7>
     ]> {
   let cppNamespace = "::mlir::yasps";
   let genSpecializedAttr = 0;

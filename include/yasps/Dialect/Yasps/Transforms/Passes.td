@@ -79,13 +79,16 @@ def YaspsDifferentiate : Pass<"yasps-differentiate", "::mlir::ModuleOp"> {
     inlined first (`yasps-inline-reads`).
   }];
   let options = [
-    Option<"separateReducedHessians", "separate-reduced-hessians", "bool",
-           /*default=*/"false",
-           "Where the reduced-space projection applies, keep the inner map "
-           "J (@E__ij, m x n) and the projected inner Hessian "
-           "(@E__hess_inner_proj, m x m) as attributes instead of forming "
-           "@E__hess_proj = J^T P(H_inner) J; the runtime forms the product "
-           "while it assembles (paper 7.2, 10.9)">
+    Option<"hessianFactors", "hessian-factors", "std::string",
+           /*default=*/"\"never\"",
+           "Where the reduced-space projection applies, whether to keep the "
+           "inner map J (@E__ij, m x n), the projected inner Hessian "
+           "(@E__hess_inner_proj, m x m) and the unprojected one "
+           "(@E__hess_inner) as attributes instead of forming "
+           "@E__hess_proj = J^T P(H_inner) J, so that the runtime forms the "
+           "product while it assembles (paper 7.2, 10.9): never, always, or "
+           "auto (when the factors hold at most half the values of the "
+           "n x n Hessian: 2 m (n + m) <= n^2)">
   ];
   let dependentDialects = ["::mlir::yasps::YaspsDialect"];
 }

@@ -14,10 +14,10 @@ namespace mlir::yasps {
 
 /// Adds the passes that give every energy its local derivatives and their
 /// placement indices: yasps-inline-reads, canonicalize, cse,
-/// yasps-differentiate (with `separateReducedHessians`) and
-/// yasps-generate-indices.
+/// yasps-differentiate (with its `hessian-factors` option: never, always
+/// or auto) and yasps-generate-indices.
 void buildDifferentiatePipeline(OpPassManager &pm,
-                                bool separateReducedHessians);
+                                StringRef hessianFactors = "never");
 
 /// Registers the `yasps-differentiate-pipeline` pass pipeline, so that it
 /// can be named in textual pipelines.
