@@ -31,6 +31,7 @@
 #include "yasps/Runtime/CpuKernel.h"
 #include "yasps/Runtime/ThreadPool.h"
 #include "yasps/Target/CPU/CpuCompiler.h"
+#include "yasps/Target/CPU/CpuSourceCache.h"
 #include "yasps/Target/GPU/GpuCompiler.h"
 #include "yasps/Target/KernelGeneration.h"
 
@@ -212,9 +213,19 @@ CpuLibrary compileCpu(const std::string &ir,
   options.optLevel = optLevel;
   options.lanes = lanes;
   CpuLibrary result;
+  // A request met before (in this or an earlier process) loads its object
+  // without parsing or lowering anything.
+  std::string source =
+      mlir::yasps::cpuSourceKey(ir, attributes, prePipeline, options);
+  if ((result.library =
+           mlir::yasps::lookupCpuSource(source, options, result.stats)))
+    return result;
   result.library = compileVerified(ir, bufferName, [&](ModuleOp module) {
-    return mlir::yasps::compileCpuKernels(module, attributes, options,
-                                          &result.stats, prePipeline);
+    auto library = mlir::yasps::compileCpuKernels(module, attributes, options,
+                                                  &result.stats, prePipeline);
+    if (library)
+      mlir::yasps::recordCpuSource(source, **library, result.stats, options);
+    return library;
   });
   return result;
 }
@@ -389,6 +400,7 @@ NB_MODULE(_yasps_compiler, m) {
             nb::dict d;
             d["from_memory"] = self.stats.fromMemory;
             d["from_disk"] = self.stats.fromDisk;
+            d["from_source"] = self.stats.fromSource;
             d["lower_seconds"] = self.stats.lowerSeconds;
             d["codegen_seconds"] = self.stats.codegenSeconds;
             d["key"] = self.stats.key;

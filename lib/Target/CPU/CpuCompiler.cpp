@@ -189,6 +189,57 @@ loadObject(const std::string &path, std::vector<CpuKernel> kernels) {
   return std::make_shared<ObjectLibrary>(std::move(*jit), std::move(kernels));
 }
 
+std::mutex &cacheLock() {
+  static std::mutex lock;
+  return lock;
+}
+
+/// Libraries by cache key. They stay loaded for the life of the process:
+/// kernels are small and a scene may be evaluated again at any time. The
+/// map is never destroyed: JIT sessions must not be torn down after LLVM's
+/// own statics.
+std::map<std::string, std::shared_ptr<CpuKernelLibrary>> &libraries() {
+  static auto &map =
+      *new std::map<std::string, std::shared_ptr<CpuKernelLibrary>>();
+  return map;
+}
+
+/// Where the object of `key` is cached ("" without a cache directory).
+std::string objectPathOf(const std::string &key,
+                         const CpuCompileOptions &options) {
+  if (options.cacheDir.empty())
+    return "";
+  llvm::SmallString<256> path(options.cacheDir);
+  llvm::sys::path::append(path, key + ".o");
+  return path.str().str();
+}
+
+/// The library of `key` from memory or disk, null if neither has it; the
+/// caller holds cacheLock().
+std::shared_ptr<CpuKernelLibrary>
+lookupLocked(const std::string &key, const std::vector<CpuKernel> &kernels,
+             const CpuCompileOptions &options, CpuCompileStats &st) {
+  if (auto cached = libraries()[key]) {
+    st.fromMemory = true;
+    return cached;
+  }
+  initializeNativeTarget();
+  std::string objectPath = objectPathOf(key, options);
+  if (objectPath.empty() || !llvm::sys::fs::exists(objectPath))
+    return nullptr;
+  Clock::time_point loadStart = Clock::now();
+  auto library = loadObject(objectPath, kernels);
+  if (!library) {
+    // A damaged cache entry is rebuilt by the caller.
+    llvm::consumeError(library.takeError());
+    return nullptr;
+  }
+  st.fromDisk = true;
+  st.codegenSeconds = secondsSince(loadStart);
+  libraries()[key] = *library;
+  return *library;
+}
+
 } // namespace
 
 llvm::Expected<std::shared_ptr<CpuKernelLibrary>>
@@ -211,36 +262,10 @@ mlir::yasps::compileCpuKernels(ModuleOp module,
 
   // 2. Caches: this process, then disk.
   st.key = cacheKey(*kernels, options);
-  static std::mutex cacheLock;
-  // Libraries stay loaded for the life of the process: kernels are small
-  // and a scene may be evaluated again at any time. The map is never
-  // destroyed: JIT sessions must not be torn down after LLVM's own statics.
-  static auto &memory =
-      *new std::map<std::string, std::shared_ptr<CpuKernelLibrary>>();
-  std::lock_guard<std::mutex> guard(cacheLock);
-  if (auto cached = memory[st.key]) {
-    st.fromMemory = true;
+  std::lock_guard<std::mutex> guard(cacheLock());
+  if (auto cached = lookupLocked(st.key, described, options, st))
     return cached;
-  }
-  initializeNativeTarget();
-  std::string objectPath;
-  if (!options.cacheDir.empty()) {
-    llvm::SmallString<256> path(options.cacheDir);
-    llvm::sys::path::append(path, st.key + ".o");
-    objectPath = path.str().str();
-    if (llvm::sys::fs::exists(objectPath)) {
-      Clock::time_point loadStart = Clock::now();
-      auto library = loadObject(objectPath, described);
-      if (library) {
-        st.fromDisk = true;
-        st.codegenSeconds = secondsSince(loadStart);
-        memory[st.key] = *library;
-        return library;
-      }
-      // A damaged cache entry is rebuilt below.
-      llvm::consumeError(library.takeError());
-    }
-  }
+  std::string objectPath = objectPathOf(st.key, options);
 
   // 3. LLVM dialect, then JIT.
   if (llvm::Error err =
@@ -275,6 +300,16 @@ mlir::yasps::compileCpuKernels(ModuleOp module,
   st.codegenSeconds = secondsSince(codegenStart);
   auto library =
       std::make_shared<EngineLibrary>(std::move(*engine), std::move(described));
-  memory[st.key] = library;
+  libraries()[st.key] = library;
   return library;
+}
+
+std::shared_ptr<CpuKernelLibrary>
+mlir::yasps::loadCachedCpuKernels(const std::string &objectKey,
+                                  std::vector<CpuKernel> kernels,
+                                  const CpuCompileOptions &options,
+                                  CpuCompileStats &stats) {
+  std::lock_guard<std::mutex> guard(cacheLock());
+  stats.key = objectKey;
+  return lookupLocked(objectKey, kernels, options, stats);
 }

@@ -5,7 +5,7 @@ simulation."""
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Dict, List, Set, Tuple
+from typing import Dict, List, Optional, Set, Tuple
 
 from .. import config
 from ..frontend.attribute import Attribute
@@ -56,11 +56,12 @@ def _has_inner_factors(scene: Scene, ir: str, pipeline: str,
     return base in _factored[key]
 
 
-def derivative_kernels(scene: Scene, energy: Attribute,
-                       assembly_only: bool) -> DerivativeKernels:
+def derivative_kernels(scene: Scene, energy: Attribute, assembly_only: bool,
+                       ir: Optional[str] = None) -> DerivativeKernels:
     """The kernels of ``energy``'s local derivatives; ``assembly_only``
     leaves out what assembly does not need (values, unprojected
-    Hessians)."""
+    Hessians). ``ir`` is the scene's ``kernel_ir`` if the caller has it
+    (one emission for all of a scene's energies)."""
     if not any(e is energy for e in scene.energies):
         raise SceneError(f"{energy.describe()} is not an energy of scene "
                          f"'{scene.name}' (addEnergy)")
@@ -68,7 +69,7 @@ def derivative_kernels(scene: Scene, energy: Attribute,
         raise SceneError(f"scene '{scene.name}' has no minimisation targets "
                          "(addMinimizeTarget)")
     base = symbol_path(energy)
-    ir = kernel_ir(scene)
+    ir = kernel_ir(scene) if ir is None else ir
     pipeline = differentiation_pipeline()
     separate = config.separate_reduced_hessians is not False and \
         _has_inner_factors(scene, ir, pipeline, base)

@@ -22,7 +22,7 @@ from ..frontend.attribute import Attribute
 from ..frontend.errors import SceneError
 from ..frontend.scene import Mesh, Primitive, PrimitiveUnion, Scene
 from ..frontend.values import from_column_major
-from ..ir import emit_scene
+from ..ir import kernel_ir
 from ..runtime import Backend
 from ..runtime.native import native
 from .derivatives import NoDerivativesError, assembly_inputs
@@ -52,11 +52,13 @@ class DofLayout:
         return out
 
 
-def _static_structure_key(scene, layout: DofLayout, static_energies) -> tuple:
+def _static_structure_key(scene, ir: str, layout: DofLayout,
+                          static_energies) -> tuple:
     """What the DoF maps of the static energies depend on: the scene's
-    structure without the instance counts of dynamic primitives, the DoF
-    layout, the indices of every connectivity and the member counts of every
-    union (paper 10.6: only dynamic instances change between steps)."""
+    structure without the instance counts of dynamic primitives (``ir``,
+    its kernel_ir), the DoF layout, the indices of every connectivity and
+    the member counts of every union (paper 10.6: only dynamic instances
+    change between steps)."""
     connectivities, unions = [], []
     pending = list(scene._symbols.values())
     while pending:
@@ -68,8 +70,7 @@ def _static_structure_key(scene, layout: DofLayout, static_energies) -> tuple:
                                for c in entity._connectivities.values()]
         if isinstance(entity, (Mesh, Primitive, PrimitiveUnion)):
             pending += list(entity._symbols.values())
-    return (emit_scene(scene, dynamic_counts=False),
-            layout.block_offsets.tobytes(), tuple(sorted(connectivities)),
+    return (ir, layout.block_offsets.tobytes(), tuple(sorted(connectivities)),
             tuple(unions), tuple(id(e) for e in static_energies))
 
 
@@ -100,11 +101,15 @@ def assemble(scene: Scene, backend: Backend, threads: Optional[int] = None,
         raise SceneError(f"scene '{scene.name}' has no minimisation targets "
                          "(addMinimizeTarget)")
     layout = DofLayout(targets)
+    # One emission of the scene for every energy's kernels; it does not
+    # change with the counts of dynamic primitives.
+    ir = kernel_ir(scene)
     static, dynamic = [], []
     for energy, is_dynamic, _ in scene._energies:
         start = clock()
         try:
-            contribution = assembly_inputs(scene, energy, backend, threads)
+            contribution = assembly_inputs(scene, energy, backend, threads,
+                                           ir)
         except NoDerivativesError:
             continue
         spent["derivatives"] += clock() - start
@@ -117,7 +122,7 @@ def assemble(scene: Scene, backend: Backend, threads: Optional[int] = None,
                    for _, (inputs, _) in static + dynamic)
 
     start = clock()
-    key = _static_structure_key(scene, layout, [e for e, _ in static])
+    key = _static_structure_key(scene, ir, layout, [e for e, _ in static])
     cached = _static_systems.get(scene)
     rebuilt = cached is None or cached[0] != key
     if rebuilt:

@@ -80,9 +80,10 @@ class _Outputs:
     assembly inputs of a Newton loop)."""
 
     def __init__(self, scene: Scene, energy: Attribute, backend: Backend,
-                 threads: Optional[int], assembly_only: bool, reuse: bool):
+                 threads: Optional[int], assembly_only: bool, reuse: bool,
+                 ir: Optional[str] = None):
         self.spec: DerivativeKernels = derivative_kernels(scene, energy,
-                                                          assembly_only)
+                                                          assembly_only, ir)
         self.scene, self.energy, self.backend = scene, energy, backend
         self.threads, self.reuse = threads, reuse
         self.count = energy.owner.numInstances
@@ -150,19 +151,21 @@ class _Outputs:
 
 
 def assembly_inputs(scene: Scene, energy: Attribute, backend: Backend,
-                    threads: Optional[int] = None
+                    threads: Optional[int] = None, ir: Optional[str] = None
                     ) -> Tuple[LocalInputs, Callable[[], np.ndarray]]:
     """What assembly needs of a registered energy, computed by the backend
     that differentiates for ``backend``: the local gradients and projected
     Hessians (or their factors) and the DoF map (computed when first asked
-    for). Raises NoDerivativesError for an energy without derivatives."""
+    for). ``ir``: the scene's ``kernel_ir``, if the caller has it. Raises
+    NoDerivativesError for an energy without derivatives."""
     where = backend.derivatives
-    outputs = _Outputs(scene, energy, where, threads, True, True)
+    outputs = _Outputs(scene, energy, where, threads, True, True, ir)
     if not outputs.needs_compression():
         return outputs.inputs(), outputs.dofs
     if where.host is not where:
         # Compression runs on the host: the energy is differentiated there.
-        outputs = _Outputs(scene, energy, where.host, threads, True, True)
+        outputs = _Outputs(scene, energy, where.host, threads, True, True,
+                           ir)
         if not outputs.needs_compression():
             return outputs.inputs(), outputs.dofs
     return outputs.compressed_inputs(), outputs.dofs

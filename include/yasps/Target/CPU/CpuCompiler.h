@@ -35,6 +35,9 @@ struct CpuKernel : KernelDescription {
 struct CpuCompileStats {
   bool fromMemory = false;   ///< reused a kernel library of this process
   bool fromDisk = false;     ///< loaded a cached object, no code generation
+  /// found by the IR text and request alone (CpuSourceCache.h): nothing
+  /// was parsed or lowered
+  bool fromSource = false;
   double lowerSeconds = 0;   ///< yasps IR to LLVM dialect
   double codegenSeconds = 0; ///< LLVM optimisation, code generation, loading
   std::string key;           ///< the cache key
@@ -85,6 +88,14 @@ compileCpuKernels(ModuleOp module, const std::vector<std::string> &attributes,
                   const CpuCompileOptions &options,
                   CpuCompileStats *stats = nullptr,
                   llvm::StringRef prePipeline = "");
+
+/// The library of the object cached under `objectKey` (a compileCpuKernels
+/// cache key) with the given kernels' descriptions: from this process's
+/// libraries, else from `options.cacheDir`; null if neither has it.
+std::shared_ptr<CpuKernelLibrary>
+loadCachedCpuKernels(const std::string &objectKey,
+                     std::vector<CpuKernel> kernels,
+                     const CpuCompileOptions &options, CpuCompileStats &stats);
 
 } // namespace mlir::yasps
 

@@ -1,0 +1,152 @@
+#!/usr/bin/env python3
+"""Compile times of a soft+affine contact scene, and what pair-count
+changes cost afterwards.
+
+The scene (bench/contact_scene.py): a soft box (stable Neo-Hookean,
+inertia) and an affine box (inertia on A and t, ABD orthogonality) whose
+vertices form one UNION, with dynamic PP, PE, PT and EE pairs carrying the
+IPC barrier. Prints:
+
+1. per energy, cold (fresh process and kernel cache): the kernels that
+   minimizeEnergy needs (gradient, projected Hessian or its factors,
+   placement indices), then what energyDerivatives adds (values, the
+   unprojected Hessian); each energy's local-Hessian storage per instance
+   as assembled (factors J and P, or the dense block) against the dense
+   n x n block;
+2. the whole scene, cold and warm (a new process with the disk cache): the
+   first minimizeEnergy and evaluateEnergy, and the compiler requests made;
+3. ``--calls`` minimizeEnergy calls with every pair type's count drawn
+   between 0 and ``--max-pairs``: compiler requests made (should be none),
+   and the median time of a call whose counts changed against one whose
+   counts (and pairs) were set again unchanged.
+
+    python3 bench/compile_times.py [--calls 200] [--max-pairs 5000]
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+HERE = Path(__file__).resolve().parent
+sys.path.insert(0, str(HERE.parent / "python"))
+sys.path.insert(0, str(HERE))
+
+
+def worker(task: str, energy: str) -> dict:
+    """Runs in a fresh process (the cache directory comes from the
+    environment): builds the scene and times ``task``."""
+    import yasps
+    from contact_scene import build
+    from yasps.runtime import cpu_backend
+    from yasps.solve import assembly_inputs
+
+    yasps.config.backend = "cpu"
+    s, *_ = build()
+    if task == "energy":
+        attr = next(e for e in s.energies if e.owner.qualifiedName + "." +
+                    e.name == energy)
+        start = time.perf_counter()
+        inputs, _ = assembly_inputs(s, attr, cpu_backend())
+        assembly = time.perf_counter() - start
+        start = time.perf_counter()
+        d = s.energyDerivatives(attr)
+        extra = time.perf_counter() - start
+        n = d.gradient.shape[1]
+        stored = (inputs.inner_size * (n + inputs.inner_size)
+                  if inputs.inner_map is not None else n * n)
+        return {"assembly": assembly, "derivatives": extra, "n": n,
+                "stored": stored, "factored": inputs.inner_map is not None}
+    start = time.perf_counter()
+    s.minimizeEnergy()
+    s.evaluateEnergy()
+    return {"seconds": time.perf_counter() - start,
+            "requests": sum(yasps.compiler.invocations().values())}
+
+
+def run_worker(task: str, energy: str, cache: str) -> dict:
+    env = dict(os.environ, YASPS_CACHE_DIR=cache)
+    out = subprocess.run([sys.executable, __file__, "--worker", task, energy],
+                         env=env, check=True, capture_output=True, text=True)
+    return json.loads(out.stdout.splitlines()[-1])
+
+
+def count_changes(calls: int, max_pairs: int) -> None:
+    import numpy as np
+
+    import yasps
+    from contact_scene import PAIR_TYPES, build, random_pairs
+
+    yasps.config.backend = "cpu"
+    s, primitives, connectivities, positions = build()
+    rng = np.random.default_rng(0)
+    s.minimizeEnergy()
+
+    def set_pairs(counts):
+        for (name, (arity, _)), n in zip(PAIR_TYPES.items(), counts):
+            primitives[name].updateNumInstances(int(n))
+            connectivities[name].updateConnectivity(
+                random_pairs(int(n), positions, arity, rng))
+
+    before = yasps.compiler.invocations()
+    changed, same = [], []
+    for _ in range(calls):
+        counts = rng.integers(0, max_pairs + 1, size=len(PAIR_TYPES))
+        for times in (changed, same):
+            # The second call sets the same counts again (new pairs): the
+            # difference is what a change of counts costs.
+            set_pairs(counts)
+            start = time.perf_counter()
+            s.minimizeEnergy(tolerance=1e-4)
+            times.append(time.perf_counter() - start)
+    requests = sum(yasps.compiler.invocations().values()) - \
+        sum(before.values())
+    print(f"\n{calls} minimizeEnergy calls, pair counts 0-{max_pairs} per "
+          f"type: {requests} compiler requests")
+    print(f"  median per call, counts changed: {1e3 * np.median(changed):.2f} "
+          f"ms; counts set again unchanged: {1e3 * np.median(same):.2f} ms; "
+          f"difference {1e3 * (np.median(changed) - np.median(same)):+.2f} ms")
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    parser.add_argument("--calls", type=int, default=200)
+    parser.add_argument("--max-pairs", type=int, default=5000)
+    parser.add_argument("--worker", nargs=2, help=argparse.SUPPRESS)
+    args = parser.parse_args()
+    if args.worker:
+        print(json.dumps(worker(*args.worker)))
+        return
+
+    import yasps
+    from contact_scene import build
+    s, *_ = build()
+    names = [e.owner.qualifiedName + "." + e.name for e in s.energies]
+    print("cold compile per energy (fresh process and cache), seconds")
+    print(f"{'energy':24} {'minimizeEnergy':>15} {'+energyDerivatives':>19} "
+          f"{'n':>4} {'Hessian storage per instance':>30}")
+    for name in names:
+        with tempfile.TemporaryDirectory() as cache:
+            r = run_worker("energy", name, cache)
+        storage = (f"{r['stored']} ({'factors' if r['factored'] else 'dense'}"
+                   f", dense {r['n'] ** 2})")
+        print(f"{name:24} {r['assembly']:15.2f} {r['derivatives']:19.2f} "
+              f"{r['n']:4d} {storage:>30}")
+    with tempfile.TemporaryDirectory() as cache:
+        cold = run_worker("scene", "", cache)
+        warm = run_worker("scene", "", cache)
+    print("\nwhole scene, first minimizeEnergy + evaluateEnergy:")
+    print(f"  cold {cold['seconds']:.2f} s ({cold['requests']} compiler "
+          f"requests); warm, new process with the disk cache "
+          f"{warm['seconds']:.2f} s ({warm['requests']} requests)")
+    count_changes(args.calls, args.max_pairs)
+
+
+if __name__ == "__main__":
+    main()
