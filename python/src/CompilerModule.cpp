@@ -224,7 +224,7 @@ CpuLibrary compileCpu(const std::string &ir,
     auto library = mlir::yasps::compileCpuKernels(module, attributes, options,
                                                   &result.stats, prePipeline);
     if (library)
-      mlir::yasps::recordCpuSource(source, **library, result.stats, options);
+      mlir::yasps::recordCpuSource(source, **library, options);
     return library;
   });
   return result;
@@ -484,6 +484,9 @@ NB_MODULE(_yasps_compiler, m) {
         "vector width in doubles; 1: one at a time). Raises "
         "MissingAttributeError (.symbol) for an attribute that does not exist "
         "after pre_pipeline, IRError for other failures.");
+  m.def("cpu_kernels_compiled", &mlir::yasps::cpuKernelsCompiled,
+        "Kernels this process has compiled to machine code for the CPU "
+        "(each is compiled once and cached on its own)");
   m.def("host_double_lanes", &mlir::yasps::hostDoubleLanes,
         "f64 lanes of the host's widest vector registers");
   m.def("attribute_params", &attributeParams, nb::arg("ir"),

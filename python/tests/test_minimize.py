@@ -1,6 +1,10 @@
 """The global Newton system: assembly against dense references built from
 the per-instance derivatives, and the PCG solution against numpy.linalg."""
 
+import subprocess
+import sys
+from pathlib import Path
+
 import numpy as np
 import pytest
 
@@ -415,3 +419,39 @@ def test_new_pair_counts_run_no_compiler(monkeypatch, factored):
         s.minimizeEnergy()
         assert barrier.compute().value.shape == (n, 1, 1)
     assert yasps.compiler.invocations() == before
+
+
+COMPILE_ONCE = """
+import sys
+from pathlib import Path
+sys.path[:0] = [{tests!r}, str(Path({tests!r}).parent)]
+import yasps
+from test_minimize import mixed_scene
+yasps.config.cache_dir = {cache!r}
+s, pp, *_ = mixed_scene([[0, 3], [1, 4]])
+compiled = yasps.compiler.cpu.kernels_compiled
+for energy in s.energies:
+    s.energyDerivatives(energy)
+kernels = compiled()
+# Assembly and the energies' values need no kernel that the derivatives did
+# not compile already (gradients, Hessians, their projections or factors,
+# placement indices, values).
+s.minimizeEnergy()
+s.evaluateEnergy()
+for energy in s.energies:
+    s.energyDerivatives(energy)
+print(kernels, compiled(), len(list(Path({cache!r}).glob("*.o"))))
+"""
+
+
+def test_every_kernel_is_compiled_once(tmp_path):
+    """energyDerivatives, minimizeEnergy and compute() ask for different
+    sets of kernels; each kernel is compiled to machine code once in a
+    process (a fresh one here) and shared by every request that names it,
+    with one object per kernel on disk."""
+    script = COMPILE_ONCE.format(tests=str(Path(__file__).parent),
+                                 cache=str(tmp_path))
+    out = subprocess.run([sys.executable, "-c", script], check=True,
+                         capture_output=True, text=True).stdout.split()
+    kernels, total, objects = map(int, out)
+    assert kernels > 0 and total == kernels and objects == kernels

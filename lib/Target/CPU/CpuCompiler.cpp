@@ -30,17 +30,22 @@
 #include "mlir/Target/LLVMIR/Dialect/LLVMIR/LLVMToLLVMIRTranslation.h"
 #include "mlir/Transforms/Passes.h"
 
+#include "llvm/ADT/StringExtras.h"
 #include "llvm/ExecutionEngine/Orc/ExecutionUtils.h"
 #include "llvm/ExecutionEngine/Orc/LLJIT.h"
 #include "llvm/Support/FileSystem.h"
 #include "llvm/Support/MemoryBuffer.h"
 #include "llvm/Support/Path.h"
+#include "llvm/Support/SHA256.h"
 #include "llvm/Support/TargetSelect.h"
 #include "llvm/TargetParser/Host.h"
 
+#include <algorithm>
+#include <atomic>
 #include <chrono>
 #include <map>
 #include <mutex>
+#include <thread>
 
 using namespace mlir;
 using namespace mlir::yasps;
@@ -93,6 +98,21 @@ public:
 
 private:
   std::unique_ptr<ExecutionEngine> engine;
+};
+
+/// Kernels of several libraries, one per kernel: each kernel is compiled
+/// and cached on its own, so requests that share kernels share their code.
+class CompositeLibrary : public CpuKernelLibrary {
+public:
+  CompositeLibrary(std::vector<std::shared_ptr<CpuKernelLibrary>> parts)
+      : parts(std::move(parts)) {
+    for (const auto &part : this->parts)
+      for (const CpuKernel &kernel : part->kernels())
+        kernelList.push_back(kernel);
+  }
+
+private:
+  std::vector<std::shared_ptr<CpuKernelLibrary>> parts;
 };
 
 /// Kernels loaded from a cached object file.
@@ -240,6 +260,74 @@ lookupLocked(const std::string &key, const std::vector<CpuKernel> &kernels,
   return *library;
 }
 
+std::string hashText(llvm::StringRef text) {
+  std::array<uint8_t, 32> hash = llvm::SHA256::hash(llvm::ArrayRef(
+      reinterpret_cast<const uint8_t *>(text.data()), text.size()));
+  return llvm::toHex(hash, /*LowerCase=*/true);
+}
+
+std::atomic<int64_t> &compiledCount() {
+  static std::atomic<int64_t> count{0};
+  return count;
+}
+
+/// One kernel on its way to machine code.
+struct KernelUnit {
+  OwningOpRef<ModuleOp> module; ///< the kernel function alone
+  CpuKernel kernel;
+  std::string key; ///< the cache key of its object
+  std::shared_ptr<CpuKernelLibrary> library;
+};
+
+/// The kernels of `kernels`, each in a module of its own with its key.
+std::vector<KernelUnit> splitKernels(ModuleOp kernels,
+                                     const std::vector<CpuKernel> &described,
+                                     const CpuCompileOptions &options) {
+  std::vector<KernelUnit> units;
+  for (const CpuKernel &kernel : described) {
+    KernelUnit unit;
+    unit.module = cast<ModuleOp>(kernels->clone());
+    for (auto func :
+         llvm::make_early_inc_range(unit.module->getOps<func::FuncOp>()))
+      if (func.getSymName() != kernel.symbol)
+        func.erase();
+    unit.kernel = kernel;
+    unit.key = cacheKey(*unit.module, options);
+    unit.kernel.objectKey = unit.key;
+    units.push_back(std::move(unit));
+  }
+  return units;
+}
+
+/// LLVM's optimisation and code generation of one lowered kernel, its
+/// object written to the disk cache; safe to run for several kernels at
+/// once (each has its own LLVM context and JIT).
+llvm::Error jitUnit(KernelUnit &unit, const CpuCompileOptions &options) {
+  std::string objectPath = objectPathOf(unit.key, options);
+  ExecutionEngineOptions engineOptions;
+  engineOptions.transformer = makeOptimizingTransformer(
+      options.optLevel, /*sizeLevel=*/0, /*targetMachine=*/nullptr);
+  engineOptions.jitCodeGenOptLevel =
+      static_cast<llvm::CodeGenOptLevel>(std::min(options.optLevel, 3u));
+  engineOptions.enableObjectDump = !objectPath.empty();
+  auto engine = ExecutionEngine::create(*unit.module, engineOptions);
+  ++compiledCount();
+  if (!engine)
+    return engine.takeError();
+  auto fn = (*engine)->lookupPacked(unit.kernel.symbol);
+  if (!fn)
+    return fn.takeError();
+  unit.kernel.packed = *fn;
+  if (!objectPath.empty()) {
+    llvm::sys::fs::create_directories(options.cacheDir);
+    storeAtomically(objectPath,
+                    [&](StringRef tmp) { (*engine)->dumpToObjectFile(tmp); });
+  }
+  unit.library = std::make_shared<EngineLibrary>(
+      std::move(*engine), std::vector<CpuKernel>{unit.kernel});
+  return llvm::Error::success();
+}
+
 } // namespace
 
 llvm::Expected<std::shared_ptr<CpuKernelLibrary>>
@@ -260,56 +348,93 @@ mlir::yasps::compileCpuKernels(ModuleOp module,
   std::vector<CpuKernel> described = cpuKernels(describeKernels(*kernels));
   st.lowerSeconds = secondsSince(start);
 
-  // 2. Caches: this process, then disk.
-  st.key = cacheKey(*kernels, options);
-  std::lock_guard<std::mutex> guard(cacheLock());
-  if (auto cached = lookupLocked(st.key, described, options, st))
-    return cached;
-  std::string objectPath = objectPathOf(st.key, options);
+  // 2. One module per kernel (each kernel function is self-contained), so
+  // that every kernel is compiled once per process and cached on its own,
+  // whichever requests share it.
+  std::vector<KernelUnit> units = splitKernels(*kernels, described, options);
+  std::string keys;
+  for (const KernelUnit &unit : units)
+    keys += unit.key + "\n";
+  st.key = units.size() == 1 ? units[0].key : hashText(keys);
 
-  // 3. LLVM dialect, then JIT.
-  if (llvm::Error err =
-          runPasses(*kernels, "lowering to the LLVM dialect failed",
-                    [&](PassManager &pm) {
-                      return parsePassPipeline(kLoweringPipeline, pm);
-                    }))
-    return std::move(err);
+  // 3. Caches: this process, then disk.
+  std::vector<KernelUnit *> missing;
+  bool anyFromDisk = false;
+  {
+    std::lock_guard<std::mutex> guard(cacheLock());
+    for (KernelUnit &unit : units) {
+      CpuCompileStats unitStats;
+      unit.library = lookupLocked(unit.key, {unit.kernel}, options, unitStats);
+      anyFromDisk |= unitStats.fromDisk;
+      if (!unit.library)
+        missing.push_back(&unit);
+    }
+  }
+  st.fromMemory = missing.empty() && !anyFromDisk;
+  st.fromDisk = missing.empty() && anyFromDisk;
+
+  // 4. The missing kernels: LLVM dialect here, then LLVM's optimisation and
+  // code generation on every core, one kernel per thread at a time.
+  for (KernelUnit *unit : missing)
+    if (llvm::Error err =
+            runPasses(*unit->module, "lowering to the LLVM dialect failed",
+                      [&](PassManager &pm) {
+                        return parsePassPipeline(kLoweringPipeline, pm);
+                      }))
+      return std::move(err);
   st.lowerSeconds = secondsSince(start);
   Clock::time_point codegenStart = Clock::now();
-
-  ExecutionEngineOptions engineOptions;
-  engineOptions.transformer = makeOptimizingTransformer(
-      options.optLevel, /*sizeLevel=*/0, /*targetMachine=*/nullptr);
-  engineOptions.jitCodeGenOptLevel =
-      static_cast<llvm::CodeGenOptLevel>(std::min(options.optLevel, 3u));
-  engineOptions.enableObjectDump = !objectPath.empty();
-  auto engine = ExecutionEngine::create(*kernels, engineOptions);
-  if (!engine)
-    return engine.takeError();
-  for (CpuKernel &kernel : described) {
-    auto fn = (*engine)->lookupPacked(kernel.symbol);
-    if (!fn)
-      return fn.takeError();
-    kernel.packed = *fn;
-  }
-  if (!objectPath.empty()) {
-    llvm::sys::fs::create_directories(options.cacheDir);
-    storeAtomically(objectPath,
-                    [&](StringRef tmp) { (*engine)->dumpToObjectFile(tmp); });
-  }
+  std::vector<llvm::Error> errors;
+  for (size_t i = 0; i < missing.size(); ++i)
+    errors.push_back(llvm::Error::success());
+  size_t workers = std::min<size_t>(
+      missing.size(), std::max(1u, std::thread::hardware_concurrency()));
+  std::vector<std::thread> threads;
+  std::atomic<size_t> next{0};
+  for (size_t w = 0; w < workers; ++w)
+    threads.emplace_back([&] {
+      for (size_t i = next++; i < missing.size(); i = next++)
+        errors[i] = jitUnit(*missing[i], options);
+    });
+  for (std::thread &thread : threads)
+    thread.join();
+  for (llvm::Error &err : errors)
+    if (err)
+      return std::move(err);
   st.codegenSeconds = secondsSince(codegenStart);
-  auto library =
-      std::make_shared<EngineLibrary>(std::move(*engine), std::move(described));
-  libraries()[st.key] = library;
-  return library;
+
+  std::vector<std::shared_ptr<CpuKernelLibrary>> parts;
+  {
+    std::lock_guard<std::mutex> guard(cacheLock());
+    for (KernelUnit *unit : missing)
+      libraries()[unit->key] = unit->library;
+  }
+  for (KernelUnit &unit : units)
+    parts.push_back(unit.library);
+  return std::make_shared<CompositeLibrary>(std::move(parts));
 }
 
+int64_t mlir::yasps::cpuKernelsCompiled() { return compiledCount(); }
+
 std::shared_ptr<CpuKernelLibrary>
-mlir::yasps::loadCachedCpuKernels(const std::string &objectKey,
-                                  std::vector<CpuKernel> kernels,
+mlir::yasps::loadCachedCpuKernels(std::vector<CpuKernel> kernels,
                                   const CpuCompileOptions &options,
                                   CpuCompileStats &stats) {
   std::lock_guard<std::mutex> guard(cacheLock());
-  stats.key = objectKey;
-  return lookupLocked(objectKey, kernels, options, stats);
+  std::vector<std::shared_ptr<CpuKernelLibrary>> parts;
+  std::string keys;
+  bool anyFromDisk = false;
+  for (CpuKernel &kernel : kernels) {
+    CpuCompileStats kernelStats;
+    auto part = lookupLocked(kernel.objectKey, {kernel}, options, kernelStats);
+    if (!part)
+      return nullptr;
+    anyFromDisk |= kernelStats.fromDisk;
+    keys += kernel.objectKey + "\n";
+    parts.push_back(std::move(part));
+  }
+  stats.fromMemory = !anyFromDisk;
+  stats.fromDisk = anyFromDisk;
+  stats.key = kernels.size() == 1 ? kernels[0].objectKey : hashText(keys);
+  return std::make_shared<CompositeLibrary>(std::move(parts));
 }

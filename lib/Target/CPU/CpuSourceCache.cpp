@@ -59,6 +59,7 @@ json::Value describe(const CpuKernel &kernel) {
     counts[name] = count;
   return json::Object{{"attribute", kernel.attribute},
                       {"symbol", kernel.symbol},
+                      {"object", kernel.objectKey},
                       {"arguments", std::move(arguments)},
                       {"rows", kernel.rows},
                       {"cols", kernel.cols},
@@ -83,15 +84,17 @@ std::optional<CpuKernel> kernelOf(const json::Value &value) {
   CpuKernel kernel;
   auto attribute = text(object->get("attribute"));
   auto symbol = text(object->get("symbol"));
+  auto objectKey = text(object->get("object"));
   auto projection = text(object->get("projection"));
   auto rows = object->getInteger("rows");
   auto cols = object->getInteger("cols");
   const json::Array *arguments = object->getArray("arguments");
   const json::Array *params = object->getArray("params");
   const json::Object *counts = object->getObject("op_counts");
-  if (!attribute || !symbol || !projection || !rows || !cols || !arguments ||
-      !params || !counts)
+  if (!attribute || !symbol || !objectKey || !projection || !rows || !cols ||
+      !arguments || !params || !counts)
     return std::nullopt;
+  kernel.objectKey = *objectKey;
   kernel.attribute = *attribute;
   kernel.symbol = *symbol;
   kernel.projection = *projection;
@@ -168,8 +171,7 @@ mlir::yasps::lookupCpuSource(const std::string &sourceKey,
   }
   const json::Object *record = parsed->getAsObject();
   const json::Array *kernels = record ? record->getArray("kernels") : nullptr;
-  auto object = record ? text(record->get("object")) : std::nullopt;
-  if (!kernels || !object)
+  if (!kernels)
     return nullptr;
   std::vector<CpuKernel> described;
   for (const json::Value &entry : *kernels) {
@@ -178,8 +180,7 @@ mlir::yasps::lookupCpuSource(const std::string &sourceKey,
       return nullptr; // a damaged record: compile again
     described.push_back(std::move(*kernel));
   }
-  auto library =
-      loadCachedCpuKernels(*object, std::move(described), options, stats);
+  auto library = loadCachedCpuKernels(std::move(described), options, stats);
   if (library)
     stats.fromSource = true;
   return library;
@@ -187,15 +188,13 @@ mlir::yasps::lookupCpuSource(const std::string &sourceKey,
 
 void mlir::yasps::recordCpuSource(const std::string &sourceKey,
                                   const CpuKernelLibrary &library,
-                                  const CpuCompileStats &stats,
                                   const CpuCompileOptions &options) {
   if (options.cacheDir.empty())
     return;
   json::Array kernels;
   for (const CpuKernel &kernel : library.kernels())
     kernels.push_back(describe(kernel));
-  json::Value record =
-      json::Object{{"object", stats.key}, {"kernels", std::move(kernels)}};
+  json::Value record = json::Object{{"kernels", std::move(kernels)}};
   llvm::sys::fs::create_directories(options.cacheDir);
   storeAtomically(recordPath(sourceKey, options), [&](llvm::StringRef tmp) {
     std::error_code error;

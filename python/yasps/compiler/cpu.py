@@ -49,6 +49,13 @@ class CpuKernels:
         self.library.launch(path, count, buffers, threads)
 
 
+def kernels_compiled() -> int:
+    """How many CPU kernels this process has compiled to machine code: each
+    kernel once, whichever requests share it (loads from the memory and
+    disk caches are not counted)."""
+    return native().cpu_kernels_compiled()
+
+
 #: Compiled libraries by (IR text, attributes, pipeline, settings): a scene
 #: evaluated again with the same structure skips parsing, passes and the
 #: kernel cache lookup. The IR is ir.kernel_ir's, without the counts of

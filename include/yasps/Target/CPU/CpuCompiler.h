@@ -29,6 +29,9 @@ namespace mlir::yasps {
 /// (index begin, index end, memref<?x...> buffers...).
 struct CpuKernel : KernelDescription {
   void (*packed)(void **) = nullptr;
+  /// The cache key of the object that holds it: every kernel is compiled
+  /// and cached on its own.
+  std::string objectKey;
 };
 
 /// How a compilation went, for users and benchmarks.
@@ -40,7 +43,8 @@ struct CpuCompileStats {
   bool fromSource = false;
   double lowerSeconds = 0;   ///< yasps IR to LLVM dialect
   double codegenSeconds = 0; ///< LLVM optimisation, code generation, loading
-  std::string key;           ///< the cache key
+  /// the cache key (of the one kernel's object, else of them all)
+  std::string key;
 };
 
 /// A set of compiled kernels and the JIT session that owns their code.
@@ -67,6 +71,10 @@ struct CpuCompileOptions {
   int64_t lanes = 0;
 };
 
+/// How many kernels this process has compiled to machine code (LLVM
+/// optimisation and code generation; loads from the caches not counted).
+int64_t cpuKernelsCompiled();
+
 /// The number of f64 lanes in the host's widest vector registers.
 int64_t hostDoubleLanes();
 
@@ -89,12 +97,11 @@ compileCpuKernels(ModuleOp module, const std::vector<std::string> &attributes,
                   CpuCompileStats *stats = nullptr,
                   llvm::StringRef prePipeline = "");
 
-/// The library of the object cached under `objectKey` (a compileCpuKernels
-/// cache key) with the given kernels' descriptions: from this process's
-/// libraries, else from `options.cacheDir`; null if neither has it.
+/// The library of `kernels` (descriptions with their `objectKey`s), each
+/// from this process's libraries, else from `options.cacheDir`; null if one
+/// is in neither.
 std::shared_ptr<CpuKernelLibrary>
-loadCachedCpuKernels(const std::string &objectKey,
-                     std::vector<CpuKernel> kernels,
+loadCachedCpuKernels(std::vector<CpuKernel> kernels,
                      const CpuCompileOptions &options, CpuCompileStats &stats);
 
 } // namespace mlir::yasps

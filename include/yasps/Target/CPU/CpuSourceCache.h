@@ -34,11 +34,10 @@ std::shared_ptr<CpuKernelLibrary>
 lookupCpuSource(const std::string &sourceKey, const CpuCompileOptions &options,
                 CpuCompileStats &stats);
 
-/// Records that the request `sourceKey` compiled to `library`, whose object
-/// is cached under `stats.key`.
+/// Records that the request `sourceKey` compiled to `library` (the objects
+/// of its kernels, by their `objectKey`s).
 void recordCpuSource(const std::string &sourceKey,
                      const CpuKernelLibrary &library,
-                     const CpuCompileStats &stats,
                      const CpuCompileOptions &options);
 
 } // namespace mlir::yasps
