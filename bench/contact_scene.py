@@ -62,10 +62,12 @@ def random_pairs(count: int, positions: np.ndarray, arity: int,
     return out[:count].astype(np.int64)
 
 
-def build(pairs: int = 4, cells: int = 1, seed: int = 0
+def build(pairs: int = 4, cells: int = 1, seed: int = 0,
+          pair_types: Tuple[str, ...] = tuple(PAIR_TYPES)
           ) -> Tuple[yasps.Scene, Dict[str, yasps.Primitive],
                      Dict[str, yasps.Connectivity], np.ndarray]:
-    """The scene with ``pairs`` pairs of each type; returns it, the pair
+    """The scene with ``pairs`` pairs of each of ``pair_types``; returns it,
+    the pair
     primitives and their connectivities by type, and the union's vertex
     positions at rest (for drawing more pairs)."""
     rng = np.random.default_rng(seed)
@@ -116,7 +118,8 @@ def build(pairs: int = 4, cells: int = 1, seed: int = 0
     union.addAttribute("x")
     primitives, connectivities = {}, {}
     positions = np.concatenate([x.value[:, :, 0], verts + [0.0, 0.0, 0.6]])
-    for name, (arity, distance2) in PAIR_TYPES.items():
+    for name in pair_types:
+        arity, distance2 = PAIR_TYPES[name]
         p = world.addPrimitive(name, numInstances=pairs, isDynamic=True)
         c = p.addConnectivity("c", union, random_pairs(pairs, positions, arity,
                                                        rng), arity)
