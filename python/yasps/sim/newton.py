@@ -1,106 +1,192 @@
 """Implicit time stepping with yasps: a Newton loop with a backtracking line
-search and a step bound, and implicit Euler on top of it.
+search and step bounds (IPC's CCD with :class:`yasps.contact.Contact`), and
+implicit Euler on top of it, over one or several minimisation targets.
 
 yasps returns Newton directions (``minimizeEnergy``); stepping, line search
 and collision handling stay with the user (paper section 3). These helpers
-are the usual choices for a first simulation.
+are the usual choices for a simulation.
 """
 
 from __future__ import annotations
 
-from typing import Callable, List, Optional
+import time
+from typing import Callable, Dict, List, Optional, Sequence, Union
 
 import numpy as np
 
 from ..frontend.attribute import Attribute
+from ..frontend.errors import SceneError
+
+Targets = Union[Attribute, Sequence[Attribute]]
 
 
 class NewtonReport:
-    """What one Newton solve did."""
+    """What one Newton solve did: ``iterations`` (accepted steps),
+    ``energies`` (the total energy before the first and after each accepted
+    step), ``converged``, ``stepBounds`` (the CCD bound of each iteration,
+    with contact) and ``seconds`` (time spent on collision detection, CCD
+    and the Newton directions)."""
 
     def __init__(self):
         self.iterations = 0
         self.energies: List[float] = []
         self.converged = False
+        self.stepBounds: List[float] = []
+        self.seconds: Dict[str, float] = {"collisions": 0.0, "ccd": 0.0,
+                                          "directions": 0.0}
 
     def __repr__(self) -> str:
         return (f"<NewtonReport {self.iterations} iterations, "
                 f"converged={self.converged}>")
 
 
-def newton(scene, x: Attribute, tolerance: float,
+def _as_list(targets: Targets) -> List[Attribute]:
+    return [targets] if isinstance(targets, Attribute) else list(targets)
+
+
+def _check_targets(scene, targets: List[Attribute]) -> None:
+    if [id(t) for t in targets] != [id(t) for t in scene.minimizeTargets]:
+        names = ", ".join(t.describe() for t in scene.minimizeTargets)
+        raise SceneError(f"newton: the targets must be the scene's "
+                         f"minimisation targets in order ({names})")
+
+
+def newton(scene, x: Targets, tolerance: float,
            step_bound: Optional[Callable[[np.ndarray, np.ndarray], float]] = None,
            max_iterations: int = 20, cg_tolerance: float = 1e-4,
-           fixed: Optional[np.ndarray] = None) -> NewtonReport:
-    """Minimises the scene's energy over its single target ``x`` by Newton's
+           fixed=None, contact=None) -> NewtonReport:
+    """Minimises the scene's energy over its targets ``x`` (one attribute,
+    or the list of the scene's minimisation targets in order) by Newton's
     method: directions from ``minimizeEnergy``, the step limited by
-    ``step_bound(x, p)`` (the largest safe fraction of the step ``p``, e.g.
-    to stay clear of obstacles: the hook for a collision-free step), then
-    halved until the energy decreases. ``fixed`` (a boolean mask of x's
-    instances or entries) excludes DoFs, which keep their values. Stops when
-    the largest entry of a step is below ``tolerance``."""
+    ``step_bound(x, p)`` (single target: the largest safe fraction of the
+    step ``p``) and by ``contact.stepBound`` (ipctk's CCD), then halved
+    until the energy decreases. With ``contact`` its pairs are rebuilt at
+    every iterate and every candidate of the line search. ``fixed`` (a
+    boolean mask of a single target's instances or entries, or a list with
+    one mask or None per target) excludes DoFs, which keep their values.
+    Stops when the largest change of a world position (with contact) or of
+    a target entry is below ``tolerance``."""
+    targets = _as_list(x)
+    _check_targets(scene, targets)
+    if fixed is not None and isinstance(x, Attribute):
+        fixed = [fixed]
     report = NewtonReport()
-    energy = scene.evaluateEnergy()
-    report.energies.append(energy)
+    clock = time.perf_counter
+
+    def energy() -> float:
+        if contact is not None:
+            start = clock()
+            contact.update()
+            report.seconds["collisions"] += clock() - start
+        return scene.evaluateEnergy()
+
+    current_energy = energy()
+    report.energies.append(current_energy)
     for _ in range(max_iterations):
-        (dx,) = scene.minimizeEnergy(
-            tolerance=cg_tolerance, fixed=None if fixed is None else [fixed])
-        p = -dx
-        current = x.value
-        alpha = 1.0 if step_bound is None else min(1.0, step_bound(current, p))
+        start = clock()
+        steps = [-dx for dx in scene.minimizeEnergy(tolerance=cg_tolerance,
+                                                    fixed=fixed)]
+        report.seconds["directions"] += clock() - start
+        current = [t.value for t in targets]
+        alpha = 1.0
+        if step_bound is not None:
+            alpha = min(alpha, step_bound(current[0], steps[0]) if
+                        len(targets) == 1 else step_bound(current, steps))
+        world = None
+        if contact is not None:
+            start = clock()
+            bound = contact.stepBound(steps)
+            report.seconds["ccd"] += clock() - start
+            report.stepBounds.append(bound)
+            alpha = min(alpha, bound)
+            world = contact.world()
         while alpha > 1e-10:
-            x.updateValue(current + alpha * p)
-            candidate = scene.evaluateEnergy()
-            if candidate <= energy:
+            for t, value, p in zip(targets, current, steps):
+                t.updateValue(value + alpha * p)
+            candidate = energy()
+            if candidate <= current_energy:
                 break
             alpha *= 0.5
         else:
-            x.updateValue(current)
+            for t, value in zip(targets, current):
+                t.updateValue(value)
+            energy()
             break
-        energy = candidate
+        current_energy = candidate
         report.iterations += 1
-        report.energies.append(energy)
-        if np.abs(alpha * p).max() < tolerance:
+        report.energies.append(current_energy)
+        change = (np.abs(contact.world() - world).max() if world is not None
+                  else max(np.abs(alpha * p).max() for p in steps))
+        if change < tolerance:
             report.converged = True
             break
     return report
 
 
 class ImplicitEuler:
-    """Implicit Euler time stepping of positions ``x`` (the scene's single
-    minimisation target) whose inertia energy pulls towards ``x_hat``:
-    every step predicts ``x_hat = x + dt v + dt^2 g`` and minimises the
-    energy by :func:`newton`, until the largest displacement of a Newton
-    step over ``dt`` is below ``velocity_tolerance`` (paper section 9.1);
-    then ``v = (x_new - x_old) / dt``. Fixed vertices (``fixed``, a boolean
-    mask of x's instances) are excluded DoFs: they keep their positions.
-    """
+    """Implicit Euler time stepping of the scene's minimisation targets
+    (``x``: one attribute or the list of them, in the scene's order), whose
+    inertia energies pull towards the predictions ``x_hat`` (one constant
+    attribute per target): every step predicts ``x_hat = x + dt v + dt^2 g``
+    (``gravity``: one vector for a single target, or one per target, None
+    for none) and minimises the energy by :func:`newton`, with ``contact``
+    if given, until the largest displacement of a Newton step over ``dt`` is
+    below ``velocity_tolerance`` (paper section 9.1); then
+    ``v = (x_new - x_old) / dt``. ``fixed`` (as for :func:`newton`) keeps
+    DoFs where they are."""
 
-    def __init__(self, scene, x: Attribute, x_hat: Attribute, dt: float,
+    def __init__(self, scene, x: Targets, x_hat: Targets, dt: float,
                  gravity=(0.0, 0.0, -9.81), velocity_tolerance: float = 1e-2,
                  step_bound: Optional[Callable[[np.ndarray, np.ndarray],
                                                float]] = None,
-                 fixed: Optional[np.ndarray] = None,
-                 max_iterations: int = 20):
-        self.scene, self.x, self.x_hat, self.dt = scene, x, x_hat, float(dt)
-        self.gravity = np.asarray(gravity, dtype=float).reshape(1, -1, 1)
+                 fixed=None, max_iterations: int = 20, contact=None,
+                 cg_tolerance: float = 1e-4):
+        single = isinstance(x, Attribute)
+        self.scene, self.dt = scene, float(dt)
+        self.targets, self.predicted = _as_list(x), _as_list(x_hat)
+        if len(self.targets) != len(self.predicted):
+            raise SceneError(f"ImplicitEuler: {len(self.targets)} targets but "
+                             f"{len(self.predicted)} predictions")
+        _check_targets(scene, self.targets)
+        gravities = [gravity] if single else list(gravity)
+        if len(gravities) != len(self.targets):
+            raise SceneError("ImplicitEuler: give one gravity (or None) per "
+                             "target")
+        self.gravity = [None if g is None else
+                        np.asarray(g, dtype=float).reshape(1, -1, 1)
+                        for g in gravities]
+        masks = [fixed] if single else (list(fixed) if fixed is not None
+                                        else [None] * len(self.targets))
+        self.fixed = [None if m is None else np.asarray(m, dtype=bool)
+                      for m in masks]
         self.velocity_tolerance = velocity_tolerance
-        self.step_bound = step_bound
-        self.fixed = None if fixed is None else np.asarray(fixed, dtype=bool)
-        self.max_iterations = max_iterations
-        self.velocity = np.zeros_like(x.value)
+        self.step_bound, self.contact = step_bound, contact
+        self.max_iterations, self.cg_tolerance = max_iterations, cg_tolerance
+        self.velocities = [np.zeros_like(t.value) for t in self.targets]
+
+    @property
+    def velocity(self) -> np.ndarray:
+        """The first target's velocity (the single-target form)."""
+        return self.velocities[0]
 
     def step(self) -> NewtonReport:
         """Advances one time step; returns the Newton report."""
-        previous = self.x.value
-        gravity = np.broadcast_to(self.gravity, previous.shape).copy()
-        if self.fixed is not None:
-            gravity[self.fixed] = 0.0
-        self.x_hat.updateValue(previous + self.dt * self.velocity
-                               + self.dt * self.dt * gravity)
-        report = newton(self.scene, self.x,
+        previous = [t.value for t in self.targets]
+        for value, v, g, mask, hat in zip(previous, self.velocities,
+                                          self.gravity, self.fixed,
+                                          self.predicted):
+            pull = np.zeros_like(value) if g is None else \
+                np.broadcast_to(g, value.shape).copy()
+            if mask is not None:
+                pull[mask] = 0.0
+            hat.updateValue(value + self.dt * v + self.dt * self.dt * pull)
+        fixed = None if all(m is None for m in self.fixed) else self.fixed
+        report = newton(self.scene, self.targets,
                         tolerance=self.velocity_tolerance * self.dt,
                         step_bound=self.step_bound,
-                        max_iterations=self.max_iterations, fixed=self.fixed)
-        self.velocity = (self.x.value - previous) / self.dt
+                        max_iterations=self.max_iterations,
+                        cg_tolerance=self.cg_tolerance, fixed=fixed,
+                        contact=self.contact)
+        self.velocities = [(t.value - p) / self.dt
+                           for t, p in zip(self.targets, previous)]
         return report

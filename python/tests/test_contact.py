@@ -1,0 +1,200 @@
+"""yasps.contact: IPC's barrier over ipctk's collision sets, as yasps
+energies on dynamic pair primitives, against ipctk's BarrierPotential; the
+chain rule through affine bodies; short drops checked for intersections by
+ipctk, independently of the layer."""
+
+import ipctk
+import numpy as np
+import pytest
+
+import yasps
+from yasps import energies as E
+from yasps.contact import Contact, surface_of
+from yasps.runtime import cpu_backend
+from yasps.sim import ImplicitEuler, box_tet_mesh
+from yasps.solve import assemble
+
+VERTS, TETS = box_tet_mesh(2, 0.5)
+FACES = surface_of(TETS)
+
+
+def rotation(angle: float, axis) -> np.ndarray:
+    axis = np.asarray(axis, float) / np.linalg.norm(axis)
+    K = np.cross(np.eye(3), axis)
+    return np.eye(3) + np.sin(angle) * K + (1 - np.cos(angle)) * K @ K
+
+
+def system_arrays(scene):
+    """The assembled gradient and dense Hessian."""
+    system, _ = assemble(scene, cpu_backend())
+    g = np.empty(system.size)
+    H = np.empty((system.size, system.size))
+    system.gradient(g)
+    system.dense(H)
+    return g, H
+
+
+def relative(a, b) -> float:
+    return float(np.abs(a - b).max() / max(np.abs(b).max(), 1e-300))
+
+
+@pytest.mark.parametrize("angle", [0.0, 0.3])
+def test_barrier_matches_ipctk(angle):
+    """Two soft boxes within dhat: axis-aligned (parallel edges: mollified
+    edge-edge pairs, end-point types) and turned (generic pairs). Energy,
+    gradient and unprojected Hessian equal ipctk's BarrierPotential on the
+    same collision set."""
+    s = yasps.scene("pair")
+    a = s.addMesh("a").addPrimitive("v", numInstances=len(VERTS))
+    b = s.addMesh("b").addPrimitive("v", numInstances=len(VERTS))
+    xa = a.addAttribute("position", rows=3)
+    xa.updateValue(VERTS)
+    xb = b.addAttribute("position", rows=3)
+    turned = (VERTS - 0.25) @ rotation(angle, [1, 2, 0.5]).T + 0.25
+    lift = 0.5 - turned[:, 2].min() + 0.02
+    xb.updateValue(turned + [0.1, 0.05, lift])
+    union = s.addMesh("w").addPrimitiveUnion("v", [a, b])
+    union.addAttribute("position")
+    contact = Contact(s, union, faces=np.concatenate([FACES, FACES + len(VERTS)]),
+                      dhat=0.05, kappa=3.0, projection="none")
+    s.addMinimizeTarget([xa, xb])
+    counts = contact.update()
+    assert sum(counts.values()) > 0
+    if angle == 0.0:
+        assert counts["ee"] + counts["ee_ev"] + counts["ee_vv"] > 0
+    V = contact.world()
+    potential = ipctk.BarrierPotential(0.05, 3.0)
+    want = potential(contact.collisions, contact.mesh, V)
+    assert abs(s.evaluateEnergy() - want) <= 1e-10 * abs(want)
+    g, H = system_arrays(s)
+    assert relative(g, potential.gradient(contact.collisions, contact.mesh, V)) < 1e-10
+    reference = potential.hessian(
+        contact.collisions, contact.mesh, V,
+        project_hessian_to_psd=ipctk.PSDProjectionMethod.NONE).toarray()
+    assert relative(H, reference) < 1e-10
+
+
+def soft_and_affine(scene, lift: float, kappa: float, projection="clamp"):
+    """A soft box and, above it, an affine box (x = A rest + t), their
+    vertices in one UNION with contact; returns the targets, the affine
+    box's rest positions and the contact."""
+    soft = scene.addMesh("soft").addPrimitive("v", numInstances=len(VERTS))
+    xs = soft.addAttribute("position", rows=3)
+    xs.updateValue(VERTS)
+    rigid = scene.addMesh("rigid")
+    body = rigid.addPrimitive("body", numInstances=1)
+    A = body.addAttribute("A", rows=3, cols=3)
+    A.updateValue(rotation(0.2, [0.3, 1, 0]))
+    t = body.addAttribute("t", rows=3)
+    t.updateValue([0.05, 0.02, lift])
+    rv = rigid.addPrimitive("v", numInstances=len(VERTS))
+    rest = VERTS - 0.25
+    rv.addConstant("rest", rows=3).updateValue(rest)
+    link = rv.addConnectivity("v2b", body, [0] * len(VERTS), 1)
+    rv.addAttribute("position", computed_attribute=rv.addAttribute(
+        "A", through=link, source=A).resize(3, 3) * rv["rest"] + rv.addAttribute(
+        "t", through=link, source=t).resize(3, 1))
+    union = scene.addMesh("w").addPrimitiveUnion("v", [soft, rv])
+    union.addAttribute("position")
+    contact = Contact(scene, union, faces=np.concatenate(
+        [FACES, FACES + len(VERTS)]), dhat=0.05, kappa=kappa,
+        projection=projection)
+    return (xs, A, t), rest, contact
+
+
+def test_affine_body_gets_the_chain_rule_of_the_soft_derivatives():
+    """Through the UNION, the barrier's gradient and Hessian with respect
+    to the soft positions, A and t are J^T g and J^T H J of ipctk's on the
+    world positions, J the (linear) map from the targets to them."""
+    s = yasps.scene("mixed")
+    (xs, A, t), rest, contact = soft_and_affine(s, 0.79, 2.0, "none")
+    s.addMinimizeTarget([xs, A, t])
+    assert sum(contact.update().values()) > 0
+    V = contact.world()
+    potential = ipctk.BarrierPotential(0.05, 2.0)
+    gw = potential.gradient(contact.collisions, contact.mesh, V)
+    Hw = potential.hessian(contact.collisions, contact.mesh, V,
+                           project_hessian_to_psd=ipctk.PSDProjectionMethod.NONE
+                           ).toarray()
+    n = len(VERTS)
+    J = np.zeros((6 * n, 3 * n + 12))
+    J[:3 * n, :3 * n] = np.eye(3 * n)
+    for i, r in enumerate(rest):
+        for row in range(3):
+            world = 3 * (n + i) + row
+            for col in range(3):
+                # A's DoFs are column-major: entry (row, col) at col*3 + row.
+                J[world, 3 * n + col * 3 + row] = r[col]
+            J[world, 3 * n + 9 + row] = 1.0
+    g, H = system_arrays(s)
+    assert relative(g, J.T @ gw) < 1e-10
+    assert relative(H, J.T @ Hw @ J) < 1e-10
+
+
+def no_intersections(mesh: ipctk.CollisionMesh, V: np.ndarray) -> bool:
+    return not ipctk.has_intersections(mesh, V)
+
+
+def test_soft_box_falls_on_an_affine_box():
+    """Implicit Euler over the soft positions, A and t with contact: the
+    soft box falls onto the affine box (no gravity on it, inertia on A and
+    t, orthogonality); every frame is free of intersections (ipctk, on a
+    mesh of its own), every accepted Newton step lowers the energy, and
+    nothing is NaN. The boxes come within dhat and push each other."""
+    dt = 0.01
+    s = yasps.scene("fall")
+    (xs, A, t), rest, contact = soft_and_affine(s, -0.3, 50.0)
+    soft = s.soft.v
+    tets = s.soft.addPrimitive("t", numInstances=len(TETS))
+    D = VERTS[TETS]
+    dm = np.stack([D[:, k] - D[:, 0] for k in (1, 2, 3)], axis=2)
+    tets.addConstant("inv", rows=3, cols=3).updateValue(np.linalg.inv(dm))
+    tets.addConstant("vol", rows=1).updateValue(
+        np.abs(np.linalg.det(dm))[:, None] / 6)
+    corners = tets.addAttribute("c", through=tets.addConnectivity(
+        "t2v", soft, TETS, 4), source=xs)
+    s.addEnergy(tets.addAttribute("elastic", computed_attribute=dt * dt *
+                E.stable_neo_hookean(E.deformation_gradient(corners, tets["inv"]),
+                                     1e4, 4e4, tets["vol"])))
+    xs.updateValue(VERTS + [0.0, 0.0, 0.56])
+    x_hat = soft.addConstant("x_hat", rows=3)
+    s.addEnergy(soft.addAttribute("inertia", computed_attribute=E.inertia(
+        xs, x_hat, 0.5)))
+    body = s.rigid.body
+    A_hat = body.addConstant("A_hat", rows=3, cols=3)
+    t_hat = body.addConstant("t_hat", rows=3)
+    s.addEnergy(body.addAttribute("inertia", computed_attribute=E.inertia(
+        A, A_hat, 5.0) + E.inertia(t, t_hat, 5.0)))
+    s.addEnergy(body.addAttribute("orth", computed_attribute=
+                                  E.abd_orthogonality(A, 100.0)))
+    t.updateValue([0.25, 0.25, 0.25])
+    s.addMinimizeTarget([xs, A, t])
+    checker = ipctk.CollisionMesh(contact.world(), contact.mesh.edges,
+                                  contact.mesh.faces)
+    assert no_intersections(checker, contact.world())
+    stepper = ImplicitEuler(s, [xs, A, t], [x_hat, A_hat, t_hat], dt,
+                            gravity=[(0, 0, -9.81), None, None], contact=contact)
+    closest = np.inf
+    for _ in range(12):
+        report = stepper.step()
+        V = contact.world()
+        assert np.isfinite(V).all()
+        assert no_intersections(checker, V)
+        assert all(b <= a for a, b in zip(report.energies, report.energies[1:]))
+        assert report.iterations > 0
+        closest = min(closest, contact.minDistance())
+    assert closest < 0.05
+    # The affine box was pushed down by the contact.
+    assert t.value[0, 2, 0] < 0.25
+
+
+def test_contact_checks_its_inputs():
+    s = yasps.scene("bad")
+    v = s.addMesh("m").addPrimitive("v", numInstances=4)
+    v.addAttribute("x", rows=3).updateValue(np.eye(4, 3))
+    with pytest.raises(yasps.SceneError, match="has no attribute 'position'"):
+        Contact(s, v, faces=[[0, 1, 2]])
+    with pytest.raises(yasps.SceneError, match="faces index vertices outside"):
+        Contact(s, v, faces=[[0, 1, 7]], position="x")
+    with pytest.raises(ValueError, match="dhat must be > 0"):
+        Contact(s, v, faces=[[0, 1, 2]], position="x", dhat=0.0)

@@ -1,0 +1,163 @@
+"""IPC contact between bodies of any parameterisation, by ipctk.
+
+:class:`Contact` owns the plumbing between a scene and ipctk (the IPC
+toolkit): the world positions of a vertex primitive or UNION, computed by
+the scene's own kernels from whatever parameterises them; ipctk's collision
+set at those positions, turned into dynamic pair primitives joined to the
+vertices (one per closest-feature type, :mod:`.pairs`) that carry IPC's
+barrier as yasps energies; and ipctk's CCD for the largest safe step. The
+barrier's derivatives and assembly are yasps' own, so free, affine, caged
+or new parameterisations need no contact code of their own::
+
+    c = Contact(scene, union, faces=F, dhat=1e-3, kappa=1e3)
+    c.update()              # pairs at the current positions
+    alpha = c.stepBound([-dx for dx in scene.minimizeEnergy()])
+
+Not yet: friction, the adaptive barrier stiffness of IPC (kappa is fixed),
+obstacles other than meshes in the same UNION, and a conservative CCD for
+non-linear parameterisations (the step bound is exact only where world
+positions are linear in the targets: free, affine and caged vertices).
+"""
+
+from __future__ import annotations
+
+from typing import Dict, List, Optional, Sequence, Union
+
+import ipctk
+import numpy as np
+
+from ..frontend.attribute import Attribute
+from ..frontend.errors import SceneError
+from ..frontend.scene import Primitive, PrimitiveUnion, Scene
+from .pairs import BY_NAME, PAIR_TYPES, barrier_energy, classify
+from .surface import edges_of, surface_of
+
+__all__ = ["Contact", "PAIR_TYPES", "edges_of", "surface_of"]
+
+
+class Contact:
+    """IPC contact among the surface ``faces`` (and ``edges``, by default
+    those of the faces) of ``vertices``, a primitive or primitive union
+    whose ``position`` attribute (3x1) gives world positions. Adds a mesh
+    ``name`` to the scene with one dynamic pair primitive per pair type and
+    its barrier energy ``kappa * b(d, dhat)`` (ipctk's BarrierPotential:
+    dhat a distance, d squared distances)."""
+
+    def __init__(self, scene: Scene,
+                 vertices: Union[Primitive, PrimitiveUnion],
+                 faces: Optional[np.ndarray] = None,
+                 edges: Optional[np.ndarray] = None, dhat: float = 1e-3,
+                 kappa: float = 1.0, position: str = "position",
+                 name: str = "contact", projection: str = "clamp"):
+        if position not in vertices:
+            raise SceneError(f"Contact: {vertices.describe()} has no "
+                             f"attribute {position!r} (its world positions)")
+        self.positions: Attribute = vertices[position]
+        if self.positions.shape != (3, 1):
+            raise SceneError(f"Contact: world positions must be 3x1, got "
+                             f"{self.positions.describe()}")
+        if not dhat > 0:
+            raise ValueError(f"Contact: dhat must be > 0, got {dhat}")
+        self.scene, self.vertices, self.dhat = scene, vertices, float(dhat)
+        count = vertices.numInstances
+        faces = np.zeros((0, 3), dtype=np.int32) if faces is None else \
+            np.ascontiguousarray(faces, dtype=np.int32).reshape(-1, 3)
+        edges = edges_of(faces) if edges is None else \
+            np.ascontiguousarray(edges, dtype=np.int32).reshape(-1, 2)
+        for what, indices in (("faces", faces), ("edges", edges)):
+            if indices.size and (indices.min() < 0 or indices.max() >= count):
+                raise SceneError(f"Contact: {what} index vertices outside "
+                                 f"0..{count - 1} of {vertices.describe()}")
+        rest = self.world()
+        self.mesh = ipctk.CollisionMesh(rest, edges, faces)
+        self.collisions = ipctk.NormalCollisions()
+        mesh = scene.addMesh(name)
+        # A stored value, not a number in the IR: changing the stiffness
+        # recompiles nothing.
+        self.stiffness = mesh.addConstant("kappa", rows=1)
+        self.stiffness.updateValue([float(kappa)])
+        self.primitives: Dict[str, Primitive] = {}
+        for pair in PAIR_TYPES:
+            p = mesh.addPrimitive(pair.name, numInstances=0, isDynamic=True)
+            link = p.addConnectivity("v", vertices, np.zeros((0, pair.arity),
+                                                              np.int64),
+                                     pair.arity)
+            gathered = p.addAttribute("x", through=link, source=self.positions)
+            eps = p.addConstant("eps_x", rows=1)
+            weight = p.addConstant("weight", rows=1)
+            energy = barrier_energy(pair, gathered, eps, weight, self.dhat,
+                                    self.stiffness)
+            scene.addEnergy(p.addAttribute("barrier", computed_attribute=energy),
+                            dynamic_instances=True, projection=projection)
+            self.primitives[pair.name] = p
+
+    # ------------------------------------------------------------- geometry
+
+    def world(self) -> np.ndarray:
+        """The vertices' world positions now, (N, 3), from the scene's
+        kernels."""
+        return np.ascontiguousarray(self.positions.compute().value[:, :, 0])
+
+    def update(self) -> Dict[str, int]:
+        """Rebuilds the pairs from ipctk's collision set at the current
+        positions; returns the number of pairs of each type."""
+        V = self.world()
+        self.collisions.build(self.mesh, V, self.dhat)
+        found: Dict[str, List[List[int]]] = {t.name: [] for t in PAIR_TYPES}
+        eps: Dict[str, List[float]] = {t.name: [] for t in PAIR_TYPES}
+        weights: Dict[str, List[float]] = {t.name: [] for t in PAIR_TYPES}
+        edges, faces = self.mesh.edges, self.mesh.faces
+        for group in (self.collisions.vv_collisions,
+                      self.collisions.ev_collisions,
+                      self.collisions.ee_collisions,
+                      self.collisions.fv_collisions):
+            for collision in group:
+                ids = collision.vertex_ids(edges, faces)
+                kind, order = classify(collision, ids, V)
+                found[kind].append(order)
+                eps[kind].append(float(getattr(collision, "eps_x", 1.0)))
+                weights[kind].append(float(collision.weight))
+        for kind, pairs in found.items():
+            p = self.primitives[kind]
+            arity = BY_NAME[kind].arity
+            p.updateNumInstances(len(pairs))
+            p.connectivities["v"].updateConnectivity(
+                np.asarray(pairs, dtype=np.int64).reshape(-1, arity))
+            p["eps_x"].updateValue(np.asarray(eps[kind]).reshape(-1, 1))
+            p["weight"].updateValue(np.asarray(weights[kind]).reshape(-1, 1))
+        return {kind: len(pairs) for kind, pairs in found.items()}
+
+    def stepBound(self, steps: Sequence[np.ndarray]) -> float:
+        """The largest fraction in [0, 1] of the step ``steps`` (one array
+        per minimisation target, as minimizeEnergy returns them, negated)
+        along which no surface primitives cross, by ipctk's CCD between the
+        world positions now and after the full step. Exact where world
+        positions are linear in the targets."""
+        targets = self.scene.minimizeTargets
+        if len(steps) != len(targets):
+            raise ValueError(f"stepBound: {len(steps)} steps for "
+                             f"{len(targets)} targets")
+        before = [t.value for t in targets]
+        V0 = self.world()
+        try:
+            for t, x, p in zip(targets, before, steps):
+                t.updateValue(x + np.asarray(p).reshape(x.shape))
+            V1 = self.world()
+        finally:
+            for t, x in zip(targets, before):
+                t.updateValue(x)
+        return float(ipctk.compute_collision_free_stepsize(self.mesh, V0, V1))
+
+    def hasIntersections(self) -> bool:
+        """Whether some edge crosses some triangle now (ipctk)."""
+        return bool(ipctk.has_intersections(self.mesh, self.world()))
+
+    def minDistance(self) -> float:
+        """The smallest distance between surface primitives now, among
+        those closer than dhat (inf if none are)."""
+        V = self.world()
+        collisions = ipctk.NormalCollisions()
+        collisions.build(self.mesh, V, self.dhat)
+        if collisions.empty():
+            return float("inf")
+        return float(np.sqrt(collisions.compute_minimum_distance(self.mesh, V)))
