@@ -188,6 +188,51 @@ def test_soft_box_falls_on_an_affine_box():
     assert t.value[0, 2, 0] < 0.25
 
 
+def test_adaptive_stiffness_is_ipctks():
+    """Without a fixed kappa, the initial stiffness is ipctk's
+    initial_barrier_stiffness from the other energies' gradient and the
+    barrier's (here both on free vertices, computed independently: the
+    inertia's m (x - x_hat) and ipctk's BarrierPotential); changing it
+    compiles nothing."""
+    s = yasps.scene("adaptive")
+    a = s.addMesh("a").addPrimitive("v", numInstances=len(VERTS))
+    b = s.addMesh("b").addPrimitive("v", numInstances=len(VERTS))
+    xa = a.addAttribute("position", rows=3)
+    xa.updateValue(VERTS)
+    xb = b.addAttribute("position", rows=3)
+    xb.updateValue(VERTS + [0.1, 0.05, 0.52])
+    hats = []
+    for prim, x in ((a, xa), (b, xb)):
+        hat = prim.addConstant("x_hat", rows=3)
+        hat.updateValue(x.value[:, :, 0] + [0.0, 0.0, -0.01])
+        s.addEnergy(prim.addAttribute("inertia", computed_attribute=E.inertia(
+            x, hat, 0.3)))
+        hats.append(hat)
+    union = s.addMesh("w").addPrimitiveUnion("v", [a, b])
+    union.addAttribute("position")
+    contact = Contact(s, union, faces=np.concatenate([FACES, FACES + len(VERTS)]),
+                      dhat=0.05, average_mass=0.3)
+    s.addMinimizeTarget([xa, xb])
+    assert sum(contact.update().values()) > 0
+    kappa = contact.adaptStiffness()
+    V = contact.world()
+    inertia = 0.3 * (V - np.concatenate([h.value[:, :, 0] for h in hats]))
+    barrier = ipctk.BarrierPotential(0.05, 1.0).gradient(
+        contact.collisions, contact.mesh, V)
+    diagonal = np.linalg.norm(V.max(axis=0) - V.min(axis=0))
+    want, _ = ipctk.initial_barrier_stiffness(
+        diagonal, ipctk.ClampedLogBarrier(), 0.05, 0.3, inertia.reshape(-1),
+        barrier)
+    assert kappa > 0 and abs(kappa - want) <= 1e-12 * want
+    assert contact.kappa == kappa
+    before = yasps.compiler.invocations()
+    contact.adaptStiffness()
+    s.minimizeEnergy()
+    assert yasps.compiler.invocations() == before
+    with pytest.raises(ValueError, match="average vertex mass"):
+        Contact(s, union, faces=FACES, name="other")
+
+
 def test_contact_checks_its_inputs():
     s = yasps.scene("bad")
     v = s.addMesh("m").addPrimitive("v", numInstances=4)
@@ -195,6 +240,6 @@ def test_contact_checks_its_inputs():
     with pytest.raises(yasps.SceneError, match="has no attribute 'position'"):
         Contact(s, v, faces=[[0, 1, 2]])
     with pytest.raises(yasps.SceneError, match="faces index vertices outside"):
-        Contact(s, v, faces=[[0, 1, 7]], position="x")
+        Contact(s, v, faces=[[0, 1, 7]], position="x", kappa=1.0)
     with pytest.raises(ValueError, match="dhat must be > 0"):
         Contact(s, v, faces=[[0, 1, 2]], position="x", dhat=0.0)

@@ -9,12 +9,12 @@ barrier as yasps energies; and ipctk's CCD for the largest safe step. The
 barrier's derivatives and assembly are yasps' own, so free, affine, caged
 or new parameterisations need no contact code of their own::
 
-    c = Contact(scene, union, faces=F, dhat=1e-3, kappa=1e3)
+    c = Contact(scene, union, faces=F, dhat=1e-3, average_mass=0.01)
     c.update()              # pairs at the current positions
     alpha = c.stepBound([-dx for dx in scene.minimizeEnergy()])
 
-Not yet: friction, the adaptive barrier stiffness of IPC (kappa is fixed),
-obstacles other than meshes in the same UNION, and a conservative CCD for
+Not yet: friction, obstacles other than meshes in the same UNION, and a
+conservative CCD for
 non-linear parameterisations (the step bound is exact only where world
 positions are linear in the targets: free, affine and caged vertices).
 """
@@ -29,7 +29,10 @@ import numpy as np
 from ..frontend.attribute import Attribute
 from ..frontend.errors import SceneError
 from ..frontend.scene import Primitive, PrimitiveUnion, Scene
+from ..runtime import current
+from ..solve import assemble
 from .pairs import BY_NAME, PAIR_TYPES, barrier_energy, classify
+from .stiffness import AdaptiveStiffness
 from .surface import edges_of, surface_of
 
 __all__ = ["Contact", "PAIR_TYPES", "edges_of", "surface_of"]
@@ -41,14 +44,18 @@ class Contact:
     whose ``position`` attribute (3x1) gives world positions. Adds a mesh
     ``name`` to the scene with one dynamic pair primitive per pair type and
     its barrier energy ``kappa * b(d, dhat)`` (ipctk's BarrierPotential:
-    dhat a distance, d squared distances)."""
+    dhat a distance, d squared distances). ``kappa`` is fixed if given;
+    otherwise IPC's adaptive stiffness (:meth:`adaptStiffness`), which needs
+    the bodies' ``average_mass`` per vertex."""
 
     def __init__(self, scene: Scene,
                  vertices: Union[Primitive, PrimitiveUnion],
                  faces: Optional[np.ndarray] = None,
                  edges: Optional[np.ndarray] = None, dhat: float = 1e-3,
-                 kappa: float = 1.0, position: str = "position",
-                 name: str = "contact", projection: str = "clamp"):
+                 kappa: Optional[float] = None,
+                 average_mass: Optional[float] = None,
+                 position: str = "position", name: str = "contact",
+                 projection: str = "clamp"):
         if position not in vertices:
             raise SceneError(f"Contact: {vertices.describe()} has no "
                              f"attribute {position!r} (its world positions)")
@@ -59,6 +66,12 @@ class Contact:
         if not dhat > 0:
             raise ValueError(f"Contact: dhat must be > 0, got {dhat}")
         self.scene, self.vertices, self.dhat = scene, vertices, float(dhat)
+        if kappa is None and average_mass is None:
+            raise ValueError("Contact: give a fixed barrier stiffness kappa, "
+                             "or the bodies' average vertex mass "
+                             "(average_mass) for IPC's adaptive one")
+        self.adaptive = None if kappa is not None else \
+            AdaptiveStiffness(self.dhat, average_mass)
         count = vertices.numInstances
         faces = np.zeros((0, 3), dtype=np.int32) if faces is None else \
             np.ascontiguousarray(faces, dtype=np.int32).reshape(-1, 3)
@@ -75,7 +88,7 @@ class Contact:
         # A stored value, not a number in the IR: changing the stiffness
         # recompiles nothing.
         self.stiffness = mesh.addConstant("kappa", rows=1)
-        self.stiffness.updateValue([float(kappa)])
+        self.stiffness.updateValue([1.0 if kappa is None else float(kappa)])
         self.primitives: Dict[str, Primitive] = {}
         for pair in PAIR_TYPES:
             p = mesh.addPrimitive(pair.name, numInstances=0, isDynamic=True)
@@ -147,6 +160,45 @@ class Contact:
             for t, x in zip(targets, before):
                 t.updateValue(x)
         return float(ipctk.compute_collision_free_stepsize(self.mesh, V0, V1))
+
+    @property
+    def kappa(self) -> float:
+        """The barrier stiffness now."""
+        return float(self.stiffness.value.reshape(-1)[0])
+
+    def _set_kappa(self, kappa: float) -> None:
+        self.stiffness.updateValue([float(kappa)])
+
+    def _diagonal(self, V: np.ndarray) -> float:
+        return float(np.linalg.norm(V.max(axis=0) - V.min(axis=0)))
+
+    def _gradient(self, kappa: float) -> np.ndarray:
+        """The scene's assembled gradient with the stiffness set to kappa."""
+        self._set_kappa(kappa)
+        system, _ = assemble(self.scene, current())
+        out = np.empty(system.size)
+        system.gradient(out)
+        return out
+
+    def adaptStiffness(self) -> float:
+        """IPC's adaptive stiffness (ipctk's heuristics): the initial kappa
+        at the first call, from the other energies' gradient and the
+        barrier's at the current pairs (call update() first); at later
+        calls, a doubling when the closest distance keeps shrinking. A
+        fixed kappa is returned unchanged. Changing kappa compiles
+        nothing: it is a stored value."""
+        if self.adaptive is None:
+            return self.kappa
+        V = self.world()
+        diagonal = self._diagonal(V)
+        if self.adaptive.kappa is None:
+            kappa = self.adaptive.initial(diagonal, self._gradient)
+        else:
+            min2 = (self.collisions.compute_minimum_distance(self.mesh, V)
+                    if not self.collisions.empty() else float("inf"))
+            kappa = self.adaptive.update(min2, diagonal)
+        self._set_kappa(kappa)
+        return kappa
 
     def hasIntersections(self) -> bool:
         """Whether some edge crosses some triangle now (ipctk)."""

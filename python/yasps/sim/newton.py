@@ -23,8 +23,10 @@ Targets = Union[Attribute, Sequence[Attribute]]
 class NewtonReport:
     """What one Newton solve did: ``iterations`` (accepted steps),
     ``energies`` (the total energy before the first and after each accepted
-    step), ``converged``, ``stepBounds`` (the CCD bound of each iteration,
-    with contact) and ``seconds`` (time spent on collision detection, CCD
+    step, each lower than the one before at the same barrier stiffness),
+    ``converged``, ``stepBounds`` (the CCD bound of each iteration, with
+    contact), ``stiffness`` (kappa after each change of an adaptive
+    contact's stiffness) and ``seconds`` (time spent on collision detection, CCD
     and the Newton directions)."""
 
     def __init__(self):
@@ -32,6 +34,8 @@ class NewtonReport:
         self.energies: List[float] = []
         self.converged = False
         self.stepBounds: List[float] = []
+        #: the barrier stiffness after each change by the adaptive rule
+        self.stiffness: List[float] = []
         self.seconds: Dict[str, float] = {"collisions": 0.0, "ccd": 0.0,
                                           "directions": 0.0}
 
@@ -80,7 +84,18 @@ def newton(scene, x: Targets, tolerance: float,
             report.seconds["collisions"] += clock() - start
         return scene.evaluateEnergy()
 
+    def adapt() -> float:
+        # IPC's adaptive barrier stiffness changes the energy itself: the
+        # next comparison is made at the new stiffness.
+        kappa = contact.kappa
+        if contact.adaptStiffness() != kappa:
+            report.stiffness.append(contact.kappa)
+            return scene.evaluateEnergy()
+        return current_energy
+
     current_energy = energy()
+    if contact is not None:
+        current_energy = adapt()
     report.energies.append(current_energy)
     for _ in range(max_iterations):
         start = clock()
@@ -115,6 +130,8 @@ def newton(scene, x: Targets, tolerance: float,
         current_energy = candidate
         report.iterations += 1
         report.energies.append(current_energy)
+        if contact is not None:
+            current_energy = adapt()
         change = (np.abs(contact.world() - world).max() if world is not None
                   else max(np.abs(alpha * p).max() for p in steps))
         if change < tolerance:

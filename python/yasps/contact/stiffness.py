@@ -1,0 +1,47 @@
+"""IPC's adaptive barrier stiffness (Li et al. 2020, section 4.3), by
+ipctk's heuristics: an initial kappa that balances the barrier's gradient
+against the other energies', and a doubling whenever the closest distance
+keeps shrinking below a fraction of the scene's size."""
+
+from __future__ import annotations
+
+from typing import Callable, Optional
+
+import ipctk
+import numpy as np
+
+
+class AdaptiveStiffness:
+    """The stiffness state of one contact: ``kappa``, its upper bound and the
+    last minimum squared distance seen. ``gradients(kappa)`` gives the
+    assembled gradient of the scene's energies with the barrier's stiffness
+    set to ``kappa`` (in the targets' DoFs)."""
+
+    def __init__(self, dhat: float, average_mass: float):
+        if not average_mass > 0:
+            raise ValueError(f"adaptive barrier stiffness needs the bodies' "
+                             f"average vertex mass > 0, got {average_mass}")
+        self.dhat, self.average_mass = float(dhat), float(average_mass)
+        self.kappa: Optional[float] = None
+        self.max_kappa = 0.0
+        self.previous: Optional[float] = None
+
+    def initial(self, diagonal: float,
+                gradient: Callable[[float], np.ndarray]) -> float:
+        """ipctk's initial stiffness at the current positions."""
+        others = gradient(0.0)
+        barrier = gradient(1.0) - others
+        self.kappa, self.max_kappa = ipctk.initial_barrier_stiffness(
+            diagonal, ipctk.ClampedLogBarrier(), self.dhat, self.average_mass,
+            others, barrier)
+        return self.kappa
+
+    def update(self, min_distance2: float, diagonal: float) -> float:
+        """Doubles kappa (up to its bound) when the closest squared distance
+        ``min_distance2`` shrank since the last call and is tiny."""
+        if self.previous is not None and np.isfinite(min_distance2):
+            self.kappa = ipctk.update_barrier_stiffness(
+                self.previous, min_distance2, self.max_kappa, self.kappa,
+                diagonal)
+        self.previous = min_distance2
+        return self.kappa
