@@ -38,39 +38,50 @@ def relative(a, b) -> float:
     return float(np.abs(a - b).max() / max(np.abs(b).max(), 1e-300))
 
 
-@pytest.mark.parametrize("angle", [0.0, 0.3])
-def test_barrier_matches_ipctk(angle):
+@pytest.mark.parametrize("cells, angle, axis, gap, dhat, projection", [
+    (2, 0.0, [1, 2, 0.5], 0.02, 0.05, "none"),
+    (2, 0.3, [1, 2, 0.5], 0.02, 0.05, "none"),
+    # Points whose closest point on an edge lies at its end: ipctk keeps
+    # them point-edge pairs (its known type), whose Hessian differs from the
+    # point-point one there.
+    (4, 0.3, [0, 0, 1], 0.012, 0.02, "clamp"),
+])
+def test_barrier_matches_ipctk(cells, angle, axis, gap, dhat, projection):
     """Two soft boxes within dhat: axis-aligned (parallel edges: mollified
     edge-edge pairs, end-point types) and turned (generic pairs). Energy,
-    gradient and unprojected Hessian equal ipctk's BarrierPotential on the
-    same collision set."""
+    gradient and Hessian (unprojected, or projected per pair) equal ipctk's
+    BarrierPotential on the same collision set."""
+    verts, tets = box_tet_mesh(cells, 0.5)
+    faces = surface_of(tets)
     s = yasps.scene("pair")
-    a = s.addMesh("a").addPrimitive("v", numInstances=len(VERTS))
-    b = s.addMesh("b").addPrimitive("v", numInstances=len(VERTS))
+    a = s.addMesh("a").addPrimitive("v", numInstances=len(verts))
+    b = s.addMesh("b").addPrimitive("v", numInstances=len(verts))
     xa = a.addAttribute("position", rows=3)
-    xa.updateValue(VERTS)
+    xa.updateValue(verts)
     xb = b.addAttribute("position", rows=3)
-    turned = (VERTS - 0.25) @ rotation(angle, [1, 2, 0.5]).T + 0.25
-    lift = 0.5 - turned[:, 2].min() + 0.02
-    xb.updateValue(turned + [0.1, 0.05, lift])
+    turned = (verts - 0.25) @ rotation(angle, axis).T + 0.25
+    lift = 0.5 - turned[:, 2].min() + gap
+    xb.updateValue(turned + ([0.1, 0.05, lift] if cells == 2 else
+                             [0.0, 0.0, lift]))
     union = s.addMesh("w").addPrimitiveUnion("v", [a, b])
     union.addAttribute("position")
-    contact = Contact(s, union, faces=np.concatenate([FACES, FACES + len(VERTS)]),
-                      dhat=0.05, kappa=3.0, projection="none")
+    contact = Contact(s, union, faces=np.concatenate([faces, faces + len(verts)]),
+                      dhat=dhat, kappa=3.0, projection=projection)
     s.addMinimizeTarget([xa, xb])
     counts = contact.update()
     assert sum(counts.values()) > 0
     if angle == 0.0:
         assert counts["ee"] + counts["ee_ev"] + counts["ee_vv"] > 0
     V = contact.world()
-    potential = ipctk.BarrierPotential(0.05, 3.0)
+    potential = ipctk.BarrierPotential(dhat, 3.0)
     want = potential(contact.collisions, contact.mesh, V)
     assert abs(s.evaluateEnergy() - want) <= 1e-10 * abs(want)
     g, H = system_arrays(s)
     assert relative(g, potential.gradient(contact.collisions, contact.mesh, V)) < 1e-10
-    reference = potential.hessian(
-        contact.collisions, contact.mesh, V,
-        project_hessian_to_psd=ipctk.PSDProjectionMethod.NONE).toarray()
+    method = ipctk.PSDProjectionMethod.NONE if projection == "none" else \
+        ipctk.PSDProjectionMethod.CLAMP
+    reference = potential.hessian(contact.collisions, contact.mesh, V,
+                                  project_hessian_to_psd=method).toarray()
     assert relative(H, reference) < 1e-10
 
 

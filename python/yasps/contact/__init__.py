@@ -126,7 +126,7 @@ class Contact:
                       self.collisions.fv_collisions):
             for collision in group:
                 ids = collision.vertex_ids(edges, faces)
-                kind, order = classify(collision, ids, V)
+                kind, order = classify(collision, ids)
                 found[kind].append(order)
                 eps[kind].append(float(getattr(collision, "eps_x", 1.0)))
                 weights[kind].append(float(collision.weight))

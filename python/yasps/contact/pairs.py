@@ -88,22 +88,23 @@ _PE = ipctk.PointEdgeDistanceType
 _EE = ipctk.EdgeEdgeDistanceType
 
 
-def classify(collision, ids: List[int], V) -> Tuple[str, List[int]]:
+def classify(collision, ids: List[int]) -> Tuple[str, List[int]]:
     """The pair type of one ipctk collision and its vertices in that type's
-    order; ``ids`` are the collision's vertex ids, ``V`` the positions."""
+    order; ``ids`` are the collision's vertex ids. The type is the one ipctk
+    evaluates the collision with (``known_dtype``): a point-edge collision's
+    distance is always to the line, a face-vertex one's to the plane, an
+    edge-edge one's by the type found when the set was built. At the border
+    of two types the distances agree but their Hessians do not, so guessing
+    the type again from the positions would not give ipctk's potential."""
     if isinstance(collision, ipctk.VertexVertexNormalCollision):
         return "vv", ids[:2]
+    dtype = collision.known_dtype()
     if isinstance(collision, ipctk.EdgeVertexNormalCollision):
         v, e0, e1 = ids[:3]
-        dtype = ipctk.point_edge_distance_type(V[v], V[e0], V[e1])
-        if dtype == _PE.P_E0:
-            return "vv", [v, e0]
-        if dtype == _PE.P_E1:
-            return "vv", [v, e1]
-        return "ev", [v, e0, e1]
+        ends = {_PE.P_E0: [v, e0], _PE.P_E1: [v, e1]}
+        return ("vv", ends[dtype]) if dtype in ends else ("ev", [v, e0, e1])
     if isinstance(collision, ipctk.FaceVertexNormalCollision):
         v, t0, t1, t2 = ids
-        dtype = ipctk.point_triangle_distance_type(V[v], V[t0], V[t1], V[t2])
         corners = {_PT.P_T0: t0, _PT.P_T1: t1, _PT.P_T2: t2}
         edges = {_PT.P_E0: (t0, t1), _PT.P_E1: (t1, t2), _PT.P_E2: (t2, t0)}
         if dtype in corners:
@@ -113,9 +114,6 @@ def classify(collision, ids: List[int], V) -> Tuple[str, List[int]]:
         return "fv", [v, t0, t1, t2]
     if isinstance(collision, ipctk.EdgeEdgeNormalCollision):
         a0, a1, b0, b1 = ids
-        dtype = collision.dtype
-        if dtype == _EE.AUTO:
-            dtype = ipctk.edge_edge_distance_type(V[a0], V[a1], V[b0], V[b1])
         ends = {_EE.EA0_EB0: [a0, a1, b0, b1], _EE.EA0_EB1: [a0, a1, b1, b0],
                 _EE.EA1_EB0: [a1, a0, b0, b1], _EE.EA1_EB1: [a1, a0, b1, b0]}
         point_edge = {_EE.EA0_EB: [a0, a1, b0, b1], _EE.EA1_EB: [a1, a0, b0, b1],
