@@ -40,7 +40,7 @@ from timing import median  # noqa: E402
 from yasps import energies as E  # noqa: E402
 from yasps.contact import Contact, surface_of  # noqa: E402
 from yasps.runtime import cpu_backend  # noqa: E402
-from yasps.sim import box_tet_mesh  # noqa: E402
+from yasps.sim import add_elastic_tets, box_tet_mesh  # noqa: E402
 from yasps.solve import assemble  # noqa: E402
 
 DHAT = 0.02
@@ -66,17 +66,7 @@ def boxes(cells: int, elastic: bool):
         x = v.addAttribute("position", rows=3)
         x.updateValue(start)
         if elastic:
-            t = mesh.addPrimitive("t", numInstances=len(tets))
-            rest = verts[tets]
-            dm = np.stack([rest[:, k] - rest[:, 0] for k in (1, 2, 3)], axis=2)
-            t.addConstant("inv", rows=3, cols=3).updateValue(np.linalg.inv(dm))
-            t.addConstant("vol", rows=1).updateValue(
-                np.abs(np.linalg.det(dm))[:, None] / 6)
-            corners = t.addAttribute("c", through=t.addConnectivity(
-                "t2v", v, tets, 4), source=x)
-            s.addEnergy(t.addAttribute("elastic", computed_attribute=1e-4 *
-                        E.stable_neo_hookean(E.deformation_gradient(
-                            corners, t["inv"]), 1e5, 4e5, t["vol"])))
+            add_elastic_tets(mesh, x, verts, tets, 1e5, 4e5, scale=1e-4)
             hat = v.addConstant("x_hat", rows=3)
             hat.updateValue(start + [0.0, 0.0, -1e-3])
             s.addEnergy(v.addAttribute("inertia", computed_attribute=

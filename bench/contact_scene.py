@@ -17,7 +17,7 @@ import numpy as np
 
 import yasps
 from yasps import energies as E
-from yasps.sim import box_tet_mesh
+from yasps.sim import add_elastic_tets, box_tet_mesh
 
 #: Arity and squared-distance function of each pair type.
 PAIR_TYPES = {
@@ -77,20 +77,10 @@ def build(pairs: int = 4, cells: int = 1, seed: int = 0,
 
     soft = s.addMesh("soft")
     sv = soft.addPrimitive("v", numInstances=nv)
-    st = soft.addPrimitive("t", numInstances=len(tets))
     x = sv.addAttribute("x", rows=3)
     x.updateValue(verts + rng.normal(scale=1e-3, size=verts.shape))
     sv.addConstant("x_hat", rows=3).updateValue(verts)
-    rest = verts[tets]
-    dm = np.stack([rest[:, k] - rest[:, 0] for k in (1, 2, 3)], axis=2)
-    st.addConstant("inv", rows=3, cols=3).updateValue(np.linalg.inv(dm))
-    st.addConstant("vol", rows=1).updateValue(
-        np.abs(np.linalg.det(dm))[:, None] / 6)
-    corners = st.addAttribute("c", through=st.addConnectivity(
-        "t2v", sv, tets, 4), source=x)
-    s.addEnergy(st.addAttribute("elastic", computed_attribute=1e-4 *
-                                E.stable_neo_hookean(E.deformation_gradient(
-                                    corners, st["inv"]), 1e4, 4e4, st["vol"])))
+    add_elastic_tets(soft, x, verts, tets, 1e4, 4e4, scale=1e-4)
     s.addEnergy(sv.addAttribute("inertia", computed_attribute=E.inertia(
         x, sv["x_hat"], 1e-2)))
 

@@ -11,7 +11,7 @@ import yasps
 from yasps import energies as E
 from yasps.contact import Contact, surface_of
 from yasps.runtime import cpu_backend
-from yasps.sim import ImplicitEuler, box_tet_mesh
+from yasps.sim import ImplicitEuler, add_elastic_tets, box_tet_mesh
 from yasps.solve import assemble
 
 VERTS, TETS = box_tet_mesh(2, 0.5)
@@ -156,17 +156,7 @@ def test_soft_box_falls_on_an_affine_box():
     s = yasps.scene("fall")
     (xs, A, t), rest, contact = soft_and_affine(s, -0.3, 50.0)
     soft = s.soft.v
-    tets = s.soft.addPrimitive("t", numInstances=len(TETS))
-    D = VERTS[TETS]
-    dm = np.stack([D[:, k] - D[:, 0] for k in (1, 2, 3)], axis=2)
-    tets.addConstant("inv", rows=3, cols=3).updateValue(np.linalg.inv(dm))
-    tets.addConstant("vol", rows=1).updateValue(
-        np.abs(np.linalg.det(dm))[:, None] / 6)
-    corners = tets.addAttribute("c", through=tets.addConnectivity(
-        "t2v", soft, TETS, 4), source=xs)
-    s.addEnergy(tets.addAttribute("elastic", computed_attribute=dt * dt *
-                E.stable_neo_hookean(E.deformation_gradient(corners, tets["inv"]),
-                                     1e4, 4e4, tets["vol"])))
+    add_elastic_tets(s.soft, xs, VERTS, TETS, 1e4, 4e4, scale=dt * dt)
     xs.updateValue(VERTS + [0.0, 0.0, 0.56])
     x_hat = soft.addConstant("x_hat", rows=3)
     s.addEnergy(soft.addAttribute("inertia", computed_attribute=E.inertia(
