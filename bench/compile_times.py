@@ -133,7 +133,6 @@ def main() -> None:
         print(json.dumps(worker(*args.worker)))
         return
 
-    import yasps
     from contact_scene import build
     s, *_ = build()
     names = [e.owner.qualifiedName + "." + e.name for e in s.energies]

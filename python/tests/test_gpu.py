@@ -72,7 +72,6 @@ def test_running_example_compiles_for_gpus():
     assert any(p.endswith("__ij") for p in paths)
     check_binaries(kernels, yasps.compiler.gpu.DEFAULT_CHIPS)
     for k in kernels.kernels:
-        kinds = [kind for kind, _ in k.launch_params]
         # Every buffer the kernel reads is an argument, the output among
         # them; inputs it does not read (the affine values behind a linear
         # map J) are left out of the launch.
