@@ -11,7 +11,8 @@ import yasps
 from yasps import energies as E
 from yasps.contact import Contact, surface_of
 from yasps.runtime import cpu_backend
-from yasps.sim import ImplicitEuler, add_elastic_tets, box_tet_mesh
+from yasps.sim import (ImplicitEuler, add_affine_inertia, add_elastic_tets,
+                       box_tet_mesh)
 from yasps.solve import assemble
 
 VERTS, TETS = box_tet_mesh(2, 0.5)
@@ -244,3 +245,53 @@ def test_contact_checks_its_inputs():
         Contact(s, v, faces=[[0, 1, 7]], position="x", kappa=1.0)
     with pytest.raises(ValueError, match="dhat must be > 0"):
         Contact(s, v, faces=[[0, 1, 2]], position="x", dhat=0.0)
+
+
+def test_affine_inertia_is_the_vertices_inertia():
+    """add_affine_inertia (mass moments on the body) gives the same energy,
+    gradient and Hessian in A and t as the vertices' own inertia
+    sum m_i/2 |x_i - x_hat_i|^2 through x = A r + t."""
+    rng = np.random.default_rng(4)
+    masses = rng.uniform(0.5, 2.0, len(VERTS))
+    A0, t0 = rotation(0.4, [1, 0, 1]), np.array([0.1, -0.2, 0.3])
+    A1 = A0 + rng.normal(scale=0.05, size=(3, 3))
+    t1 = t0 + rng.normal(scale=0.05, size=3)
+
+    def scene(moments: bool):
+        s = yasps.scene("inertia")
+        mesh = s.addMesh("r")
+        body = mesh.addPrimitive("body", numInstances=1)
+        A = body.addAttribute("A", rows=3, cols=3)
+        A.updateValue(A1)
+        t = body.addAttribute("t", rows=3)
+        t.updateValue(t1)
+        A_hat = body.addConstant("A_hat", rows=3, cols=3)
+        A_hat.updateValue(A0)
+        t_hat = body.addConstant("t_hat", rows=3)
+        t_hat.updateValue(t0)
+        if moments:
+            add_affine_inertia(body, A, t, A_hat, t_hat, VERTS, masses)
+        else:
+            v = mesh.addPrimitive("v", numInstances=len(VERTS))
+            v.addConstant("rest", rows=3).updateValue(VERTS)
+            v.addConstant("m", rows=1).updateValue(masses[:, None])
+            link = v.addConnectivity("v2b", body, [0] * len(VERTS), 1)
+            joined = [v.addAttribute(n, through=link, source=src)
+                      for n, src in (("A", A), ("t", t), ("A_hat", A_hat),
+                                     ("t_hat", t_hat))]
+            x = joined[0].resize(3, 3) * v["rest"] + joined[1].resize(3, 1)
+            x_hat = joined[2].resize(3, 3) * v["rest"] + joined[3].resize(3, 1)
+            s.addEnergy(v.addAttribute("inertia", computed_attribute=0.5 *
+                                       v["m"] * (x - x_hat).squaredNorm()))
+        s.addMinimizeTarget([A, t])
+        return s
+
+    fast, slow = scene(True), scene(False)
+    assert abs(fast.evaluateEnergy() - slow.evaluateEnergy()) <= \
+        1e-12 * slow.evaluateEnergy()
+    for a, b in zip(system_arrays(fast), system_arrays(slow)):
+        assert relative(a, b) < 1e-12
+    with pytest.raises(ValueError, match="masses for"):
+        add_affine_inertia(fast.r.body, fast.r.body["A"], fast.r.body["t"],
+                           fast.r.body["A_hat"], fast.r.body["t_hat"],
+                           VERTS, masses[:3], name="other")
