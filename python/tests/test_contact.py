@@ -35,6 +35,23 @@ def system_arrays(scene):
     return g, H
 
 
+def two_soft_boxes(name: str, lower: np.ndarray, upper: np.ndarray):
+    """A scene with two boxes of free vertices at ``lower`` and ``upper``
+    and the UNION of their vertices: (scene, primitives, positions,
+    union)."""
+    s = yasps.scene(name)
+    prims, positions = [], []
+    for mesh, start in (("a", lower), ("b", upper)):
+        v = s.addMesh(mesh).addPrimitive("v", numInstances=len(start))
+        x = v.addAttribute("position", rows=3)
+        x.updateValue(start)
+        prims.append(v)
+        positions.append(x)
+    union = s.addMesh("w").addPrimitiveUnion("v", prims)
+    union.addAttribute("position")
+    return s, prims, positions, union
+
+
 def relative(a, b) -> float:
     return float(np.abs(a - b).max() / max(np.abs(b).max(), 1e-300))
 
@@ -54,18 +71,11 @@ def test_barrier_matches_ipctk(cells, angle, axis, gap, dhat, projection):
     BarrierPotential on the same collision set."""
     verts, tets = box_tet_mesh(cells, 0.5)
     faces = surface_of(tets)
-    s = yasps.scene("pair")
-    a = s.addMesh("a").addPrimitive("v", numInstances=len(verts))
-    b = s.addMesh("b").addPrimitive("v", numInstances=len(verts))
-    xa = a.addAttribute("position", rows=3)
-    xa.updateValue(verts)
-    xb = b.addAttribute("position", rows=3)
     turned = (verts - 0.25) @ rotation(angle, axis).T + 0.25
     lift = 0.5 - turned[:, 2].min() + gap
-    xb.updateValue(turned + ([0.1, 0.05, lift] if cells == 2 else
-                             [0.0, 0.0, lift]))
-    union = s.addMesh("w").addPrimitiveUnion("v", [a, b])
-    union.addAttribute("position")
+    s, _, (xa, xb), union = two_soft_boxes(
+        "pair", verts, turned + ([0.1, 0.05, lift] if cells == 2 else
+                                 [0.0, 0.0, lift]))
     contact = Contact(s, union, faces=np.concatenate([faces, faces + len(verts)]),
                       dhat=dhat, kappa=3.0, projection=projection)
     s.addMinimizeTarget([xa, xb])
@@ -196,13 +206,8 @@ def test_adaptive_stiffness_is_ipctks():
     barrier's (here both on free vertices, computed independently: the
     inertia's m (x - x_hat) and ipctk's BarrierPotential); changing it
     compiles nothing."""
-    s = yasps.scene("adaptive")
-    a = s.addMesh("a").addPrimitive("v", numInstances=len(VERTS))
-    b = s.addMesh("b").addPrimitive("v", numInstances=len(VERTS))
-    xa = a.addAttribute("position", rows=3)
-    xa.updateValue(VERTS)
-    xb = b.addAttribute("position", rows=3)
-    xb.updateValue(VERTS + [0.1, 0.05, 0.52])
+    s, (a, b), (xa, xb), union = two_soft_boxes(
+        "adaptive", VERTS, VERTS + [0.1, 0.05, 0.52])
     hats = []
     for prim, x in ((a, xa), (b, xb)):
         hat = prim.addConstant("x_hat", rows=3)
@@ -210,8 +215,6 @@ def test_adaptive_stiffness_is_ipctks():
         s.addEnergy(prim.addAttribute("inertia", computed_attribute=E.inertia(
             x, hat, 0.3)))
         hats.append(hat)
-    union = s.addMesh("w").addPrimitiveUnion("v", [a, b])
-    union.addAttribute("position")
     contact = Contact(s, union, faces=np.concatenate([FACES, FACES + len(VERTS)]),
                       dhat=0.05, average_mass=0.3)
     s.addMinimizeTarget([xa, xb])
