@@ -9,14 +9,17 @@ barrier as yasps energies; and ipctk's CCD for the largest safe step. The
 barrier's derivatives and assembly are yasps' own, so free, affine, caged
 or new parameterisations need no contact code of their own::
 
-    c = Contact(scene, union, faces=F, dhat=1e-3, average_mass=0.01)
-    c.update()              # pairs at the current positions
+    c = Contact(scene, union, faces=F, dhat=1e-3, average_mass=0.01,
+                friction=0.2, halfspaces=[((0, 0, 0), (0, 0, 1))])
+    c.update(lag=True, dt=0.01)  # pairs now, friction lagged here
+    c.update()                   # pairs at the current positions
     alpha = c.stepBound([-dx for dx in scene.minimizeEnergy()])
 
-Not yet: friction, obstacles other than meshes in the same UNION, and a
-conservative CCD for
-non-linear parameterisations (the step bound is exact only where world
-positions are linear in the targets: free, affine and caged vertices).
+Friction is IPC's lagged, smoothed friction (:mod:`.friction`); obstacles
+are static members of the UNION (meshes) or half-spaces
+(:mod:`.halfspace`). Not yet: a conservative CCD for non-linear
+parameterisations (the step bound is exact only where world positions are
+linear in the targets: free, affine and caged vertices).
 """
 
 from __future__ import annotations
@@ -31,6 +34,9 @@ from ..frontend.errors import SceneError
 from ..frontend.scene import Primitive, PrimitiveUnion, Scene
 from ..runtime import current
 from ..solve import assemble
+from .friction import (ARITIES, FrictionPairs, add_friction_primitives,
+                       tangential_pairs)
+from .halfspace import HalfSpaces
 from .pairs import BY_NAME, PAIR_TYPES, barrier_energy, classify
 from .stiffness import AdaptiveStiffness
 from .surface import edges_of, surface_of
@@ -46,7 +52,11 @@ class Contact:
     its barrier energy ``kappa * b(d, dhat)`` (ipctk's BarrierPotential:
     dhat a distance, d squared distances). ``kappa`` is fixed if given;
     otherwise IPC's adaptive stiffness (:meth:`adaptStiffness`), which needs
-    the bodies' ``average_mass`` per vertex."""
+    the bodies' ``average_mass`` per vertex. ``halfspaces``: planes
+    (origin, normal) the vertices stay above. ``friction`` > 0 adds IPC's
+    lagged friction with coefficient mu = friction and smoothing velocity
+    ``eps_v`` (m/s; the displacement threshold is eps_v dt), lagged by
+    ``update(lag=True, dt=...)`` once per time step."""
 
     def __init__(self, scene: Scene,
                  vertices: Union[Primitive, PrimitiveUnion],
@@ -55,7 +65,8 @@ class Contact:
                  kappa: Optional[float] = None,
                  average_mass: Optional[float] = None,
                  position: str = "position", name: str = "contact",
-                 projection: str = "clamp"):
+                 projection: str = "clamp", halfspaces=(),
+                 friction: float = 0.0, eps_v: float = 1e-3):
         if position not in vertices:
             raise SceneError(f"Contact: {vertices.describe()} has no "
                              f"attribute {position!r} (its world positions)")
@@ -65,6 +76,10 @@ class Contact:
                              f"{self.positions.describe()}")
         if not dhat > 0:
             raise ValueError(f"Contact: dhat must be > 0, got {dhat}")
+        if not friction >= 0 or not eps_v > 0:
+            raise ValueError(f"Contact: friction must be >= 0 and eps_v > 0, "
+                             f"got friction={friction}, eps_v={eps_v}")
+        self.friction, self.eps_v = float(friction), float(eps_v)
         self.scene, self.vertices, self.dhat = scene, vertices, float(dhat)
         if kappa is None and average_mass is None:
             raise ValueError("Contact: give a fixed barrier stiffness kappa, "
@@ -103,6 +118,15 @@ class Contact:
             scene.addEnergy(p.addAttribute("barrier", computed_attribute=energy),
                             dynamic_instances=True, projection=projection)
             self.primitives[pair.name] = p
+        self.halfspaces = HalfSpaces(mesh, vertices, self.positions,
+                                     halfspaces, self.dhat, self.stiffness,
+                                     projection)
+        self.friction_primitives: Dict[int, Primitive] = {}
+        if self.friction > 0:
+            self.eps_u = mesh.addConstant("eps_u", rows=1)
+            self.eps_u.updateValue([self.eps_v])
+            self.friction_primitives = add_friction_primitives(
+                mesh, vertices, self.positions, self.eps_u, projection)
 
     # ------------------------------------------------------------- geometry
 
@@ -111,10 +135,40 @@ class Contact:
         kernels."""
         return np.ascontiguousarray(self.positions.compute().value[:, :, 0])
 
-    def update(self) -> Dict[str, int]:
-        """Rebuilds the pairs from ipctk's collision set at the current
-        positions; returns the number of pairs of each type."""
+    def update(self, lag: bool = False,
+               dt: Optional[float] = None) -> Dict[str, int]:
+        """Rebuilds the pairs from ipctk's collision set (and the
+        half-spaces) at the current positions; returns the number of pairs
+        of each type. With ``lag`` (once per time step, at its start) also
+        the friction pairs: ipctk's tangential set here, with the normal
+        forces at the current stiffness and the threshold eps_v * ``dt``."""
         V = self.world()
+        counts = self._normal_pairs(V)
+        counts["plane"] = self.halfspaces.update(V)
+        if lag and self.friction > 0:
+            if dt is None or not dt > 0:
+                raise ValueError("Contact.update(lag=True): give the time "
+                                 "step dt (friction's threshold is eps_v dt)")
+            if self.adaptive is not None and self.adaptive.kappa is None:
+                self.adaptStiffness()
+            counts.update(self._lag_friction(V, float(dt)))
+        return counts
+
+    def _lag_friction(self, V: np.ndarray, dt: float) -> Dict[str, int]:
+        """The friction pairs at positions V (whose normal pairs are built)."""
+        self.eps_u.updateValue([self.eps_v * dt])
+        barrier = ipctk.BarrierPotential(self.dhat, self.kappa)
+        tangential = ipctk.TangentialCollisions()
+        tangential.build(self.mesh, V, self.collisions, barrier, self.friction)
+        pairs = {arity: FrictionPairs(arity) for arity in ARITIES}
+        tangential_pairs(tangential, self.mesh, V, pairs)
+        self.halfspaces.friction_pairs(V, barrier, self.friction, pairs[1])
+        for arity, found in pairs.items():
+            found.store(self.friction_primitives[arity])
+        return {f"friction{a}": len(f.vertices) for a, f in pairs.items()}
+
+    def _normal_pairs(self, V: np.ndarray) -> Dict[str, int]:
+        """The barrier pairs of ipctk's collision set at positions V."""
         self.collisions.build(self.mesh, V, self.dhat)
         found: Dict[str, List[List[int]]] = {t.name: [] for t in PAIR_TYPES}
         eps: Dict[str, List[float]] = {t.name: [] for t in PAIR_TYPES}
@@ -159,7 +213,8 @@ class Contact:
         finally:
             for t, x in zip(targets, before):
                 t.updateValue(x)
-        return float(ipctk.compute_collision_free_stepsize(self.mesh, V0, V1))
+        return min(self.halfspaces.step_bound(V0, V1), float(
+            ipctk.compute_collision_free_stepsize(self.mesh, V0, V1)))
 
     @property
     def kappa(self) -> float:
@@ -201,8 +256,11 @@ class Contact:
         return kappa
 
     def hasIntersections(self) -> bool:
-        """Whether some edge crosses some triangle now (ipctk)."""
-        return bool(ipctk.has_intersections(self.mesh, self.world()))
+        """Whether some edge crosses some triangle (ipctk), or some vertex
+        lies below a half-space, now."""
+        V = self.world()
+        return (self.halfspaces.intersecting(V)
+                or bool(ipctk.has_intersections(self.mesh, V)))
 
     def minDistance(self) -> float:
         """The smallest distance between surface primitives now, among
@@ -210,6 +268,8 @@ class Contact:
         V = self.world()
         collisions = ipctk.NormalCollisions()
         collisions.build(self.mesh, V, self.dhat)
+        planes = self.halfspaces.min_distance(V)
         if collisions.empty():
-            return float("inf")
-        return float(np.sqrt(collisions.compute_minimum_distance(self.mesh, V)))
+            return planes if planes < self.dhat else float("inf")
+        return min(planes, float(np.sqrt(
+            collisions.compute_minimum_distance(self.mesh, V))))

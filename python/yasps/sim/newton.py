@@ -19,6 +19,9 @@ from ..frontend.errors import SceneError
 
 Targets = Union[Attribute, Sequence[Attribute]]
 
+#: The stages of a Newton iteration that a report times.
+STAGES = ("collisions", "ccd", "derivatives", "assembly", "pcg", "energy")
+
 
 class NewtonReport:
     """What one Newton solve did: ``iterations`` (accepted steps),
@@ -26,8 +29,12 @@ class NewtonReport:
     step, each lower than the one before at the same barrier stiffness),
     ``converged``, ``stepBounds`` (the CCD bound of each iteration, with
     contact), ``stiffness`` (kappa after each change of an adaptive
-    contact's stiffness) and ``seconds`` (time spent on collision detection, CCD
-    and the Newton directions)."""
+    contact's stiffness), ``cgIterations`` (of each direction) and
+    ``seconds``: the time per stage as the paper's Fig. 20 splits it,
+    ``collisions`` (ipctk's collision sets and the pairs from them, friction's
+    lag included), ``ccd``, ``derivatives`` (local derivatives of every
+    energy), ``assembly`` (indices and the global system), ``pcg`` and
+    ``energy`` (the line search's energy evaluations)."""
 
     def __init__(self):
         self.iterations = 0
@@ -36,8 +43,15 @@ class NewtonReport:
         self.stepBounds: List[float] = []
         #: the barrier stiffness after each change by the adaptive rule
         self.stiffness: List[float] = []
-        self.seconds: Dict[str, float] = {"collisions": 0.0, "ccd": 0.0,
-                                          "directions": 0.0}
+        self.cgIterations: List[int] = []
+        self.seconds: Dict[str, float] = dict.fromkeys(STAGES, 0.0)
+
+    def add(self, other: "NewtonReport") -> None:
+        """Accumulates another solve's counts and seconds (a run's total)."""
+        self.iterations += other.iterations
+        self.cgIterations += other.cgIterations
+        for stage, seconds in other.seconds.items():
+            self.seconds[stage] = self.seconds.get(stage, 0.0) + seconds
 
     def __repr__(self) -> str:
         return (f"<NewtonReport {self.iterations} iterations, "
@@ -82,7 +96,10 @@ def newton(scene, x: Targets, tolerance: float,
             start = clock()
             contact.update()
             report.seconds["collisions"] += clock() - start
-        return scene.evaluateEnergy()
+        start = clock()
+        value = scene.evaluateEnergy()
+        report.seconds["energy"] += clock() - start
+        return value
 
     def adapt() -> float:
         # IPC's adaptive barrier stiffness changes the energy itself: the
@@ -98,10 +115,14 @@ def newton(scene, x: Targets, tolerance: float,
         current_energy = adapt()
     report.energies.append(current_energy)
     for _ in range(max_iterations):
-        start = clock()
         steps = [-dx for dx in scene.minimizeEnergy(tolerance=cg_tolerance,
                                                     fixed=fixed)]
-        report.seconds["directions"] += clock() - start
+        solve = scene.lastSolve
+        spent = solve["seconds"]
+        report.seconds["derivatives"] += spent["derivatives"]
+        report.seconds["assembly"] += spent["indices"] + spent["assembly"]
+        report.seconds["pcg"] += spent["solve"]
+        report.cgIterations.append(solve["iterations"])
         current = [t.value for t in targets]
         alpha = 1.0
         if step_bound is not None:
@@ -198,12 +219,20 @@ class ImplicitEuler:
                 pull[mask] = 0.0
             hat.updateValue(value + self.dt * v + self.dt * self.dt * pull)
         fixed = None if all(m is None for m in self.fixed) else self.fixed
+        lag_seconds = 0.0
+        if self.contact is not None and self.contact.friction > 0:
+            # Friction's normal forces, bases and closest points are those
+            # of the step's start (IPC's lagging).
+            start = time.perf_counter()
+            self.contact.update(lag=True, dt=self.dt)
+            lag_seconds = time.perf_counter() - start
         report = newton(self.scene, self.targets,
                         tolerance=self.velocity_tolerance * self.dt,
                         step_bound=self.step_bound,
                         max_iterations=self.max_iterations,
                         cg_tolerance=self.cg_tolerance, fixed=fixed,
                         contact=self.contact)
+        report.seconds["collisions"] += lag_seconds
         self.velocities = [(t.value - p) / self.dt
                            for t, p in zip(self.targets, previous)]
         return report
