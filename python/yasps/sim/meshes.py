@@ -1,9 +1,11 @@
-"""Meshes for first simulations and tests."""
+"""Meshes for first simulations and tests: a tet box, a cloth grid and its
+bending hinges, and tet meshes read from files (Gmsh, VTK, ... via meshio)."""
 
 from __future__ import annotations
 
 import itertools
-from typing import Tuple
+from os import PathLike
+from typing import Optional, Tuple, Union
 
 import numpy as np
 
@@ -27,3 +29,117 @@ def box_tet_mesh(n: int, size: float = 1.0) -> Tuple[np.ndarray, np.ndarray]:
                 tet[2], tet[3] = tet[3], tet[2]
             tets.append(tet)
     return grid * (size / n), np.array(tets, dtype=np.int32)
+
+
+def cloth_grid(n: int, size: float = 1.0,
+               height: float = 0.0) -> Tuple[np.ndarray, np.ndarray]:
+    """A square cloth of n x n cells in the plane z = ``height``, centred
+    at the origin (x, y in [-size/2, size/2]): vertices ((n+1)^2, 3), vertex
+    i + (n+1) j at column i, row j, and triangles (2 n^2, 3) int32, two per
+    cell, counter-clockwise seen from +z (normals +z)."""
+    if n < 1:
+        raise ValueError(f"cloth_grid: n must be at least 1, not {n}")
+    ticks = np.linspace(-size / 2, size / 2, n + 1)
+    x, y = np.meshgrid(ticks, ticks, indexing="xy")
+    verts = np.stack([x.ravel(), y.ravel(),
+                      np.full(x.size, float(height))], axis=1)
+    i, j = np.meshgrid(np.arange(n), np.arange(n), indexing="xy")
+    i, j = i.ravel(), j.ravel()
+    a = i + (n + 1) * j          # the cell's corners: a b below, c d above
+    b, c, d = a + 1, a + n + 1, a + n + 2
+    # Alternating the diagonal per cell (a checkerboard) keeps the grid
+    # free of a preferred shear direction, which one diagonal everywhere
+    # would give the cloth.
+    flip = (i + j) % 2 == 1
+    first = np.where(flip[:, None], np.stack([a, b, c], 1),
+                     np.stack([a, b, d], 1))
+    second = np.where(flip[:, None], np.stack([b, d, c], 1),
+                      np.stack([a, d, c], 1))
+    faces = np.stack([first, second], axis=1).reshape(-1, 3)
+    return verts, faces.astype(np.int32)
+
+
+def cloth_corners(n: int) -> np.ndarray:
+    """The indices of the 4 corner vertices of ``cloth_grid(n)``: (-,-),
+    (+,-), (-,+), (+,+) in x, y."""
+    return np.array([0, n, n * (n + 1), (n + 1) * (n + 1) - 1], dtype=np.int64)
+
+
+def hinges_of(faces: np.ndarray) -> np.ndarray:
+    """Every interior edge of a consistently oriented manifold triangle mesh
+    as a hinge (H, 4) int64 in the order ``energies.dihedral_bending``
+    reads: x0, x1 the shared edge as it runs in the first triangle (x0, x1,
+    x2), x2 and x3 the opposite vertices. The second triangle then runs
+    (x1, x0, x3), so n1 = (x1-x0)x(x2-x0) and n2 = (x3-x0)x(x1-x0) are both
+    the triangles' own normals and the bending energy is zero on a flat
+    mesh. Raises ValueError if a directed edge occurs twice (inconsistent
+    orientation, or more than two triangles on an edge)."""
+    faces = np.asarray(faces, dtype=np.int64).reshape(-1, 3)
+    if len(faces) == 0:
+        return np.zeros((0, 4), dtype=np.int64)
+    # Half-edges: edge k of each triangle runs from corner k to k+1, with
+    # corner k+2 opposite it.
+    start = faces.ravel()
+    end = faces[:, [1, 2, 0]].ravel()
+    opposite = faces[:, [2, 0, 1]].ravel()
+    count = int(faces.max()) + 1
+    key = start * count + end
+    order = np.argsort(key, kind="stable")
+    sorted_key = key[order]
+    if np.any(sorted_key[1:] == sorted_key[:-1]):
+        raise ValueError("hinges_of: a directed edge occurs in two triangles: "
+                         "the mesh is inconsistently oriented or non-manifold")
+    # Each interior edge once: from its half-edge with start < end, looking
+    # up the reversed half-edge of the neighbouring triangle.
+    lower = np.flatnonzero(start < end)
+    twin_key = end[lower] * count + start[lower]
+    at = np.minimum(np.searchsorted(sorted_key, twin_key), len(key) - 1)
+    found = sorted_key[at] == twin_key
+    lower, twin = lower[found], order[at[found]]
+    return np.stack([start[lower], end[lower], opposite[lower],
+                     opposite[twin]], axis=1)
+
+
+def read_tet_mesh(path: Union[str, PathLike],
+                  file_format: Optional[str] = None) -> Tuple[np.ndarray, np.ndarray]:
+    """Reads the tetrahedra of a mesh file (Gmsh .msh, .vtu, ... anything
+    meshio reads; ``file_format`` names meshio's reader where the suffix
+    does not): vertices (N, 3) float and tets (M, 4) int32, every tet
+    positively oriented (two vertices swapped where its signed volume is
+    negative). Points no tet uses (Gmsh keeps geometry nodes) are dropped,
+    since they would be vertices without mass; tets keep their order.
+    Raises ValueError naming the file and its cell types when it has no
+    (linear) tetra cells."""
+    import meshio  # here, so that importing yasps.sim does not need meshio
+
+    mesh = meshio.read(path, file_format=file_format)
+    blocks = [block.data for block in mesh.cells if block.type == "tetra"]
+    if not blocks:
+        found = sorted({block.type for block in mesh.cells}) or ["none"]
+        raise ValueError(f"read_tet_mesh: {path} has no tetra cells (cell "
+                         f"types found: {', '.join(found)})")
+    if mesh.points.shape[1] != 3:
+        raise ValueError(f"read_tet_mesh: {path} has {mesh.points.shape[1]}-D "
+                         "points; tets need 3-D ones")
+    tets = np.concatenate(blocks).astype(np.int64)
+    used, tets = np.unique(tets, return_inverse=True)
+    verts = np.asarray(mesh.points, dtype=float)[used]
+    tets = tets.reshape(-1, 4)
+    return verts, orient_tets(verts, tets).astype(np.int32)
+
+
+def signed_tet_volumes(verts: np.ndarray, tets: np.ndarray) -> np.ndarray:
+    """The signed volume (M,) of each tet (a, b, c, d): det[b-a, c-a, d-a]/6,
+    positive when b, c, d turn counter-clockwise seen from outside a."""
+    corners = np.asarray(verts, dtype=float)[np.asarray(tets)]
+    edges = corners[:, 1:] - corners[:, :1]
+    return np.linalg.det(edges) / 6
+
+
+def orient_tets(verts: np.ndarray, tets: np.ndarray) -> np.ndarray:
+    """A copy of ``tets`` (M, 4) with the last two vertices swapped where a
+    tet's signed volume is negative, so that every tet is positive."""
+    tets = np.array(tets, copy=True)
+    inverted = signed_tet_volumes(verts, tets) < 0
+    tets[inverted] = tets[inverted][:, [0, 1, 3, 2]]
+    return tets
