@@ -192,7 +192,7 @@ def test_soft_box_falls_on_an_affine_box():
         V = contact.world()
         assert np.isfinite(V).all()
         assert no_intersections(checker, V)
-        assert all(b <= a for a, b in zip(report.energies, report.energies[1:]))
+        assert all(after <= before for before, after in report.stepEnergies)
         assert report.iterations > 0
         closest = min(closest, contact.minDistance())
     assert closest < 0.05

@@ -208,7 +208,7 @@ def block_on_slope(angle_degrees: float, mu: float, steps: int):
     t0, t1 = tangent_basis(normal).T
     for _ in range(steps):
         report = stepper.step()
-        assert all(b <= a for a, b in zip(report.energies, report.energies[1:]))
+        assert all(after <= before for before, after in report.stepEnergies)
         assert np.isfinite(x.value).all()
         lowest = min(lowest, min(
             ipctk.point_plane_signed_distance(p, np.zeros(3), t0, t1)

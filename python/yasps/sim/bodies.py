@@ -3,11 +3,14 @@ elasticity on its vertices' positions, and an affine body's inertia."""
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 
 from ..frontend import energies as E
 from ..frontend.attribute import Attribute
-from ..frontend.scene import Mesh
+from ..frontend.scene import Mesh, Primitive
+from .meshes import hinges_of
 
 
 def add_elastic_tets(mesh: Mesh, positions: Attribute, rest: np.ndarray,
@@ -60,3 +63,102 @@ def add_affine_inertia(body, A: Attribute, t: Attribute, A_hat: Attribute,
                                + 0.5 * total * dt.squaredNorm())
     body.scene.addEnergy(energy)
     return energy
+
+
+def _triangle_rest_frames(rest: np.ndarray, faces: np.ndarray):
+    """Per triangle: the inverse of its rest (u, v) edge matrix in a frame
+    of its own plane (2x2) and its area."""
+    corners = rest[faces]
+    e1, e2 = corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0]
+    normal = np.cross(e1, e2)
+    areas = 0.5 * np.linalg.norm(normal, axis=1)
+    if (areas <= 0).any():
+        raise ValueError(f"add_cloth: {int((areas <= 0).sum())} triangles "
+                         f"have no area at rest")
+    u = e1 / np.linalg.norm(e1, axis=1, keepdims=True)
+    v = np.cross(normal / (2 * areas[:, None]), u)
+    uv = np.stack([np.stack([(e * u).sum(1), (e * v).sum(1)], axis=1)
+                   for e in (e1, e2)], axis=2)
+    return np.linalg.inv(uv), areas
+
+
+def add_cloth(mesh: Mesh, positions: Attribute, rest: np.ndarray,
+              faces: np.ndarray, stretch: float, shear: float,
+              bending: float, scale: float = 1.0,
+              name: str = "cloth") -> Attribute:
+    """Registers a cloth on the triangles ``faces`` (M, 3) of the vertices
+    ``positions`` belongs to, at rest ``rest`` (N, 3): Baraff-Witkin
+    stretch and shear per triangle (``stretch``, ``shear`` per unit area,
+    the rest (u, v) frame in each triangle's plane) and, if ``bending`` >
+    0, dihedral bending on every interior edge (its rest length times
+    ``bending``; zero when flat), all times ``scale`` (dt^2 for implicit
+    Euler). Primitives ``name`` and ``name + "_hinges"``. Returns the
+    stretch energy."""
+    rest = np.asarray(rest, dtype=float).reshape(-1, 3)
+    faces = np.asarray(faces, dtype=np.int64).reshape(-1, 3)
+    inverse, areas = _triangle_rest_frames(rest, faces)
+    tri = mesh.addPrimitive(name, numInstances=len(faces))
+    tri.addConstant("uv_inv", rows=2, cols=2).updateValue(inverse)
+    tri.addConstant("area", rows=1).updateValue(areas[:, None])
+    corners = tri.addAttribute("c", through=tri.addConnectivity(
+        "f2v", positions.owner, faces, 3), source=positions)
+    energy = tri.addAttribute("stretch", computed_attribute=scale *
+                              E.baraff_witkin(corners, tri["uv_inv"],
+                                              tri["area"], stretch, shear))
+    mesh.scene.addEnergy(energy)
+    hinges = hinges_of(faces)
+    if bending > 0 and len(hinges):
+        h = mesh.addPrimitive(name + "_hinges", numInstances=len(hinges))
+        h.addConstant("length", rows=1).updateValue(np.linalg.norm(
+            rest[hinges[:, 1]] - rest[hinges[:, 0]], axis=1)[:, None])
+        joined = h.addAttribute("h", through=h.addConnectivity(
+            "h2v", positions.owner, hinges, 4), source=positions)
+        mesh.scene.addEnergy(h.addAttribute(
+            "bending", computed_attribute=scale * E.dihedral_bending(
+                joined, h["length"], bending)))
+    return energy
+
+
+@dataclass
+class AffineBody:
+    """An affine body's handles: the targets ``A`` (3x3) and ``t`` (3x1),
+    their predictions ``A_hat``, ``t_hat`` (for implicit Euler), and the
+    primitive ``vertices`` whose ``position`` is ``A rest + t``."""
+    A: Attribute
+    t: Attribute
+    A_hat: Attribute
+    t_hat: Attribute
+    vertices: Primitive
+
+
+def add_affine_body(mesh: Mesh, rest: np.ndarray, masses: np.ndarray,
+                    stiffness: float, scale: float = 1.0,
+                    translation=(0.0, 0.0, 0.0)) -> AffineBody:
+    """An affine body (ABD) on ``mesh``: one instance ``body`` with A = I and
+    t = ``translation``, vertices ``v`` at ``A rest + t`` (``rest`` (N, 3),
+    relative to the body's origin), the inertia of their ``masses`` on A
+    and t (:func:`add_affine_inertia`) and ``scale`` times the
+    orthogonality energy with ``stiffness`` (dt^2 times a stiffness like
+    the material's Young's modulus times the volume, as ABD does)."""
+    rest = np.asarray(rest, dtype=float).reshape(-1, 3)
+    body = mesh.addPrimitive("body", numInstances=1)
+    A = body.addAttribute("A", rows=3, cols=3)
+    A.updateValue(np.eye(3)[None])
+    t = body.addAttribute("t", rows=3)
+    t.updateValue(np.asarray(translation, float).reshape(1, 3))
+    A_hat = body.addConstant("A_hat", rows=3, cols=3)
+    A_hat.updateValue(A.value)
+    t_hat = body.addConstant("t_hat", rows=3)
+    t_hat.updateValue(t.value)
+    v = mesh.addPrimitive("v", numInstances=len(rest))
+    v.addConstant("rest", rows=3).updateValue(rest)
+    link = v.addConnectivity("v2b", body, np.zeros((len(rest), 1), np.int64),
+                             1)
+    v.addAttribute("position", computed_attribute=v.addAttribute(
+        "A", through=link, source=A).resize(3, 3) * v["rest"]
+        + v.addAttribute("t", through=link, source=t).resize(3, 1))
+    add_affine_inertia(body, A, t, A_hat, t_hat, rest, masses)
+    mesh.scene.addEnergy(body.addAttribute(
+        "orthogonality", computed_attribute=scale * E.abd_orthogonality(
+            A, stiffness)))
+    return AffineBody(A, t, A_hat, t_hat, v)

@@ -10,7 +10,7 @@ are the usual choices for a simulation.
 from __future__ import annotations
 
 import time
-from typing import Callable, Dict, List, Optional, Sequence, Union
+from typing import Callable, Dict, List, Optional, Sequence, Tuple, Union
 
 import numpy as np
 
@@ -26,7 +26,8 @@ STAGES = ("collisions", "ccd", "derivatives", "assembly", "pcg", "energy")
 class NewtonReport:
     """What one Newton solve did: ``iterations`` (accepted steps),
     ``energies`` (the total energy before the first and after each accepted
-    step, each lower than the one before at the same barrier stiffness),
+    step), ``stepEnergies`` (per accepted step the energy before and
+    after it at the same barrier stiffness: after <= before),
     ``converged``, ``stepBounds`` (the CCD bound of each iteration, with
     contact), ``stiffness`` (kappa after each change of an adaptive
     contact's stiffness), ``cgIterations`` (of each direction) and
@@ -39,6 +40,7 @@ class NewtonReport:
     def __init__(self):
         self.iterations = 0
         self.energies: List[float] = []
+        self.stepEnergies: List[Tuple[float, float]] = []
         self.converged = False
         self.stepBounds: List[float] = []
         #: the barrier stiffness after each change by the adaptive rule
@@ -49,6 +51,7 @@ class NewtonReport:
     def add(self, other: "NewtonReport") -> None:
         """Accumulates another solve's counts and seconds (a run's total)."""
         self.iterations += other.iterations
+        self.stepEnergies += other.stepEnergies
         self.cgIterations += other.cgIterations
         for stage, seconds in other.seconds.items():
             self.seconds[stage] = self.seconds.get(stage, 0.0) + seconds
@@ -148,6 +151,7 @@ def newton(scene, x: Targets, tolerance: float,
                 t.updateValue(value)
             energy()
             break
+        report.stepEnergies.append((current_energy, candidate))
         current_energy = candidate
         report.iterations += 1
         report.energies.append(current_energy)

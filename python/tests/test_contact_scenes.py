@@ -1,0 +1,133 @@
+"""Short contact simulations through yasps.contact and yasps.sim: a soft box
+dropped on another resting on the ground, a cloth draped over a static box
+(an obstacle member of the UNION), and the README demo (soft, affine and
+cloth in one UNION). Every frame is checked by ipctk on positions the test
+reads from the targets itself, every accepted Newton step lowers the
+energy, and nothing is NaN."""
+
+import subprocess
+import sys
+from pathlib import Path
+
+import ipctk
+import numpy as np
+
+import yasps
+from yasps import energies as E
+from yasps.contact import Contact, surface_of
+from yasps.sim import (ImplicitEuler, add_cloth, add_elastic_tets,
+                       box_tet_mesh, cloth_grid)
+
+REPO = Path(__file__).resolve().parents[2]
+DT = 0.01
+
+
+def free_vertices(mesh, start: np.ndarray, mass: float):
+    """Free vertices with inertia: (primitive, x, x_hat)."""
+    v = mesh.addPrimitive("v", numInstances=len(start))
+    x = v.addAttribute("position", rows=3)
+    x.updateValue(start)
+    x_hat = v.addConstant("x_hat", rows=3)
+    x_hat.updateValue(start)
+    mesh.scene.addEnergy(v.addAttribute("inertia", computed_attribute=E.inertia(
+        x, x_hat, mass)))
+    return v, x, x_hat
+
+
+def check_frame(report, V: np.ndarray, faces: np.ndarray) -> None:
+    """No NaN, energy lowered by every accepted step, and no intersection
+    by ipctk on a collision mesh of the test's own."""
+    assert np.isfinite(V).all()
+    assert all(after <= before for before, after in report.stepEnergies)
+    mesh = ipctk.CollisionMesh(V, ipctk.edges(faces), faces)
+    assert not ipctk.has_intersections(mesh, V)
+
+
+def test_soft_box_dropped_on_a_soft_box_on_the_ground():
+    """Two soft boxes, one on the ground (a half-space), one falling onto
+    it: they touch (pairs between them), stay apart, and the lower one stays
+    above the ground."""
+    verts, tets = box_tet_mesh(2, 0.2)
+    faces = surface_of(tets).astype(np.int32)
+    s = yasps.scene("soft_on_soft")
+    xs, hats, prims = [], [], []
+    for name, lift in (("low", 5e-4), ("high", 0.23)):
+        mesh = s.addMesh(name)
+        start = verts + [0.03 if name == "high" else 0.0, 0.02, lift]
+        v, x, x_hat = free_vertices(mesh, start, 0.1)
+        add_elastic_tets(mesh, x, start, tets, 2e4, 2e4, scale=DT * DT)
+        xs.append(x)
+        hats.append(x_hat)
+        prims.append(v)
+    union = s.addMesh("all").addPrimitiveUnion("v", prims)
+    union.addAttribute("position")
+    both = np.concatenate([faces, faces + len(verts)])
+    contact = Contact(s, union, faces=both, dhat=1e-3, average_mass=0.1,
+                      halfspaces=[((0, 0, 0), (0, 0, 1))])
+    s.addMinimizeTarget(xs)
+    stepper = ImplicitEuler(s, xs, hats, DT, gravity=[(0, 0, -9.81)] * 2,
+                            contact=contact)
+    between = 0
+    for _ in range(12):
+        report = stepper.step()
+        V = np.concatenate([x.value[:, :, 0] for x in xs])
+        check_frame(report, V, both)
+        assert V[:, 2].min() > 0.0
+        ids = [c.vertex_ids(contact.mesh.edges, contact.mesh.faces)
+               for c in contact.collisions.fv_collisions]
+        between += sum(min(i) < len(verts) <= max(i) for i in ids)
+    assert between > 0
+    # Resting on it, pressed into its top: below its top corners, well above
+    # its middle.
+    assert xs[1].value[:, 2, 0].min() > 0.15
+
+
+def test_cloth_draped_over_a_static_box():
+    """A cloth falls on a box whose vertices are constants (an obstacle in
+    the UNION): it comes to rest on the box's top face, hanging over its
+    edges, without going through."""
+    cv, cf = cloth_grid(10, size=0.6, height=0.21)
+    bv, bt = box_tet_mesh(1, 0.2)
+    bv = bv - [0.1, 0.1, 0.0]
+    box_faces = surface_of(bt)
+    s = yasps.scene("drape")
+    cloth = s.addMesh("cloth")
+    v, x, x_hat = free_vertices(cloth, cv, 0.3 / len(cv))
+    add_cloth(cloth, x, cv, cf, stretch=1e3, shear=1e2, bending=1e-3,
+              scale=DT * DT)
+    obstacle = s.addMesh("box").addPrimitive("v", numInstances=len(bv))
+    obstacle.addConstant("position", rows=3).updateValue(bv)
+    union = s.addMesh("all").addPrimitiveUnion("v", [v, obstacle])
+    union.addAttribute("position")
+    faces = np.concatenate([cf, box_faces + len(cv)]).astype(np.int32)
+    contact = Contact(s, union, faces=faces, dhat=2e-3,
+                      average_mass=0.3 / len(cv), friction=0.3)
+    s.addMinimizeTarget(x)
+    stepper = ImplicitEuler(s, x, x_hat, DT, contact=contact)
+    for _ in range(15):
+        report = stepper.step()
+        V = np.concatenate([x.value[:, :, 0], bv])
+        check_frame(report, V, faces)
+    xc = x.value[:, :, 0]
+    on_top = (np.abs(xc[:, 0]) < 0.08) & (np.abs(xc[:, 1]) < 0.08)
+    assert on_top.any()
+    # Held by the box's top (z = 0.2; lifted a little where the cloth
+    # buckles over the box's edges), while the rim falls past.
+    assert np.all(xc[on_top, 2] > 0.2)
+    assert np.all(xc[on_top, 2] < 0.2 + 0.03)
+    assert xc[:, 2].min() < 0.15
+
+
+def test_readme_contact_demo_runs_small(tmp_path):
+    """The README demo (soft, affine and cloth through one UNION, friction,
+    pictures and video) at a small size: it exits cleanly, reports no
+    intersections and writes its series, pictures and video."""
+    out = subprocess.run(
+        [sys.executable, str(REPO / "examples" / "contact_demo.py"),
+         "--frames", "3", "--cloth", "6", "--box", "1", "--output",
+         str(tmp_path)], capture_output=True, text=True, timeout=900)
+    assert out.returncode == 0, out.stderr[-3000:]
+    assert "no intersections" in out.stdout
+    for name in ("cloth.pvd", "soft.pvd", "rigid.pvd", "frame_0003.png"):
+        assert (tmp_path / name).stat().st_size > 0
+    assert list(tmp_path.glob("contact.*"))
