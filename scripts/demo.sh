@@ -1,9 +1,9 @@
 #!/usr/bin/env bash
 # The demo command: installs what is missing, builds, and runs the main demo:
-# a soft box dropped onto the ground (implicit Euler, stable Neo-Hookean,
-# IPC barrier, Newton with yasps' directions) on the CPU, after the paper's
-# running example (two bunnies, UNION, dynamic collision pairs) through
-# yasps-opt and through Python.
+# a soft and an affine box falling onto a pinned cloth (three
+# parameterisations in one UNION, IPC contact with friction, implicit Euler)
+# on the CPU, after the paper's running example (two bunnies, UNION, dynamic
+# collision pairs) through yasps-opt and through Python.
 set -euo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
 build=${BUILD_DIR:-$root/build}
@@ -19,5 +19,5 @@ echo "== examples/ir/two_bunnies.mlir after yasps-inline-reads (barrier energy)"
 echo "== examples/two_bunnies.py"
 YASPS_BUILD_DIR="$build" python3 "$root/examples/two_bunnies.py"
 
-echo "== examples/drop.py: a soft box dropped onto the ground"
-YASPS_BUILD_DIR="$build" python3 "$root/examples/drop.py"
+echo "== examples/contact_demo.py: a soft and an affine box fall onto a pinned cloth"
+YASPS_BUILD_DIR="$build" python3 "$root/examples/contact_demo.py" --output out/contact
