@@ -96,7 +96,8 @@ def test_barrier_matches_ipctk(cells, angle, axis, gap, dhat, projection):
     assert relative(H, reference) < 1e-10
 
 
-def soft_and_affine(scene, lift: float, kappa: float, projection="clamp"):
+def soft_and_affine(scene, lift: float, kappa: float, projection="clamp",
+                    friction: float = 0.0):
     """A soft box and, above it, an affine box (x = A rest + t), their
     vertices in one UNION with contact; returns the targets, the affine
     box's rest positions and the contact."""
@@ -120,24 +121,38 @@ def soft_and_affine(scene, lift: float, kappa: float, projection="clamp"):
     union.addAttribute("position")
     contact = Contact(scene, union, faces=np.concatenate(
         [FACES, FACES + len(VERTS)]), dhat=0.05, kappa=kappa,
-        projection=projection)
+        projection=projection, friction=friction, eps_v=0.1)
     return (xs, A, t), rest, contact
 
 
 def test_affine_body_gets_the_chain_rule_of_the_soft_derivatives():
-    """Through the UNION, the barrier's gradient and Hessian with respect
-    to the soft positions, A and t are J^T g and J^T H J of ipctk's on the
-    world positions, J the (linear) map from the targets to them."""
+    """Through the UNION, the gradient and Hessian of barrier and friction
+    with respect to the soft positions, A and t are J^T g and J^T H J of
+    ipctk's BarrierPotential + FrictionPotential on the world positions, J
+    the (linear) map from the targets to them (friction lagged at the start,
+    then the affine box moved)."""
     s = yasps.scene("mixed")
-    (xs, A, t), rest, contact = soft_and_affine(s, 0.79, 2.0, "none")
+    (xs, A, t), rest, contact = soft_and_affine(s, 0.79, 2.0, "none",
+                                                friction=0.4)
     s.addMinimizeTarget([xs, A, t])
+    counts = contact.update(lag=True, dt=0.01)
+    assert sum(counts[f"friction{k}"] for k in (2, 3, 4)) > 0
+    Vt = contact.world()
+    tangential = ipctk.TangentialCollisions()
+    potential = ipctk.BarrierPotential(0.05, 2.0)
+    tangential.build(contact.mesh, Vt, contact.collisions, potential, 0.4)
+    t.updateValue(t.value + [[[2e-3], [-1e-3], [1e-4]]])
+    A.updateValue(A.value @ rotation(1e-3, [0, 0, 1]))
     assert sum(contact.update().values()) > 0
     V = contact.world()
-    potential = ipctk.BarrierPotential(0.05, 2.0)
-    gw = potential.gradient(contact.collisions, contact.mesh, V)
-    Hw = potential.hessian(contact.collisions, contact.mesh, V,
-                           project_hessian_to_psd=ipctk.PSDProjectionMethod.NONE
-                           ).toarray()
+    friction = ipctk.FrictionPotential(0.1 * 0.01)
+    none = ipctk.PSDProjectionMethod.NONE
+    gw = potential.gradient(contact.collisions, contact.mesh, V) + \
+        friction.gradient(tangential, contact.mesh, V - Vt)
+    Hw = (potential.hessian(contact.collisions, contact.mesh, V,
+                            project_hessian_to_psd=none)
+          + friction.hessian(tangential, contact.mesh, V - Vt,
+                             project_hessian_to_psd=none)).toarray()
     n = len(VERTS)
     J = np.zeros((6 * n, 3 * n + 12))
     J[:3 * n, :3 * n] = np.eye(3 * n)

@@ -104,10 +104,15 @@ def test_cloth_draped_over_a_static_box():
                       average_mass=0.3 / len(cv), friction=0.3)
     s.addMinimizeTarget(x)
     stepper = ImplicitEuler(s, x, x_hat, DT, contact=contact)
-    for _ in range(15):
-        report = stepper.step()
-        V = np.concatenate([x.value[:, :, 0], bv])
-        check_frame(report, V, faces)
+    frames = []
+
+    def check(frame, report):
+        frames.append(frame)
+        check_frame(report, np.concatenate([x.value[:, :, 0], bv]), faces)
+
+    total = stepper.run(15, on_frame=check, progress=False)
+    assert frames == list(range(1, 16))
+    assert total.iterations == len(total.stepEnergies) > 15
     xc = x.value[:, :, 0]
     on_top = (np.abs(xc[:, 0]) < 0.08) & (np.abs(xc[:, 1]) < 0.08)
     assert on_top.any()

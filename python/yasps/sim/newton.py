@@ -13,6 +13,7 @@ import time
 from typing import Callable, Dict, List, Optional, Sequence, Tuple, Union
 
 import numpy as np
+from tqdm import tqdm
 
 from ..frontend.attribute import Attribute
 from ..frontend.errors import SceneError
@@ -205,6 +206,25 @@ class ImplicitEuler:
         self.step_bound, self.contact = step_bound, contact
         self.max_iterations, self.cg_tolerance = max_iterations, cg_tolerance
         self.velocities = [np.zeros_like(t.value) for t in self.targets]
+
+    def run(self, frames: int, on_frame: Optional[Callable[[int, NewtonReport],
+                                                          None]] = None,
+            progress: bool = True) -> NewtonReport:
+        """Takes ``frames`` steps with a progress bar (tqdm; ``progress=False``
+        for none), calling ``on_frame(frame, report)`` after each (frames
+        count from 1); returns the sum of the steps' reports."""
+        total = NewtonReport()
+        total.converged = True
+        with tqdm(range(1, frames + 1), unit="frame", disable=not progress,
+                  leave=False) as bar:
+            for frame in bar:
+                report = self.step()
+                total.add(report)
+                total.converged = total.converged and report.converged
+                bar.set_postfix(newton=report.iterations)
+                if on_frame is not None:
+                    on_frame(frame, report)
+        return total
 
     @property
     def velocity(self) -> np.ndarray:
