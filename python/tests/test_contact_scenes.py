@@ -13,25 +13,12 @@ import ipctk
 import numpy as np
 
 import yasps
-from yasps import energies as E
 from yasps.contact import Contact, surface_of
 from yasps.sim import (ImplicitEuler, add_cloth, add_elastic_tets,
-                       box_tet_mesh, cloth_grid)
+                       add_free_vertices, box_tet_mesh, cloth_grid)
 
 REPO = Path(__file__).resolve().parents[2]
 DT = 0.01
-
-
-def free_vertices(mesh, start: np.ndarray, mass: float):
-    """Free vertices with inertia: (primitive, x, x_hat)."""
-    v = mesh.addPrimitive("v", numInstances=len(start))
-    x = v.addAttribute("position", rows=3)
-    x.updateValue(start)
-    x_hat = v.addConstant("x_hat", rows=3)
-    x_hat.updateValue(start)
-    mesh.scene.addEnergy(v.addAttribute("inertia", computed_attribute=E.inertia(
-        x, x_hat, mass)))
-    return v, x, x_hat
 
 
 def check_frame(report, V: np.ndarray, faces: np.ndarray) -> None:
@@ -54,11 +41,11 @@ def test_soft_box_dropped_on_a_soft_box_on_the_ground():
     for name, lift in (("low", 5e-4), ("high", 0.23)):
         mesh = s.addMesh(name)
         start = verts + [0.03 if name == "high" else 0.0, 0.02, lift]
-        v, x, x_hat = free_vertices(mesh, start, 0.1)
-        add_elastic_tets(mesh, x, start, tets, 2e4, 2e4, scale=DT * DT)
-        xs.append(x)
-        hats.append(x_hat)
-        prims.append(v)
+        free = add_free_vertices(mesh, start, 0.1)
+        add_elastic_tets(mesh, free.x, start, tets, 2e4, 2e4, scale=DT * DT)
+        xs.append(free.x)
+        hats.append(free.x_hat)
+        prims.append(free.primitive)
     union = s.addMesh("all").addPrimitiveUnion("v", prims)
     union.addAttribute("position")
     both = np.concatenate([faces, faces + len(verts)])
@@ -92,7 +79,8 @@ def test_cloth_draped_over_a_static_box():
     box_faces = surface_of(bt)
     s = yasps.scene("drape")
     cloth = s.addMesh("cloth")
-    v, x, x_hat = free_vertices(cloth, cv, 0.3 / len(cv))
+    free = add_free_vertices(cloth, cv, 0.3 / len(cv))
+    v, x, x_hat = free.primitive, free.x, free.x_hat
     add_cloth(cloth, x, cv, cf, stretch=1e3, shear=1e2, bending=1e-3,
               scale=DT * DT)
     obstacle = s.addMesh("box").addPrimitive("v", numInstances=len(bv))

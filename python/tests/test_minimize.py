@@ -11,6 +11,7 @@ import pytest
 import yasps
 from yasps import energies as E
 from yasps.runtime import cpu_backend
+from yasps.compiler.cpu import kernels_compiled
 from yasps.solve import DofLayout, NoDerivativesError
 from yasps.solve import assemble as assemble_on
 
@@ -401,24 +402,28 @@ def test_an_energy_without_targets_has_no_derivatives_and_is_left_out():
 @pytest.mark.parametrize("factored", [False, True])
 def test_new_pair_counts_run_no_compiler(monkeypatch, factored):
     """Dynamic instance counts are not part of what is compiled: once warm,
-    minimizeEnergy and compute() with any number of collision pairs ask the
-    C++ compiler for nothing (no parse, no pass, no LLVM), with dense or
-    factored projected Hessians."""
+    1,000 minimizeEnergy calls with 0 to 5,000 collision pairs, and
+    compute() at some of them, ask the C++ compiler for nothing (no parse,
+    no pass, no LLVM) and compile no kernel, with dense or factored
+    projected Hessians."""
     monkeypatch.setattr(yasps.config, "separate_reduced_hessians", factored)
     s, pp, p2v, *_ = mixed_scene([[0, 3], [1, 4]])
     barrier = pp["b"]
     s.minimizeEnergy()
     barrier.compute()
     before = yasps.compiler.invocations()
+    compiled = kernels_compiled()
     counts = np.random.default_rng(3)
-    for _ in range(25):
-        n = int(counts.integers(0, 200))
+    for call in range(1000):
+        n = int(counts.integers(0, 5001))
         pp.updateNumInstances(n)
         p2v.updateConnectivity(np.stack([counts.integers(0, 3, n),
                                          counts.integers(3, 5, n)], axis=1))
         s.minimizeEnergy()
-        assert barrier.compute().value.shape == (n, 1, 1)
+        if call % 50 == 0:
+            assert barrier.compute().value.shape == (n, 1, 1)
     assert yasps.compiler.invocations() == before
+    assert kernels_compiled() == compiled
 
 
 COMPILE_ONCE = """

@@ -2,15 +2,18 @@
 search and step bounds), bodies (soft tets, cloth, affine bodies), meshes,
 and output (ParaView series, pictures, videos)."""
 
-from .bodies import (AffineBody, add_affine_body, add_affine_inertia,
-                     add_cloth, add_elastic_tets)
+from .bodies import (AffineBody, FreeVertices, add_affine_body,
+                     add_affine_inertia, add_cloth, add_elastic_tets,
+                     add_free_vertices, lumped_masses)
 from .meshes import (box_tet_mesh, cloth_corners, cloth_grid, hinges_of,
                      orient_tets, read_tet_mesh, signed_tet_volumes)
 from .newton import ImplicitEuler, NewtonReport, newton
 from .output import (RecordedFrame, SurfaceRecorder, render_surfaces,
                      render_surfaces_array, write_video)
+from .run import Body, RunSummary, simulate
 
-__all__ = ["AffineBody", "ImplicitEuler", "NewtonReport", "RecordedFrame",
+__all__ = ["AffineBody", "Body", "FreeVertices", "add_free_vertices",
+           "lumped_masses", "RunSummary", "simulate", "ImplicitEuler", "NewtonReport", "RecordedFrame",
            "SurfaceRecorder", "add_affine_body", "add_affine_inertia",
            "add_cloth", "add_elastic_tets",
            "box_tet_mesh", "cloth_corners", "cloth_grid", "hinges_of",

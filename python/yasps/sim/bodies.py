@@ -162,3 +162,55 @@ def add_affine_body(mesh: Mesh, rest: np.ndarray, masses: np.ndarray,
         "orthogonality", computed_attribute=scale * E.abd_orthogonality(
             A, stiffness)))
     return AffineBody(A, t, A_hat, t_hat, v)
+
+
+def lumped_masses(verts: np.ndarray, cells: np.ndarray,
+                  density: float) -> np.ndarray:
+    """Vertex masses (N,) lumped from tets (M, 4; density per volume) or
+    triangles (M, 3; density per area): each cell's mass split evenly among
+    its corners."""
+    verts = np.asarray(verts, dtype=float)
+    cells = np.asarray(cells, dtype=np.int64)
+    c = verts[cells]
+    if cells.shape[1] == 4:
+        sizes = np.abs(np.linalg.det(np.stack([c[:, k] - c[:, 0]
+                                               for k in (1, 2, 3)], 2))) / 6
+    elif cells.shape[1] == 3:
+        sizes = 0.5 * np.linalg.norm(np.cross(c[:, 1] - c[:, 0],
+                                              c[:, 2] - c[:, 0]), axis=1)
+    else:
+        raise ValueError(f"lumped_masses: cells of {cells.shape[1]} vertices; "
+                         f"give tets (4) or triangles (3)")
+    k = cells.shape[1]
+    masses = np.zeros(len(verts))
+    np.add.at(masses, cells.reshape(-1), np.repeat(sizes / k, k))
+    return density * masses
+
+
+@dataclass
+class FreeVertices:
+    """Free vertices with inertia: the primitive, the target ``x`` and its
+    prediction ``x_hat``."""
+    primitive: Primitive
+    x: Attribute
+    x_hat: Attribute
+
+
+def add_free_vertices(mesh: Mesh, start: np.ndarray, masses,
+                      name: str = "v") -> FreeVertices:
+    """A primitive ``name`` of vertices at ``start`` (N, 3) whose positions
+    ``position`` are a minimisation target's candidates, with the
+    implicit-Euler inertia ``m/2 |x - x_hat|^2`` of their ``masses`` (one
+    per vertex, or one for all) registered."""
+    start = np.asarray(start, dtype=float).reshape(-1, 3)
+    v = mesh.addPrimitive(name, numInstances=len(start))
+    x = v.addAttribute("position", rows=3)
+    x.updateValue(start)
+    x_hat = v.addConstant("x_hat", rows=3)
+    x_hat.updateValue(start)
+    mass = v.addConstant("mass", rows=1)
+    mass.updateValue(np.broadcast_to(np.asarray(masses, float).reshape(-1, 1),
+                                     (len(start), 1)).copy())
+    mesh.scene.addEnergy(v.addAttribute("inertia", computed_attribute=E.inertia(
+        x, x_hat, mass)))
+    return FreeVertices(v, x, x_hat)

@@ -17,6 +17,7 @@ from tqdm import tqdm
 
 from ..frontend.attribute import Attribute
 from ..frontend.errors import SceneError
+from ..solve import SolverError
 
 Targets = Union[Attribute, Sequence[Attribute]]
 
@@ -47,12 +48,15 @@ class NewtonReport:
         #: the barrier stiffness after each change by the adaptive rule
         self.stiffness: List[float] = []
         self.cgIterations: List[int] = []
+        #: directions taken from PCG's last iterate (it hit its limit)
+        self.inexactDirections = 0
         self.seconds: Dict[str, float] = dict.fromkeys(STAGES, 0.0)
 
     def add(self, other: "NewtonReport") -> None:
         """Accumulates another solve's counts and seconds (a run's total)."""
         self.iterations += other.iterations
         self.stepEnergies += other.stepEnergies
+        self.inexactDirections += other.inexactDirections
         self.cgIterations += other.cgIterations
         for stage, seconds in other.seconds.items():
             self.seconds[stage] = self.seconds.get(stage, 0.0) + seconds
@@ -76,7 +80,8 @@ def _check_targets(scene, targets: List[Attribute]) -> None:
 def newton(scene, x: Targets, tolerance: float,
            step_bound: Optional[Callable[[np.ndarray, np.ndarray], float]] = None,
            max_iterations: int = 20, cg_tolerance: float = 1e-4,
-           fixed=None, contact=None) -> NewtonReport:
+           fixed=None, contact=None,
+           cg_max_iterations: int = 1000) -> NewtonReport:
     """Minimises the scene's energy over its targets ``x`` (one attribute,
     or the list of the scene's minimisation targets in order) by Newton's
     method: directions from ``minimizeEnergy``, the step limited by
@@ -87,7 +92,9 @@ def newton(scene, x: Targets, tolerance: float,
     boolean mask of a single target's instances or entries, or a list with
     one mask or None per target) excludes DoFs, which keep their values.
     Stops when the largest change of a world position (with contact) or of
-    a target entry is below ``tolerance``."""
+    a target entry is below ``tolerance``. A direction whose PCG stops at
+    ``cg_max_iterations`` before ``cg_tolerance`` is used as it is (counted
+    in ``inexactDirections``)."""
     targets = _as_list(x)
     _check_targets(scene, targets)
     if fixed is not None and isinstance(x, Attribute):
@@ -119,8 +126,16 @@ def newton(scene, x: Targets, tolerance: float,
         current_energy = adapt()
     report.energies.append(current_energy)
     for _ in range(max_iterations):
-        steps = [-dx for dx in scene.minimizeEnergy(tolerance=cg_tolerance,
-                                                    fixed=fixed)]
+        try:
+            directions = scene.minimizeEnergy(tolerance=cg_tolerance,
+                                              maxIterations=cg_max_iterations,
+                                              fixed=fixed)
+        except SolverError as error:
+            # A CG iterate from zero on an SPD system is a descent
+            # direction: take it, inexactly, and let the line search judge.
+            directions = error.solution
+            report.inexactDirections += 1
+        steps = [-dx for dx in directions]
         solve = scene.lastSolve
         spent = solve["seconds"]
         report.seconds["derivatives"] += spent["derivatives"]
@@ -183,7 +198,7 @@ class ImplicitEuler:
                  step_bound: Optional[Callable[[np.ndarray, np.ndarray],
                                                float]] = None,
                  fixed=None, max_iterations: int = 20, contact=None,
-                 cg_tolerance: float = 1e-4):
+                 cg_tolerance: float = 1e-4, cg_max_iterations: int = 1000):
         single = isinstance(x, Attribute)
         self.scene, self.dt = scene, float(dt)
         self.targets, self.predicted = _as_list(x), _as_list(x_hat)
@@ -205,6 +220,7 @@ class ImplicitEuler:
         self.velocity_tolerance = velocity_tolerance
         self.step_bound, self.contact = step_bound, contact
         self.max_iterations, self.cg_tolerance = max_iterations, cg_tolerance
+        self.cg_max_iterations = cg_max_iterations
         self.velocities = [np.zeros_like(t.value) for t in self.targets]
 
     def run(self, frames: int, on_frame: Optional[Callable[[int, NewtonReport],
@@ -255,7 +271,8 @@ class ImplicitEuler:
                         step_bound=self.step_bound,
                         max_iterations=self.max_iterations,
                         cg_tolerance=self.cg_tolerance, fixed=fixed,
-                        contact=self.contact)
+                        contact=self.contact,
+                        cg_max_iterations=self.cg_max_iterations)
         report.seconds["collisions"] += lag_seconds
         self.velocities = [(t.value - p) / self.dt
                            for t, p in zip(self.targets, previous)]

@@ -1,0 +1,101 @@
+#!/usr/bin/env python3
+"""Cloths on bunny on cloth (paper 9.1, Fig. 14, Table 1).
+
+A soft bunny (stable Neo-Hookean, Young's modulus 10,259 Pa, Poisson 0.205,
+1 kg) falls onto a cloth pinned at its four corners; one to three cloth
+layers (Baraff-Witkin stretch 33,570 and shear 100,607, dihedral bending
+0.055) drop onto it one after the other. dt = 0.01 s, CG relative tolerance
+1e-4, Newton stops when the largest displacement over dt is below 1e-2 m/s.
+
+    python3 examples/paper/cloths_on_bunny.py [--frames 60] [--layers 1]
+        [--scale small|paper] [--output DIR]
+"""
+
+from __future__ import annotations
+
+import sys
+
+import numpy as np
+
+from common import (CLOTH_CELLS, DT, GRAVITY, arguments, bunny, lame,  # noqa: E402
+                    run)
+
+import yasps  # noqa: E402
+from yasps.contact import Contact  # noqa: E402
+from yasps.sim import (Body, ImplicitEuler, add_cloth, add_elastic_tets,  # noqa: E402
+                       add_free_vertices, cloth_corners, cloth_grid,
+                       lumped_masses)
+
+CLOTH = dict(stretch=33570.0, shear=100607.0, bending=0.055)
+CLOTH_DENSITY = 0.2       # kg/m^2
+BUNNY_HEIGHT = 0.3        # m
+COLORS = [(0.85, 0.75, 0.55), (0.6, 0.8, 0.55), (0.8, 0.55, 0.75),
+          (0.55, 0.7, 0.85)]
+
+
+def build(scale: str, layers: int):
+    """The scene: (stepper, contact, {body: Body})."""
+    s = yasps.scene("cloths_on_bunny")
+    parts, faces, bodies, targets, hats, fixed = [], [], {}, [], [], []
+    offset = 0
+
+    def add_surface(name, free, F, color, mask=None):
+        nonlocal offset
+        parts.append(free.primitive)
+        faces.append(F + offset)
+        offset += free.primitive.numInstances
+        bodies[name] = Body(free.x, F, color)
+        targets.append(free.x)
+        hats.append(free.x_hat)
+        fixed.append(mask)
+
+    n = CLOTH_CELLS[scale]
+    cv, cf = cloth_grid(n, size=1.0)
+    mesh = s.addMesh("cloth")
+    c = add_free_vertices(mesh, cv, lumped_masses(cv, cf, CLOTH_DENSITY))
+    add_cloth(mesh, c.x, cv, cf, scale=DT * DT, **CLOTH)
+    pinned = np.zeros(len(cv), dtype=bool)
+    pinned[cloth_corners(n)] = True
+    add_surface("cloth", c, cf, COLORS[0], pinned)
+
+    bv, bt, bf = bunny(scale, BUNNY_HEIGHT)
+    bv = bv + [0.0, 0.0, 0.01]
+    masses = lumped_masses(bv, bt, 1.0)
+    mesh = s.addMesh("bunny")
+    b = add_free_vertices(mesh, bv, masses / masses.sum())  # 1 kg
+    mu, lam = lame(10259.0, 0.205)
+    add_elastic_tets(mesh, b.x, bv, bt, mu, lam, scale=DT * DT)
+    add_surface("bunny", b, bf, (0.35, 0.6, 0.9))
+
+    for k in range(layers):
+        lv, lf = cloth_grid(max(n * 3 // 5, 4), size=0.6,
+                            height=BUNNY_HEIGHT + 0.05 + 0.1 * k)
+        mesh = s.addMesh(f"layer{k}")
+        layer = add_free_vertices(mesh, lv, lumped_masses(lv, lf, CLOTH_DENSITY))
+        add_cloth(mesh, layer.x, lv, lf, scale=DT * DT, **CLOTH)
+        add_surface(f"layer{k}", layer, lf, COLORS[1 + k % 3])
+
+    union = s.addMesh("all").addPrimitiveUnion("v", parts)
+    union.addAttribute("position")
+    contact = Contact(s, union, faces=np.concatenate(faces), dhat=1e-3,
+                      average_mass=CLOTH_DENSITY / (n + 1) ** 2)
+    s.addMinimizeTarget(targets)
+    stepper = ImplicitEuler(s, targets, hats, dt=DT,
+                            gravity=[GRAVITY] * len(targets), fixed=fixed,
+                            contact=contact, velocity_tolerance=1e-2,
+                            cg_tolerance=1e-4)
+    return stepper, contact, bodies
+
+
+def main() -> None:
+    args = arguments(__doc__.split("\n")[0], frames=60, extra=lambda p:
+                     p.add_argument("--layers", type=int, default=1,
+                                    choices=(1, 2, 3)))
+    stepper, contact, bodies = build(args.scale, args.layers)
+    summary = run("cloths_on_bunny", args, stepper, bodies, contact,
+                  bounds=((-0.55, -0.55, -0.35), (0.55, 0.55, 0.65)))
+    sys.exit(1 if summary.intersections else 0)
+
+
+if __name__ == "__main__":
+    main()

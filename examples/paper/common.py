@@ -1,0 +1,78 @@
+"""What the paper's scene scripts share: their command line, the bunny meshes
+of ../shared/data, material constants, and the run to files with its summary.
+Each scene script builds its scene in its own file; this holds no physics."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import time
+from pathlib import Path
+from typing import Tuple
+
+import numpy as np
+
+REPO = Path(__file__).resolve().parents[2]
+sys.path.insert(0, str(REPO / "python"))
+
+from yasps.contact import surface_of  # noqa: E402
+from yasps.sim import RunSummary, read_tet_mesh, simulate  # noqa: E402
+
+DATA = REPO.parent / "shared" / "data"
+DT = 0.01
+GRAVITY = (0.0, 0.0, -9.81)
+
+#: The paper's sizes (Table 1, Table 5) and the small ones of the tests.
+BUNNY = {"small": "bunny-1.8k.msh", "paper": "bunny-19k.msh"}
+CLOTH_CELLS = {"small": 24, "paper": 100}
+
+
+def arguments(description: str, frames: int,
+              extra=lambda parser: None) -> argparse.Namespace:
+    """The scene scripts' common options, and those ``extra(parser)`` adds."""
+    parser = argparse.ArgumentParser(description=description)
+    extra(parser)
+    parser.add_argument("--frames", type=int, default=frames)
+    parser.add_argument("--scale", choices=("small", "paper"), default="small")
+    parser.add_argument("--output", type=Path, default=None,
+                        help="default: out/paper/<scene>")
+    parser.add_argument("--no-video", action="store_true")
+    return parser.parse_args()
+
+
+def lame(young: float, poisson: float) -> Tuple[float, float]:
+    """Lame's (mu, lambda) from Young's modulus and Poisson's ratio."""
+    return (young / (2 * (1 + poisson)),
+            young * poisson / ((1 + poisson) * (1 - 2 * poisson)))
+
+
+def bunny(scale: str, height: float) -> Tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The tet bunny of ``scale`` standing on z = 0, centred in x and y,
+    ``height`` tall: (vertices, tets, surface triangles)."""
+    path = DATA / BUNNY[scale]
+    if not path.exists():
+        raise SystemExit(f"{path} is missing: the paper's scenes read the "
+                         f"bunny meshes from ../shared/data")
+    verts, tets = read_tet_mesh(path)
+    lo, hi = verts.min(axis=0), verts.max(axis=0)
+    verts = (verts - [(lo[0] + hi[0]) / 2, (lo[1] + hi[1]) / 2, lo[2]]) \
+        * (height / (hi[2] - lo[2]))
+    return verts, tets, surface_of(tets)
+
+
+def run(name: str, args, stepper, bodies, contact, **options) -> RunSummary:
+    """Compiles (or loads) the kernels, simulates ``args.frames`` frames to
+    ``args.output`` and prints the summary line and the time per stage."""
+    output = args.output or REPO / "out" / "paper" / name
+    start = time.perf_counter()
+    contact.update()
+    stepper.scene.evaluateEnergy()
+    stepper.scene.minimizeEnergy(fixed=stepper.fixed)
+    print(f"{name}: compiled or loaded the kernels in "
+          f"{time.perf_counter() - start:.1f} s")
+    summary = simulate(stepper, bodies, args.frames, output, contact=contact,
+                       video=not args.no_video, **options)
+    print(f"{name}: {summary.line()}")
+    print(summary.stages())
+    print(f"{name}: wrote {output}")
+    return summary
