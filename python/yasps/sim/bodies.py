@@ -10,7 +10,7 @@ import numpy as np
 from ..frontend import energies as E
 from ..frontend.attribute import Attribute
 from ..frontend.scene import Mesh, Primitive
-from .meshes import hinges_of
+from .meshes import HEX_CORNERS, hinges_of
 
 
 def add_elastic_tets(mesh: Mesh, positions: Attribute, rest: np.ndarray,
@@ -214,3 +214,64 @@ def add_free_vertices(mesh: Mesh, start: np.ndarray, masses,
     mesh.scene.addEnergy(v.addAttribute("inertia", computed_attribute=E.inertia(
         x, x_hat, mass)))
     return FreeVertices(v, x, x_hat)
+
+
+def hex8_gauss_points(rest: np.ndarray, hexes: np.ndarray):
+    """The 2x2x2 Gauss rule on trilinear hexahedra (M, 8, HEX_CORNERS
+    order) at rest ``rest``: per cell and point (M * 8 of them) the
+    gradients of the 8 shape functions with respect to rest positions
+    (8x3, so that F = x^T G) and the point's weight times the rest Jacobian's
+    determinant (its share of the cell's volume)."""
+    rest = np.asarray(rest, dtype=float)
+    corners = rest[np.asarray(hexes, dtype=np.int64)]          # (M, 8, 3)
+    g = 0.5 / np.sqrt(3.0)
+    points = 0.5 + g * (2 * HEX_CORNERS - 1)                   # (8, 3)
+    gradients, volumes = [], []
+    for xi in points:
+        factors = np.where(HEX_CORNERS == 1, xi, 1.0 - xi)     # (8, 3)
+        signs = np.where(HEX_CORNERS == 1, 1.0, -1.0)
+        dN = np.stack([signs[:, a] * np.prod(np.delete(factors, a, axis=1),
+                                              axis=1) for a in range(3)], 1)
+        J = np.einsum("mkd,ka->mda", corners, dN)               # dX/dxi
+        gradients.append(dN[None] @ np.linalg.inv(J))          # (M, 8, 3)
+        volumes.append(np.linalg.det(J) / 8.0)
+    G = np.stack(gradients, axis=1).reshape(-1, 8, 3)
+    w = np.stack(volumes, axis=1).reshape(-1)
+    if (w <= 0).any():
+        raise ValueError("hex8_gauss_points: inverted cells at rest")
+    return G, w
+
+
+def add_hex8_neo_hookean(mesh: Mesh, positions: Attribute, rest: np.ndarray,
+                         hexes: np.ndarray, mu: float, lam: float,
+                         scale: float = 1.0, name: str = "gauss") -> Attribute:
+    """Stable Neo-Hookean on trilinear hexahedra (paper appendix G, Hex8):
+    a primitive ``name`` of their 2x2x2 Gauss points, each joined to its
+    cell's 8 corners with F = x^T G and its share of the volume (see
+    :func:`hex8_gauss_points`), times ``scale``. Returns the energy."""
+    G, w = hex8_gauss_points(rest, hexes)
+    corners = np.repeat(np.asarray(hexes, dtype=np.int64), 8, axis=0)
+    q = mesh.addPrimitive(name, numInstances=len(w))
+    q.addConstant("G", rows=8, cols=3).updateValue(G)
+    q.addConstant("vol", rows=1).updateValue(w[:, None])
+    x = q.addAttribute("c", through=q.addConnectivity(
+        "q2v", positions.owner, corners, 8), source=positions)
+    energy = q.addAttribute("elastic", computed_attribute=scale *
+                            E.stable_neo_hookean(x.T * q["G"], mu, lam,
+                                                 q["vol"]))
+    mesh.scene.addEnergy(energy)
+    return energy
+
+
+def add_caged_surface(mesh: Mesh, cage_positions: Attribute,
+                      cage, name: str = "surface") -> Primitive:
+    """A primitive ``name`` of points whose ``position`` is trilinear in the
+    8 corners of their cage cell (``cage``: a :class:`.meshes.Cage` whose
+    vertices ``cage_positions`` belongs to): the points the cage moves."""
+    p = mesh.addPrimitive(name, numInstances=len(cage.cell_of))
+    p.addConstant("w", rows=8).updateValue(cage.weights[:, :, None])
+    corners = p.addAttribute("c", through=p.addConnectivity(
+        "p2c", cage_positions.owner, cage.corners_of_points(), 8),
+        source=cage_positions)
+    p.addAttribute("position", computed_attribute=corners.T * p["w"])
+    return p

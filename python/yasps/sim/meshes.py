@@ -4,6 +4,7 @@ bending hinges, and tet meshes read from files (Gmsh, VTK, ... via meshio)."""
 from __future__ import annotations
 
 import itertools
+from dataclasses import dataclass
 from os import PathLike
 from typing import Optional, Tuple, Union
 
@@ -143,3 +144,81 @@ def orient_tets(verts: np.ndarray, tets: np.ndarray) -> np.ndarray:
     inverted = signed_tet_volumes(verts, tets) < 0
     tets[inverted] = tets[inverted][:, [0, 1, 3, 2]]
     return tets
+
+
+#: The corners of a hexahedral cell as (x, y, z) offsets in {0, 1}, in the
+#: order corner index = x + 2 y + 4 z.
+HEX_CORNERS = np.array([[c & 1, (c >> 1) & 1, (c >> 2) & 1] for c in range(8)])
+
+
+def trilinear_weights(local: np.ndarray) -> np.ndarray:
+    """(N, 8) weights of the 8 corners of a unit cell at local coordinates
+    ``local`` (N, 3) in [0, 1]^3, in HEX_CORNERS order."""
+    local = np.asarray(local, dtype=float).reshape(-1, 1, 3)
+    factors = np.where(HEX_CORNERS[None] == 1, local, 1.0 - local)
+    return factors.prod(axis=2)
+
+
+@dataclass
+class Cage:
+    """A uniform grid of cells around some points: the cells that hold a
+    point (``hexes``, (M, 8) into ``vertices``, HEX_CORNERS order), and per
+    point the cell it lies in and its trilinear ``weights`` (N, 8) of that
+    cell's corners."""
+    vertices: np.ndarray
+    hexes: np.ndarray
+    cell_of: np.ndarray
+    weights: np.ndarray
+
+    def corners_of_points(self) -> np.ndarray:
+        """(N, 8): the cage vertices each point is trilinear in."""
+        return self.hexes[self.cell_of]
+
+    def embed(self, positions: np.ndarray) -> np.ndarray:
+        """The points' positions for cage vertex ``positions`` (V, 3)."""
+        return np.einsum("nk,nkd->nd", self.weights,
+                         positions[self.corners_of_points()])
+
+
+def cage_grid(points: np.ndarray, cells: int, margin: float = 1e-3) -> Cage:
+    """The cage of ``points`` (N, 3): their bounding box (grown by
+    ``margin`` of its diagonal) cut into ``cells`` cells along its longest
+    side (cubes), only the cells holding a point kept (paper 9.3, appendix
+    G: each point is trilinear in the 8 corners of its cell)."""
+    points = np.asarray(points, dtype=float).reshape(-1, 3)
+    lo, hi = points.min(axis=0), points.max(axis=0)
+    pad = margin * np.linalg.norm(hi - lo)
+    lo, hi = lo - pad, hi + pad
+    h = (hi - lo).max() / cells
+    shape = np.maximum(np.ceil((hi - lo) / h).astype(int), 1)
+    scaled = (points - lo) / h
+    cell = np.minimum(np.floor(scaled).astype(int), shape - 1)
+    keys = np.ravel_multi_index(cell.T, shape)
+    active, cell_of = np.unique(keys, return_inverse=True)
+    origin = np.stack(np.unravel_index(active, shape), axis=1)
+    corner_grid = origin[:, None, :] + HEX_CORNERS[None]
+    corner_keys = np.ravel_multi_index(corner_grid.reshape(-1, 3).T, shape + 1)
+    used, hexes = np.unique(corner_keys, return_inverse=True)
+    vertices = lo + h * np.stack(np.unravel_index(used, shape + 1), axis=1)
+    weights = trilinear_weights(scaled - origin[cell_of])
+    return Cage(vertices, hexes.reshape(-1, 8).astype(np.int64),
+                cell_of.reshape(-1), weights)
+
+
+def hex_tets(hexes: np.ndarray) -> np.ndarray:
+    """Each hexahedral cell (M, 8, HEX_CORNERS order, axis-aligned) as the
+    6 positively oriented tets around its main diagonal (6M, 4)."""
+    tets = []
+    for perm in itertools.permutations(range(3)):
+        path = [np.zeros(3, dtype=int)]
+        for axis in perm:
+            step = path[-1].copy()
+            step[axis] = 1
+            path.append(step)
+        corners = [int(p[0] + 2 * p[1] + 4 * p[2]) for p in path]
+        # The path's tet is positive when the axis permutation is even.
+        sign = np.linalg.det(np.eye(3)[list(perm)])
+        if sign < 0:
+            corners[2], corners[3] = corners[3], corners[2]
+        tets.append(corners)
+    return np.asarray(hexes)[:, tets].reshape(-1, 4)
