@@ -1,0 +1,154 @@
+"""The paper's scenes (examples/paper) at small scale for a few frames: no
+intersection in any frame (ipctk, on positions the test computes itself),
+every accepted Newton step lowers the energy, nothing is NaN, and the
+physics each scene is about. Also the cage helpers against their
+definitions."""
+
+import sys
+from pathlib import Path
+
+import ipctk
+import numpy as np
+import pytest
+
+REPO = Path(__file__).resolve().parents[2]
+DATA = REPO.parent / "shared" / "data"
+sys.path.insert(0, str(REPO / "examples" / "paper"))
+
+from yasps.sim import (cage_grid, hex8_gauss_points, hex_tets,  # noqa: E402
+                       signed_tet_volumes)
+
+needs_bunny = pytest.mark.skipif(not (DATA / "bunny-1.8k.msh").exists(),
+                                 reason="../shared/data/bunny-1.8k.msh missing")
+
+
+def step_and_check(stepper, bodies, frames: int, check=None):
+    """Steps ``frames`` frames; after each: finite positions, energy lowered
+    by every accepted step, no intersection among all bodies' surfaces by
+    ipctk on a collision mesh of the test's own, and ``check(frame)``."""
+    for frame in range(1, frames + 1):
+        report = stepper.step()
+        assert all(after <= before for before, after in report.stepEnergies)
+        parts, faces, offset = [], [], 0
+        for body in bodies.values():
+            V = body.now()
+            assert np.isfinite(V).all()
+            parts.append(V)
+            faces.append(body.faces + offset)
+            offset += len(V)
+        V = np.concatenate(parts)
+        F = np.concatenate(faces).astype(np.int32)
+        mesh = ipctk.CollisionMesh(V, ipctk.edges(F), F)
+        assert not ipctk.has_intersections(mesh, V)
+        if check is not None:
+            check(frame)
+
+
+def pinned_corners_stay(stepper, mask_index: int = 0):
+    """A check that the first target's pinned vertices do not move."""
+    target = stepper.targets[mask_index]
+    mask = stepper.fixed[mask_index]
+    start = target.value[mask].copy()
+    return lambda frame: np.testing.assert_array_equal(target.value[mask],
+                                                        start)
+
+
+@needs_bunny
+def test_cloths_on_bunny():
+    """9.1: the bunny falls onto the pinned cloth, a cloth layer onto it."""
+    import cloths_on_bunny
+    stepper, contact, bodies = cloths_on_bunny.build("small", 1)
+    z0 = bodies["bunny"].now()[:, 2].mean()
+    step_and_check(stepper, bodies, 4, pinned_corners_stay(stepper))
+    assert bodies["bunny"].now()[:, 2].mean() < z0
+    assert sum(contact.update().values()) > 0  # the bunny is on the cloth
+
+
+@needs_bunny
+def test_many_bunnies():
+    """9.2: soft and affine bunnies through one UNION; the affine ones stay
+    nearly rigid (|A^T A - I| small)."""
+    import many_bunnies
+    stepper, contact, bodies, affine = many_bunnies.build("small", 2)
+
+    def rigid(frame):
+        for body in affine:
+            A = body.A.value[0]
+            assert np.abs(A.T @ A - np.eye(3)).max() < 1e-3
+
+    corners = pinned_corners_stay(stepper)
+    heights = [body.t.value[0, 2, 0] for body in affine]
+    step_and_check(stepper, bodies, 4, lambda f: (corners(f), rigid(f)))
+    assert affine
+    assert all(body.t.value[0, 2, 0] < z for body, z in zip(affine, heights))
+
+
+@needs_bunny
+@pytest.mark.parametrize("discretization", ["tet4", "hex8"])
+def test_caged_bunny(discretization):
+    """9.3: the surface follows its cage (the embedding reproduces the
+    cage's trilinear map) while both fall."""
+    import caged_bunny
+    stepper, contact, bodies, cage = caged_bunny.build("small", discretization,
+                                                       4)
+    corners = stepper.targets[1]
+    z0 = corners.value[:, 2, 0].mean()
+
+    def embedded(frame):
+        world = bodies["bunny"].now()
+        surface = bodies["bunny"].positions.owner
+        weights = surface["w"].value[:, :, 0]
+        ids = surface.connectivities["p2c"].indices
+        want = np.einsum("nk,nkd->nd", weights, corners.value[ids][:, :, :, 0])
+        assert np.abs(world - want).max() < 1e-12
+
+    step_and_check(stepper, bodies, 3, embedded)
+    assert corners.value[:, 2, 0].mean() < z0
+
+
+@needs_bunny
+def test_mixed_materials():
+    """9.4: the fixed strip does not move, the affine ends stay nearly
+    rigid, and the soft part lets the ends sag under gravity."""
+    import mixed_materials
+    stepper, contact, bodies, info = mixed_materials.build("small")
+    parts, ends, where, rest = (info[k] for k in ("parts", "ends", "where",
+                                                 "rest"))
+
+    def strip_fixed(frame):
+        world = bodies["bunny"].now()
+        np.testing.assert_array_equal(world[where[parts["fixed"]]],
+                                      rest[parts["fixed"]])
+        for body in ends.values():
+            A = body.A.value[0]
+            assert np.abs(A.T @ A - np.eye(3)).max() < 1e-3
+
+    step_and_check(stepper, bodies, 4, strip_fixed)
+    soft = stepper.targets[0].value[:, 2, 0]
+    assert soft.mean() < rest[parts["soft"], 2].mean()
+
+
+def test_cage_helpers_against_their_definitions():
+    """cage_grid: every point is reproduced by its cell's trilinear weights
+    (non-negative, summing to one); hex_tets: 6 positive tets filling each
+    cell; hex8_gauss_points: F = I at rest and the weights sum to the cells'
+    volume."""
+    rng = np.random.default_rng(5)
+    points = rng.uniform(-1, 1, (400, 3)) * [1.0, 0.5, 0.3]
+    cage = cage_grid(points, 5)
+    assert np.abs(cage.embed(cage.vertices) - points).max() < 1e-12
+    assert cage.weights.min() >= 0
+    assert np.abs(cage.weights.sum(axis=1) - 1).max() < 1e-12
+    side = cage.vertices[cage.hexes[0, 1], 0] - cage.vertices[cage.hexes[0, 0], 0]
+    volumes = signed_tet_volumes(cage.vertices, hex_tets(cage.hexes))
+    assert volumes.min() > 0
+    assert volumes.sum() == pytest.approx(len(cage.hexes) * side ** 3, rel=1e-12)
+    G, w = hex8_gauss_points(cage.vertices, cage.hexes)
+    corners = cage.vertices[np.repeat(cage.hexes, 8, axis=0)]
+    F = np.einsum("mkd,mka->mda", corners, G)
+    assert np.abs(F - np.eye(3)).max() < 1e-12
+    assert w.sum() == pytest.approx(len(cage.hexes) * side ** 3, rel=1e-12)
+    # Under a linear map the Gauss points see exactly that map.
+    M = np.eye(3) + 0.1 * rng.standard_normal((3, 3))
+    F = np.einsum("mkd,mka->mda", corners @ M.T, G)
+    assert np.abs(F - M).max() < 1e-12
