@@ -44,7 +44,8 @@ class RecordedFrame:
 
 
 class SurfaceRecorder:
-    """Writes the surfaces of bodies as VTU files (triangle cells), one per
+    """Writes the surfaces of bodies as VTU files (triangle cells, or line
+    cells for bodies given segments (M, 2)), one per
     body and frame (``directory/<name>_<frame:04d>.vtu``), and keeps a
     ParaView series ``directory/<name>.pvd`` per body that lists them with
     their times, rewritten after every frame so that it is valid while a
@@ -63,8 +64,12 @@ class SurfaceRecorder:
                                  "cannot name a file")
         self.directory = Path(directory)
         self.directory.mkdir(parents=True, exist_ok=True)
-        self.faces_by_body = {name: np.asarray(F, dtype=np.int64).reshape(-1, 3)
-                              for name, F in faces_by_body.items()}
+        # Triangles (M, 3), or polylines as segments (M, 2).
+        self.faces_by_body = {}
+        for name, F in faces_by_body.items():
+            F = np.asarray(F, dtype=np.int64)
+            width = F.shape[1] if F.ndim == 2 and F.shape[1] in (2, 3) else 3
+            self.faces_by_body[name] = F.reshape(-1, width)
         self.every = every
         self._calls = 0
         self._frames: List[RecordedFrame] = []
@@ -111,7 +116,8 @@ class SurfaceRecorder:
                              f"{len(points)} vertices, its faces use vertex "
                              f"{faces.max()}")
         path = self.directory / f"{name}_{index:04d}.vtu"
-        meshio.write(path, meshio.Mesh(points, [("triangle", faces)]))
+        cell = "line" if faces.shape[1] == 2 else "triangle"
+        meshio.write(path, meshio.Mesh(points, [(cell, faces)]))
         return path
 
     def _write_series(self, name: str) -> None:

@@ -1,0 +1,205 @@
+#!/usr/bin/env python3
+"""Mass-spring pendulum parameterised by angles (paper 10.7, Fig. 29).
+
+A zigzag spring hangs from the ceiling; a lever pivots at its lower end; a
+zigzag spring hangs from each end of the lever with a mass block at its
+foot. The only targets are angles: each spring's zigzag angle (its length
+is K l cos(phi)) and the lever's tilt. The masses' world positions are
+computed attributes nested through all of them, so their inertia is a
+deeply nested non-linear parameterisation; the springs' energy is k (phi -
+phi_rest)^2. Implicit Euler on the masses' world positions: the predictions
+are made in world space and Newton runs over the angles.
+
+    python3 examples/paper/pendulum.py [--frames 100] [--output DIR]
+"""
+
+from __future__ import annotations
+
+import sys
+from typing import Dict, List
+
+import numpy as np
+
+from common import DT, REPO, arguments  # noqa: E402
+
+import yasps  # noqa: E402
+from imageio import v3 as iio  # noqa: E402
+from yasps.sim import (NewtonReport, SurfaceRecorder, newton,  # noqa: E402
+                       write_video)
+
+ANCHOR = np.array([0.0, 0.0, 0.0])
+SEGMENTS, SEGMENT = 6, 0.05      # zigzag segments per spring and their length
+LEVER = 0.25                     # half the lever's length
+MASSES = [1.0, 0.6]              # kg, left and right block: the lever tips
+STIFFNESS = 2.0                  # N m per rad^2
+REST = 0.6                       # rest zigzag angle (rad)
+GRAVITY = np.array([0.0, 0.0, -9.81])
+
+
+def spring_length(phi):
+    """End-to-end length of a zigzag spring at angle ``phi``."""
+    return SEGMENTS * SEGMENT * phi.cos()
+
+
+def build(tilt: float = 0.4):
+    """The scene: (scene, {name: attribute}) with targets phi (3 springs:
+    ceiling, left, right) and psi (the lever)."""
+    s = yasps.scene("pendulum")
+    m = s.addMesh("pendulum")
+    springs = m.addPrimitive("springs", numInstances=3)
+    phi = springs.addAttribute("phi", rows=1)
+    phi.updateValue(np.full((3, 1), REST))
+    lever = m.addPrimitive("lever", numInstances=1)
+    psi = lever.addAttribute("psi", rows=1)
+    psi.updateValue([[tilt]])
+    masses = m.addPrimitive("masses", numInstances=2)
+    masses.addConstant("side", rows=1).updateValue([[-1.0], [1.0]])
+    masses.addConstant("mass", rows=1).updateValue(np.array(MASSES)[:, None])
+    top = masses.addAttribute("phi_top", through=masses.addConnectivity(
+        "to_ceiling", springs, [[0], [0]], 1), source=phi)
+    own = masses.addAttribute("phi_own", through=masses.addConnectivity(
+        "to_spring", springs, [[1], [2]], 1), source=phi)
+    tipping = masses.addAttribute("psi", through=masses.addConnectivity(
+        "to_lever", lever, [[0], [0]], 1), source=psi)
+    side = masses["side"]
+    # Pivot at the ceiling spring's foot, the lever's end, the block below.
+    x = side * LEVER * tipping.cos()
+    z = -spring_length(top) + side * LEVER * tipping.sin() - spring_length(own)
+    position = masses.addAttribute("position", computed_attribute=yasps.vstack(
+        [x + ANCHOR[0], 0.0 * x + ANCHOR[1], z + ANCHOR[2]]))
+    predicted = masses.addConstant("x_hat", rows=3)
+    s.addEnergy(masses.addAttribute("inertia", computed_attribute=0.5 * masses["mass"]
+        * (position - predicted).squaredNorm()))
+    s.addEnergy(springs.addAttribute("elastic", computed_attribute=(
+        DT * DT * STIFFNESS) * (phi - REST) * (phi - REST)))
+    s.addMinimizeTarget([phi, psi])
+    return s, dict(phi=phi, psi=psi, position=position, predicted=predicted)
+
+
+def reference_positions(phi: np.ndarray, psi: float) -> np.ndarray:
+    """The masses' positions from the angles, in NumPy (for the test)."""
+    L = SEGMENTS * SEGMENT * np.cos(phi)
+    out = []
+    for side, own in ((-1.0, L[1]), (1.0, L[2])):
+        out.append(ANCHOR + [side * LEVER * np.cos(psi), 0.0,
+                             -L[0] + side * LEVER * np.sin(psi) - own])
+    return np.array(out)
+
+
+class Stepper:
+    """Implicit Euler on the masses: world-space predictions, Newton over
+    the angles."""
+
+    def __init__(self, scene, parts: Dict[str, object]):
+        self.scene, self.parts = scene, parts
+        self.velocity = np.zeros((2, 3))
+
+    def step(self) -> NewtonReport:
+        x = self.parts["position"].compute().value[:, :, 0].copy()
+        self.parts["predicted"].updateValue(
+            x + DT * self.velocity + DT * DT * GRAVITY)
+        report = newton(self.scene, [self.parts["phi"], self.parts["psi"]],
+                        tolerance=1e-6, max_iterations=50, cg_tolerance=1e-10)
+        self.velocity = (self.parts["position"].compute().value[:, :, 0]
+                         - x) / DT
+        return report
+
+
+def zigzag(start: np.ndarray, phi: float, down: float = -1.0) -> np.ndarray:
+    """The (x, z) corners of a zigzag spring hanging from ``start``."""
+    points = [start]
+    for k in range(SEGMENTS):
+        side = 1.0 if k % 2 == 0 else -1.0
+        points.append(points[-1] + [side * SEGMENT * np.sin(phi),
+                                    down * SEGMENT * np.cos(phi)])
+    return np.array(points)
+
+
+def polyline(phi: np.ndarray, psi: float) -> np.ndarray:
+    """The springs and the lever as points in 3D (x, 0, z): the ceiling
+    spring, the lever's left end, its spring, the lever's right end, its
+    spring; connected by SEGMENTS_OF_POLYLINE."""
+    top = zigzag(np.zeros(2), phi[0])
+    pivot = top[-1]
+    parts = [top]
+    for k, side in ((1, -1.0), (2, 1.0)):
+        end = pivot + side * LEVER * np.array([np.cos(psi), np.sin(psi)])
+        parts.append(zigzag(end, phi[k]))
+    xz = np.concatenate(parts)
+    return np.stack([xz[:, 0], np.zeros(len(xz)), xz[:, 1]], axis=1)
+
+
+def _segments() -> np.ndarray:
+    n = SEGMENTS + 1
+    chain = [[k, k + 1] for part in range(3) for k in
+             range(part * n, part * n + SEGMENTS)]
+    lever = [[n - 1, n], [n - 1, 2 * n]]   # pivot to each spring's top
+    return np.array(chain + lever)
+
+
+SEGMENTS_OF_POLYLINE = _segments()
+
+
+def draw(phi: np.ndarray, psi: float, title: str) -> np.ndarray:
+    """A side view: springs coloured by stress (green to red), the lever,
+    the two blocks; as an (H, W, 3) image."""
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.figure import Figure
+    from matplotlib.patches import Rectangle
+
+    fig = Figure(figsize=(4, 5), dpi=100)
+    FigureCanvasAgg(fig)
+    ax = fig.add_subplot()
+    stress = np.abs(phi - REST) / 0.3
+    colour = lambda k: (min(1.0, stress[k]), max(0.0, 1 - stress[k]), 0.2)  # noqa: E731
+    top = zigzag(np.zeros(2), phi[0])
+    ax.plot(top[:, 0], top[:, 1], color=colour(0), lw=2)
+    pivot = top[-1]
+    for k, side in ((1, -1.0), (2, 1.0)):
+        end = pivot + side * LEVER * np.array([np.cos(psi), np.sin(psi)])
+        ax.plot([pivot[0], end[0]], [pivot[1], end[1]], color="0.3", lw=4)
+        spring = zigzag(end, phi[k])
+        ax.plot(spring[:, 0], spring[:, 1], color=colour(k), lw=2)
+        ax.add_patch(Rectangle(spring[-1] - [0.03, 0.05], 0.06, 0.05,
+                               color="0.2"))
+    ax.plot([-0.1, 0.1], [0, 0], color="k", lw=3)
+    ax.set_xlim(-0.5, 0.5)
+    ax.set_ylim(-1.0, 0.05)
+    ax.set_aspect("equal")
+    ax.set_title(title)
+    ax.axis("off")
+    fig.canvas.draw()
+    return np.asarray(fig.canvas.buffer_rgba())[:, :, :3].copy()
+
+
+def main() -> None:
+    args = arguments(__doc__.split("\n")[0], frames=100)
+    output = args.output or REPO / "out" / "paper" / "pendulum"
+    output.mkdir(parents=True, exist_ok=True)
+    scene, parts = build()
+    stepper = Stepper(scene, parts)
+    total = NewtonReport()
+    recorder = SurfaceRecorder(output, {"pendulum": SEGMENTS_OF_POLYLINE})
+    images: List[np.ndarray] = []
+    stills = {max(1, round(args.frames * k / 4)) for k in range(1, 5)}
+    for frame in range(1, args.frames + 1):
+        total.add(stepper.step())
+        phi = parts["phi"].value[:, 0, 0]
+        psi = float(parts["psi"].value[0, 0, 0])
+        image = draw(phi, psi, f"t = {frame * DT:.2f} s")
+        images.append(image)
+        if frame in stills:
+            iio.imwrite(output / f"frame_{frame:04d}.png", image)
+        recorder.record(frame * DT, {"pendulum": polyline(phi, psi)})
+    if not args.no_video:
+        write_video(output / "pendulum.mp4", images)
+    print(f"pendulum: {args.frames} frames, {total.iterations} Newton "
+          f"iterations, {sum(total.cgIterations)} CG iterations")
+    seconds = sum(total.seconds.values()) or 1.0
+    for stage, spent in total.seconds.items():
+        print(f"  {stage:12} {spent:8.2f} s  {100 * spent / seconds:5.1f}%")
+    print(f"pendulum: wrote {output}")
+
+
+if __name__ == "__main__":
+    sys.exit(main())
