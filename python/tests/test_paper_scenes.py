@@ -178,3 +178,29 @@ def test_pendulum_swings():
     assert tilts[-1] - 0.4 > 0.1                      # the lever tips
     moved = parts["position"].compute().value[:, :, 0] - start
     assert np.abs(moved[:, 0]).max() > 0.01           # sideways: a swing
+
+
+def test_mat_twist():
+    """E.1: the held edges turn as prescribed (CCD permitting) and the
+    cloth between them twists with them: rows at x = +-1/4 turn about x in
+    their edge's direction, by less than the edge."""
+    import mat_twist
+    stepper, contact, bodies, twister = mat_twist.build("small")
+    rest = stepper.targets[0].value[:, :, 0].copy()
+
+    def turn(frame):
+        twister.advance()
+
+    twister.advance()
+    step_and_check(stepper, bodies, 12, turn)
+    assert twister.angle == pytest.approx(twister.wanted)
+    x = stepper.targets[0].value[:, :, 0]
+    for side in (-1.0, 1.0):
+        row = np.abs(rest[:, 0] - side * 0.25) < 0.03
+        ends = row & (np.abs(rest[:, 1]) > 0.4)
+        y, z = x[ends, 1], x[ends, 2]
+        # The row's direction in the y-z plane, from its two far ends.
+        order = np.argsort(rest[ends, 1])
+        dy, dz = y[order[-1]] - y[order[0]], z[order[-1]] - z[order[0]]
+        angle = np.arctan2(dz, dy) * side
+        assert 0.05 * twister.angle < angle < twister.angle
