@@ -230,3 +230,35 @@ def test_block_sticks_below_the_friction_angle_and_slides_above():
     free = 0.5 * 9.81 * (np.sin(theta) - mu * np.cos(theta)) * t * t
     assert 0.6 * free < slid < 1.2 * free
     assert min(low_stuck, low_slid) > 0.0
+
+
+def test_step_bound_follows_a_curved_motion():
+    """A vertex on a circle, parameterised by its angle, turns past a static
+    triangle that its chord does not reach: ipctk's CCD on the straight
+    motion finds nothing, the step bound follows the arc and stops before
+    the triangle (where the arc crosses it at 0.182 of the step)."""
+    s = yasps.scene("arc")
+    mesh = s.addMesh("m")
+    p = mesh.addPrimitive("p", numInstances=1)
+    angle = p.addAttribute("angle", rows=1)
+    angle.updateValue([[-0.5]])
+    p.addAttribute("position", computed_attribute=yasps.vstack(
+        [angle.cos(), angle.sin(), 0.0 * angle]))
+    wall = mesh.addPrimitive("wall", numInstances=3)
+    wall.addConstant("position", rows=3).updateValue(
+        [[0.95, -0.6, -0.1], [0.95, 0.6, -0.1], [0.95, 0.0, 0.2]])
+    union = mesh.addPrimitiveUnion("all", [p, wall])
+    union.addAttribute("position")
+    contact = Contact(s, union, faces=[[1, 2, 3]], edges=[[1, 2], [2, 3], [3, 1]],
+                      dhat=1e-3, kappa=1.0)
+    s.addMinimizeTarget(angle)
+    step = np.array([[[1.0]]])
+    V0 = contact.world()
+    V1 = V0.copy()
+    V1[0] = [np.cos(0.5), np.sin(0.5), 0.0]
+    assert ipctk.compute_collision_free_stepsize(contact.mesh, V0, V1) == 1.0
+    crossing = (0.5 - np.arccos(0.95)) / 1.0
+    bound = contact.stepBound([step])
+    assert 0.5 * crossing < bound < crossing
+    # A step that stops short of the wall keeps its whole length.
+    assert contact.stepBound([0.1 * step]) == 1.0

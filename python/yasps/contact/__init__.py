@@ -17,9 +17,9 @@ or new parameterisations need no contact code of their own::
 
 Friction is IPC's lagged, smoothed friction (:mod:`.friction`); obstacles
 are static members of the UNION (meshes) or half-spaces
-(:mod:`.halfspace`). Not yet: a conservative CCD for non-linear
-parameterisations (the step bound is exact only where world positions are
-linear in the targets: free, affine and caged vertices).
+(:mod:`.halfspace`). The step bound is exact where world positions are
+linear in the targets (free, affine and caged vertices); for non-linear
+parameterisations it follows the curved motion in straight pieces.
 """
 
 from __future__ import annotations
@@ -42,6 +42,9 @@ from .stiffness import AdaptiveStiffness
 from .surface import edges_of, surface_of
 
 __all__ = ["Contact", "PAIR_TYPES", "edges_of", "surface_of"]
+
+#: Straight pieces that follow a curved (non-linear) motion in stepBound.
+CURVED_PIECES = 8
 
 
 class Contact:
@@ -194,27 +197,60 @@ class Contact:
             p["weight"].updateValue(np.asarray(weights[kind]).reshape(-1, 1))
         return {kind: len(pairs) for kind, pairs in found.items()}
 
-    def stepBound(self, steps: Sequence[np.ndarray]) -> float:
+    def stepBound(self, steps: Sequence[np.ndarray],
+                  pieces: int = CURVED_PIECES) -> float:
         """The largest fraction in [0, 1] of the step ``steps`` (one array
         per minimisation target, as minimizeEnergy returns them, negated)
-        along which no surface primitives cross, by ipctk's CCD between the
-        world positions now and after the full step. Exact where world
-        positions are linear in the targets."""
+        along which no surface primitives cross, by ipctk's CCD (and the
+        half-spaces' closed form) on the world positions' motion. Where the
+        world positions move in a straight line (linear parameterisations:
+        free, affine, caged), one CCD from now to the full step is exact.
+        Where the midpoint of the step is off that line (angles, other
+        non-linear parameterisations), the motion is followed through
+        ``pieces`` straight pieces, each checked to keep twice its own
+        deviation from the curve (at its midpoint) away from every surface,
+        so that the curve itself stays clear: conservative where a piece's
+        deviation is largest at its midpoint, as on arcs."""
         targets = self.scene.minimizeTargets
         if len(steps) != len(targets):
             raise ValueError(f"stepBound: {len(steps)} steps for "
                              f"{len(targets)} targets")
         before = [t.value for t in targets]
-        V0 = self.world()
-        try:
+        steps = [np.asarray(p).reshape(x.shape) for x, p in zip(before, steps)]
+
+        def world_at(fraction: float) -> np.ndarray:
             for t, x, p in zip(targets, before, steps):
-                t.updateValue(x + np.asarray(p).reshape(x.shape))
-            V1 = self.world()
+                t.updateValue(x + fraction * p)
+            return self.world()
+
+        try:
+            V0 = self.world()
+            V1, middle = world_at(1.0), world_at(0.5)
+            scale = max(float(np.abs(V1 - V0).max()), 1e-300)
+            straight = np.abs(middle - 0.5 * (V0 + V1)).max() <= 1e-9 * scale
+            if straight:
+                return self._bound(V0, V1)
+            previous = V0
+            for k in range(pieces):
+                following = world_at((k + 1) / pieces)
+                bend = world_at((k + 0.5) / pieces) - 0.5 * (previous + following)
+                margin = 2.0 * float(np.linalg.norm(bend, axis=1).max())
+                bound = self._bound(previous, following, margin)
+                if bound < 1.0:
+                    return (k + bound) / pieces
+                previous = following
+            return 1.0
         finally:
             for t, x in zip(targets, before):
                 t.updateValue(x)
-        return min(self.halfspaces.step_bound(V0, V1), float(
-            ipctk.compute_collision_free_stepsize(self.mesh, V0, V1)))
+
+    def _bound(self, V0: np.ndarray, V1: np.ndarray,
+               margin: float = 0.0) -> float:
+        """The fraction of the straight motion V0 -> V1 that keeps surfaces
+        at least ``margin`` apart (and from the half-spaces)."""
+        return min(self.halfspaces.step_bound(V0, V1, margin), float(
+            ipctk.compute_collision_free_stepsize(self.mesh, V0, V1,
+                                                  min_distance=margin)))
 
     @property
     def kappa(self) -> float:

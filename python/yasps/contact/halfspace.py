@@ -90,13 +90,15 @@ class HalfSpaces:
         p["offset"].updateValue(self.offsets[plane].reshape(-1, 1))
         return len(vertex)
 
-    def step_bound(self, V0: np.ndarray, V1: np.ndarray) -> float:
+    def step_bound(self, V0: np.ndarray, V1: np.ndarray,
+                   margin: float = 0.0) -> float:
         """The largest fraction of the straight motion V0 -> V1 that keeps
-        every vertex above every plane, with IPC's conservative rescaling
-        (the first contact is never reached)."""
+        every vertex ``margin`` above every plane, with IPC's conservative
+        rescaling (the first contact is never reached)."""
         if not len(self.offsets):
             return 1.0
-        s0, s1 = self.signed_distances(V0), self.signed_distances(V1)
+        s0 = self.signed_distances(V0) - margin
+        s1 = self.signed_distances(V1) - margin
         crossing = (s0 > 0) & (s1 <= 0)
         if not crossing.any():
             return 1.0
