@@ -25,7 +25,7 @@ from common import DT, REPO, arguments  # noqa: E402
 import yasps  # noqa: E402
 from imageio import v3 as iio  # noqa: E402
 from yasps.sim import (NewtonReport, SurfaceRecorder, newton,  # noqa: E402
-                       write_video)
+                       polyline_segments, write_video, zigzag_spring)
 
 ANCHOR = np.array([0.0, 0.0, 0.0])
 SEGMENTS, SEGMENT = 6, 0.05      # zigzag segments per spring and their length
@@ -105,39 +105,18 @@ class Stepper:
         return report
 
 
-def zigzag(start: np.ndarray, phi: float, down: float = -1.0) -> np.ndarray:
-    """The (x, z) corners of a zigzag spring hanging from ``start``."""
-    points = [start]
-    for k in range(SEGMENTS):
-        side = 1.0 if k % 2 == 0 else -1.0
-        points.append(points[-1] + [side * SEGMENT * np.sin(phi),
-                                    down * SEGMENT * np.cos(phi)])
-    return np.array(points)
-
-
-def polyline(phi: np.ndarray, psi: float) -> np.ndarray:
-    """The springs and the lever as points in 3D (x, 0, z): the ceiling
-    spring, the lever's left end, its spring, the lever's right end, its
-    spring; connected by SEGMENTS_OF_POLYLINE."""
-    top = zigzag(np.zeros(2), phi[0])
+def pendulum_lines(phi: np.ndarray, psi: float) -> np.ndarray:
+    """The three springs (zigzags) and the lever's two arms as polylines in
+    the x-z plane: (points, segments)."""
+    top = zigzag_spring(ANCHOR, phi[0], SEGMENTS, SEGMENT)
     pivot = top[-1]
-    parts = [top]
+    lines = [top]
     for k, side in ((1, -1.0), (2, 1.0)):
-        end = pivot + side * LEVER * np.array([np.cos(psi), np.sin(psi)])
-        parts.append(zigzag(end, phi[k]))
-    xz = np.concatenate(parts)
-    return np.stack([xz[:, 0], np.zeros(len(xz)), xz[:, 1]], axis=1)
-
-
-def _segments() -> np.ndarray:
-    n = SEGMENTS + 1
-    chain = [[k, k + 1] for part in range(3) for k in
-             range(part * n, part * n + SEGMENTS)]
-    lever = [[n - 1, n], [n - 1, 2 * n]]   # pivot to each spring's top
-    return np.array(chain + lever)
-
-
-SEGMENTS_OF_POLYLINE = _segments()
+        end = pivot + side * LEVER * np.array([np.cos(psi), 0.0, np.sin(psi)])
+        lines += [np.stack([pivot, end]),
+                  zigzag_spring(end, phi[k], SEGMENTS, SEGMENT)]
+    points = np.concatenate(lines)
+    return points, polyline_segments([len(line) for line in lines])
 
 
 def draw(phi: np.ndarray, psi: float, title: str) -> np.ndarray:
@@ -152,15 +131,17 @@ def draw(phi: np.ndarray, psi: float, title: str) -> np.ndarray:
     ax = fig.add_subplot()
     stress = np.abs(phi - REST) / 0.3
     colour = lambda k: (min(1.0, stress[k]), max(0.0, 1 - stress[k]), 0.2)  # noqa: E731
-    top = zigzag(np.zeros(2), phi[0])
-    ax.plot(top[:, 0], top[:, 1], color=colour(0), lw=2)
-    pivot = top[-1]
-    for k, side in ((1, -1.0), (2, 1.0)):
-        end = pivot + side * LEVER * np.array([np.cos(psi), np.sin(psi)])
-        ax.plot([pivot[0], end[0]], [pivot[1], end[1]], color="0.3", lw=4)
-        spring = zigzag(end, phi[k])
-        ax.plot(spring[:, 0], spring[:, 1], color=colour(k), lw=2)
-        ax.add_patch(Rectangle(spring[-1] - [0.03, 0.05], 0.06, 0.05,
+    points, _ = pendulum_lines(phi, psi)
+    n = SEGMENTS + 1
+    # The layout of pendulum_lines: spring, arm, spring, arm, spring.
+    pieces = [(0, n, colour(0), 2), (n, n + 2, "0.3", 4),
+              (n + 2, 2 * n + 2, colour(1), 2), (2 * n + 2, 2 * n + 4, "0.3", 4),
+              (2 * n + 4, 3 * n + 4, colour(2), 2)]
+    for begin, end, color, width in pieces:
+        ax.plot(points[begin:end, 0], points[begin:end, 2], color=color,
+                lw=width)
+    for foot in (points[2 * n + 1], points[3 * n + 3]):
+        ax.add_patch(Rectangle((foot[0] - 0.03, foot[2] - 0.05), 0.06, 0.05,
                                color="0.2"))
     ax.plot([-0.1, 0.1], [0, 0], color="k", lw=3)
     ax.set_xlim(-0.5, 0.5)
@@ -179,7 +160,8 @@ def main() -> None:
     scene, parts = build()
     stepper = Stepper(scene, parts)
     total = NewtonReport()
-    recorder = SurfaceRecorder(output, {"pendulum": SEGMENTS_OF_POLYLINE})
+    recorder = SurfaceRecorder(output, {
+        "pendulum": pendulum_lines(np.full(3, REST), 0.0)[1]})
     images: List[np.ndarray] = []
     stills = {max(1, round(args.frames * k / 4)) for k in range(1, 5)}
     for frame in range(1, args.frames + 1):
@@ -190,7 +172,7 @@ def main() -> None:
         images.append(image)
         if frame in stills:
             iio.imwrite(output / f"frame_{frame:04d}.png", image)
-        recorder.record(frame * DT, {"pendulum": polyline(phi, psi)})
+        recorder.record(frame * DT, {"pendulum": pendulum_lines(phi, psi)[0]})
     if not args.no_video:
         write_video(output / "pendulum.mp4", images)
     print(f"pendulum: {args.frames} frames, {total.iterations} Newton "

@@ -174,6 +174,11 @@ def test_pendulum_swings():
         assert np.isfinite(world).all()
         np.testing.assert_allclose(
             world, pendulum.reference_positions(phi, psi), atol=1e-12)
+        # The drawn springs end at the blocks.
+        points, _ = pendulum.pendulum_lines(phi, psi)
+        n = pendulum.SEGMENTS + 1
+        np.testing.assert_allclose(points[[2 * n + 1, 3 * n + 3]], world,
+                                   atol=1e-12)
         tilts.append(psi)
     assert tilts[-1] - 0.4 > 0.1                      # the lever tips
     moved = parts["position"].compute().value[:, :, 0] - start
@@ -204,3 +209,4 @@ def test_mat_twist():
         dy, dz = y[order[-1]] - y[order[0]], z[order[-1]] - z[order[0]]
         angle = np.arctan2(dz, dy) * side
         assert 0.05 * twister.angle < angle < twister.angle
+

@@ -8,8 +8,8 @@ from .bodies import (AffineBody, FreeVertices, add_affine_body,
                      add_hex8_neo_hookean, hex8_gauss_points, lumped_masses)
 from .meshes import (HEX_CORNERS, Cage, box_tet_mesh, cage_grid,
                      cloth_corners, cloth_grid, hex_tets, hinges_of,
-                     orient_tets, read_tet_mesh, signed_tet_volumes,
-                     trilinear_weights)
+                     orient_tets, polyline_segments, read_tet_mesh,
+                     signed_tet_volumes, trilinear_weights, zigzag_spring)
 from .newton import ImplicitEuler, NewtonReport, newton
 from .output import (RecordedFrame, SurfaceRecorder, render_surfaces,
                      render_surfaces_array, write_video)
@@ -18,7 +18,7 @@ from .run import Body, RunSummary, simulate
 __all__ = ["AffineBody", "Body", "Cage", "FreeVertices", "HEX_CORNERS",
            "add_caged_surface", "add_free_vertices", "add_hex8_neo_hookean",
            "cage_grid", "hex8_gauss_points", "hex_tets", "lumped_masses",
-           "trilinear_weights", "RunSummary", "simulate", "ImplicitEuler", "NewtonReport", "RecordedFrame",
+           "trilinear_weights", "polyline_segments", "zigzag_spring", "RunSummary", "simulate", "ImplicitEuler", "NewtonReport", "RecordedFrame",
            "SurfaceRecorder", "add_affine_body", "add_affine_inertia",
            "add_cloth", "add_elastic_tets",
            "box_tet_mesh", "cloth_corners", "cloth_grid", "hinges_of",

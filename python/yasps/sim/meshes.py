@@ -222,3 +222,27 @@ def hex_tets(hexes: np.ndarray) -> np.ndarray:
             corners[2], corners[3] = corners[3], corners[2]
         tets.append(corners)
     return np.asarray(hexes)[:, tets].reshape(-1, 4)
+
+
+def zigzag_spring(top, angle: float, segments: int,
+                  length: float) -> np.ndarray:
+    """The corners (segments + 1, 3) of a zigzag spring hanging straight
+    down (-z) from ``top`` (3,) in the x-z plane: ``segments`` segments of
+    ``length``, alternately ``angle`` to either side of the vertical, so
+    that its end is ``segments * length * cos(angle)`` below ``top``."""
+    top = np.asarray(top, dtype=float).reshape(3)
+    sides = np.where(np.arange(segments) % 2 == 0, 1.0, -1.0)
+    steps = np.stack([sides * length * np.sin(angle), np.zeros(segments),
+                      np.full(segments, -length * np.cos(angle))], axis=1)
+    return np.vstack([top, top + np.cumsum(steps, axis=0)])
+
+
+def polyline_segments(lengths) -> np.ndarray:
+    """The segments (M, 2) joining consecutive points of polylines of the
+    given point counts, laid out one after the other."""
+    out, start = [], 0
+    for count in lengths:
+        out += [[start + k, start + k + 1] for k in range(count - 1)]
+        start += count
+    return np.asarray(out, dtype=np.int64).reshape(-1, 2)
+
