@@ -247,8 +247,9 @@ def write_doc(rows: List[str], loc: List[str]) -> None:
     body = [
         "# Gallery: the paper's scenes",
         "",
-        "Every scene of the YASPS paper's sections 9 and 10.7 and appendix E.1",
-        "as a script in `examples/paper/`, run here at `small` scale on the CPU.",
+        "The scenes of the YASPS paper's sections 9.1-9.4, 10.7 and appendix",
+        "E.1 (the repulsive curve of 9.5 is not here yet) as scripts in",
+        "`examples/paper/`, run here at `small` scale on the CPU.",
         "This page is written by `python3 examples/paper/gallery.py` from the",
         "scripts' own output (pictures: the last frame of each run); each",
         "script runs alone as `python3 examples/paper/<scene>.py [--frames N]",
@@ -259,8 +260,9 @@ def write_doc(rows: List[str], loc: List[str]) -> None:
     ]
     for scene in SCENES:
         body += [f"## {scene.name}", "", scene.what + ".", "",
-                 f"`python3 examples/paper/{scene.script}`"
-                 + (" --cage hex8" if scene.name.endswith("hex8") else ""), "",
+                 f"`python3 examples/paper/{scene.script}"
+                 + (" --cage hex8" if scene.name.endswith("hex8") else "")
+                 + "`", "",
                  f"![{scene.name}](gallery/{scene.name}.png)", ""]
     body += [
         "## Lines of code per stage (paper Fig. 19)", "",
