@@ -68,7 +68,10 @@ def build(scale: str, layers: int):
     add_surface("bunny", b, bf, (0.35, 0.6, 0.9))
 
     for k in range(layers):
-        lv, lf = cloth_grid(max(n * 3 // 5, 4), size=0.6,
+        # The paper's layers are cloths like the bottom one (10,201
+        # vertices); the small ones are smaller.
+        cells = n if scale == "paper" else max(n * 3 // 5, 4)
+        lv, lf = cloth_grid(cells, size=0.6,
                             height=BUNNY_HEIGHT + 0.05 + 0.1 * k)
         mesh = s.addMesh(f"layer{k}")
         layer = add_free_vertices(mesh, lv, lumped_masses(lv, lf, CLOTH_DENSITY))
