@@ -75,8 +75,9 @@ def build(cloth_cells: int, box_cells: int):
         average_mass=float(np.mean(cloth_masses)), friction=0.2)
     targets = [c.x, b.x, body.A, body.t]
     s.addMinimizeTarget(targets)
-    stepper = ImplicitEuler(s, targets, [c.x_hat, b.x_hat, body.A_hat,
-                                         body.t_hat], dt=DT,
+    stepper = ImplicitEuler(s, targets=targets,
+                            predicted=[c.x_hat, b.x_hat, body.A_hat,
+                                       body.t_hat], dt=DT,
                             gravity=[GRAVITY, GRAVITY, None, GRAVITY],
                             fixed=[pinned, None, None, None], contact=contact)
     bodies = {"cloth": Body(c.x, cf, (0.85, 0.75, 0.55)),

@@ -124,3 +124,35 @@ def test_readme_contact_demo_runs_small(tmp_path):
     for name in ("cloth.pvd", "soft.pvd", "rigid.pvd", "frame_0003.png"):
         assert (tmp_path / name).stat().st_size > 0
     assert list(tmp_path.glob("contact.*"))
+
+
+def test_implicit_euler_takes_targets_and_predictions_by_name():
+    """ImplicitEuler(scene, targets=[...], predicted=[...], dt=...) steps
+    exactly as the positional form; mixing the two forms, or leaving one
+    out, is an error that says what to give."""
+    import pytest
+
+    def run(by_name: bool):
+        s = yasps.scene("named")
+        parts = [add_free_vertices(s.addMesh(f"m{k}"), np.eye(3) + k, 0.1)
+                 for k in range(2)]
+        xs, hats = [p.x for p in parts], [p.x_hat for p in parts]
+        s.addMinimizeTarget(xs)
+        stepper = (ImplicitEuler(s, targets=xs, predicted=hats, dt=DT,
+                                 gravity=[(0, 0, -9.81), None])
+                   if by_name else
+                   ImplicitEuler(s, xs, hats, DT,
+                                 gravity=[(0, 0, -9.81), None]))
+        stepper.step()
+        return s, xs, hats, np.concatenate([x.value for x in xs])
+
+    s, xs, hats, named = run(True)
+    *_, positional = run(False)
+    np.testing.assert_array_equal(named, positional)
+    # The first mesh fell, the second (no gravity) did not move.
+    assert (named[:3, 2, 0] < np.eye(3)[:, 2]).all()
+    np.testing.assert_array_equal(named[3:, :, 0], np.eye(3) + 1)
+    with pytest.raises(yasps.SceneError, match="not both"):
+        ImplicitEuler(s, xs, hats, DT, targets=xs, predicted=hats)
+    with pytest.raises(yasps.SceneError, match="predicted="):
+        ImplicitEuler(s, targets=xs, dt=DT)

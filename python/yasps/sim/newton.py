@@ -191,14 +191,29 @@ class ImplicitEuler:
     if given, until the largest displacement of a Newton step over ``dt`` is
     below ``velocity_tolerance`` (paper section 9.1); then
     ``v = (x_new - x_old) / dt``. ``fixed`` (as for :func:`newton`) keeps
-    DoFs where they are."""
+    DoFs where they are. Several targets may also be given as
+    ``targets=[x, A, t], predicted=[x_hat, A_hat, t_hat]``."""
 
-    def __init__(self, scene, x: Targets, x_hat: Targets, dt: float,
+    def __init__(self, scene, x: Optional[Targets] = None,
+                 x_hat: Optional[Targets] = None, dt: Optional[float] = None,
                  gravity=(0.0, 0.0, -9.81), velocity_tolerance: float = 1e-2,
                  step_bound: Optional[Callable[[np.ndarray, np.ndarray],
                                                float]] = None,
                  fixed=None, max_iterations: int = 20, contact=None,
-                 cg_tolerance: float = 1e-4, cg_max_iterations: int = 1000):
+                 cg_tolerance: float = 1e-4, cg_max_iterations: int = 1000,
+                 *, targets: Optional[Sequence[Attribute]] = None,
+                 predicted: Optional[Sequence[Attribute]] = None):
+        # targets= and predicted= are the multi-target spelling of x, x_hat.
+        if targets is not None or predicted is not None:
+            if x is not None or x_hat is not None:
+                raise SceneError("ImplicitEuler: give x and x_hat, or "
+                                 "targets= and predicted=, not both")
+            x, x_hat = (None if targets is None else list(targets),
+                        None if predicted is None else list(predicted))
+        if x is None or x_hat is None or dt is None:
+            raise SceneError("ImplicitEuler: give the targets (x or "
+                             "targets=), their predictions (x_hat or "
+                             "predicted=) and dt")
         single = isinstance(x, Attribute)
         self.scene, self.dt = scene, float(dt)
         self.targets, self.predicted = _as_list(x), _as_list(x_hat)
