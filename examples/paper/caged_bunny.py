@@ -19,14 +19,14 @@ import sys
 import numpy as np
 
 from common import (CLOTH_CELLS, DT, GRAVITY, arguments, bunny, lame,  # noqa: E402
-                    run)
+                    pinned_cloth, run)
 
 import yasps  # noqa: E402
 from yasps.contact import Contact  # noqa: E402
 from yasps.sim import (Body, Cage, ImplicitEuler, add_caged_surface,  # noqa: E402
-                       add_cloth, add_elastic_tets, add_free_vertices,
-                       add_hex8_neo_hookean, cage_grid, cloth_corners,
-                       cloth_grid, hex_tets, lumped_masses)
+                       add_elastic_tets, add_free_vertices,
+                       add_hex8_neo_hookean, cage_grid, hex_tets,
+                       lumped_masses)
 
 CLOTH = dict(stretch=3.55e3, shear=1.0e3, bending=0.055)
 CLOTH_DENSITY = 0.2
@@ -37,12 +37,7 @@ def build(scale: str, discretization: str, cells: int):
     """The scene: (stepper, contact, {body: Body}, cage)."""
     s = yasps.scene(f"caged_bunny_{discretization}")
     n = CLOTH_CELLS[scale]
-    cv, cf = cloth_grid(n, size=1.0)
-    mesh = s.addMesh("cloth")
-    cloth = add_free_vertices(mesh, cv, lumped_masses(cv, cf, CLOTH_DENSITY))
-    add_cloth(mesh, cloth.x, cv, cf, scale=DT * DT, **CLOTH)
-    pinned = np.zeros(len(cv), dtype=bool)
-    pinned[cloth_corners(n)] = True
+    cloth, cf, pinned = pinned_cloth(s, scale, CLOTH, CLOTH_DENSITY)
 
     verts, tets, faces = bunny(scale, HEIGHT)
     verts = verts + [0.0, 0.0, 0.02]
@@ -72,7 +67,7 @@ def build(scale: str, discretization: str, cells: int):
     union = s.addMesh("all").addPrimitiveUnion("v", [cloth.primitive, points])
     union.addAttribute("position")
     contact = Contact(s, union, faces=np.concatenate(
-        [cf, renumber[faces] + len(cv)]), dhat=1e-3,
+        [cf, renumber[faces] + cloth.primitive.numInstances]), dhat=1e-3,
         average_mass=CLOTH_DENSITY / (n + 1) ** 2)
     targets = [cloth.x, corners.x]
     s.addMinimizeTarget(targets)

@@ -18,13 +18,12 @@ import sys
 import numpy as np
 
 from common import (CLOTH_CELLS, DT, GRAVITY, arguments, bunny, lame,  # noqa: E402
-                    run)
+                    pinned_cloth, run)
 
 import yasps  # noqa: E402
 from yasps.contact import Contact  # noqa: E402
 from yasps.sim import (Body, ImplicitEuler, add_cloth, add_elastic_tets,  # noqa: E402
-                       add_free_vertices, cloth_corners, cloth_grid,
-                       lumped_masses)
+                       add_free_vertices, cloth_grid, lumped_masses)
 
 CLOTH = dict(stretch=33570.0, shear=100607.0, bending=0.055)
 CLOTH_DENSITY = 0.2       # kg/m^2
@@ -50,12 +49,7 @@ def build(scale: str, layers: int):
         fixed.append(mask)
 
     n = CLOTH_CELLS[scale]
-    cv, cf = cloth_grid(n, size=1.0)
-    mesh = s.addMesh("cloth")
-    c = add_free_vertices(mesh, cv, lumped_masses(cv, cf, CLOTH_DENSITY))
-    add_cloth(mesh, c.x, cv, cf, scale=DT * DT, **CLOTH)
-    pinned = np.zeros(len(cv), dtype=bool)
-    pinned[cloth_corners(n)] = True
+    c, cf, pinned = pinned_cloth(s, scale, CLOTH, CLOTH_DENSITY)
     add_surface("cloth", c, cf, COLORS[0], pinned)
 
     bv, bt, bf = bunny(scale, BUNNY_HEIGHT)

@@ -16,7 +16,9 @@ REPO = Path(__file__).resolve().parents[2]
 sys.path.insert(0, str(REPO / "python"))
 
 from yasps.contact import surface_of  # noqa: E402
-from yasps.sim import RunSummary, read_tet_mesh, simulate  # noqa: E402
+from yasps.sim import (FreeVertices, RunSummary, add_cloth,  # noqa: E402
+                       add_free_vertices, cloth_corners, cloth_grid,
+                       lumped_masses, read_tet_mesh, simulate)
 
 DATA = REPO.parent / "shared" / "data"
 DT = 0.01
@@ -58,6 +60,21 @@ def bunny(scale: str, height: float) -> Tuple[np.ndarray, np.ndarray, np.ndarray
     verts = (verts - [(lo[0] + hi[0]) / 2, (lo[1] + hi[1]) / 2, lo[2]]) \
         * (height / (hi[2] - lo[2]))
     return verts, tets, surface_of(tets)
+
+
+def pinned_cloth(scene, scale: str, material: dict, density: float
+                 ) -> Tuple[FreeVertices, np.ndarray, np.ndarray]:
+    """The scenes' bottom cloth: a 1 m square at z = 0 of CLOTH_CELLS[scale]
+    cells (``material``: add_cloth's stretch, shear and bending; ``density``
+    per area), its four corners pinned: (vertices, triangles, pinned mask)."""
+    n = CLOTH_CELLS[scale]
+    verts, faces = cloth_grid(n, size=1.0)
+    mesh = scene.addMesh("cloth")
+    cloth = add_free_vertices(mesh, verts, lumped_masses(verts, faces, density))
+    add_cloth(mesh, cloth.x, verts, faces, scale=DT * DT, **material)
+    pinned = np.zeros(len(verts), dtype=bool)
+    pinned[cloth_corners(n)] = True
+    return cloth, faces, pinned
 
 
 def run(name: str, args, stepper, bodies, contact, **options) -> RunSummary:

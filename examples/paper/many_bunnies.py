@@ -18,13 +18,12 @@ import sys
 import numpy as np
 
 from common import (CLOTH_CELLS, DT, GRAVITY, arguments, bunny, lame,  # noqa: E402
-                    run)
+                    pinned_cloth, run)
 
 import yasps  # noqa: E402
 from yasps.contact import Contact  # noqa: E402
-from yasps.sim import (Body, ImplicitEuler, add_affine_body, add_cloth,  # noqa: E402
-                       add_elastic_tets, add_free_vertices, cloth_corners,
-                       cloth_grid, lumped_masses)
+from yasps.sim import (Body, ImplicitEuler, add_affine_body,  # noqa: E402
+                       add_elastic_tets, add_free_vertices, lumped_masses)
 
 #: Table 5's cloth; its stiffness per unit area, scaled to the small cloth's
 #: weight (0.2 kg/m^2).
@@ -38,19 +37,14 @@ def build(scale: str, count: int):
     """The scene: (stepper, contact, {body: Body}, affine bodies)."""
     s = yasps.scene("many_bunnies")
     n = CLOTH_CELLS[scale]
-    cv, cf = cloth_grid(n, size=1.0)
-    mesh = s.addMesh("cloth")
-    cloth = add_free_vertices(mesh, cv, lumped_masses(cv, cf, CLOTH_DENSITY))
-    add_cloth(mesh, cloth.x, cv, cf, scale=DT * DT, **CLOTH)
-    pinned = np.zeros(len(cv), dtype=bool)
-    pinned[cloth_corners(n)] = True
+    cloth, cf, pinned = pinned_cloth(s, scale, CLOTH, CLOTH_DENSITY)
 
     bv, bt, bf = bunny(scale, HEIGHT)
     volume = lumped_masses(bv, bt, 1.0).sum()
     parts, faces, bodies, affine = [cloth.primitive], [cf], {}, []
     targets, hats, gravity, fixed = [cloth.x], [cloth.x_hat], [GRAVITY], [pinned]
     bodies["cloth"] = Body(cloth.x, cf, (0.85, 0.75, 0.55))
-    offset = len(cv)
+    offset = cloth.primitive.numInstances
     mu, lam = lame(31.7e3, 0.226)
     for k in range(count):
         row, col = divmod(k, 2)
