@@ -95,6 +95,44 @@ public:
                         &::yasps::python::poolFor(threads));
   }
 
+  /// add_slot_factored: `tables` are (instances, rows, cols) Jacobians,
+  /// `slots` (S, 3) rows of (inner start, inner stride, column) and
+  /// `sources` (count, S, 2) pairs of (table, instance), table -1: none.
+  void addSlotFactored(size_t energy, DoubleArray gradients, DoubleArray inner,
+                       int64_t m, std::vector<DoubleArray> tables,
+                       Int64Array slots, Int64Array sources, unsigned threads) {
+    if (energy >= system->numEnergies())
+      throw std::invalid_argument("no energy " + std::to_string(energy));
+    auto [count, n] = shape(energy);
+    ::yasps::runtime::SlotFactors factors;
+    factors.numInner = m;
+    for (DoubleArray &t : tables) {
+      if (t.ndim() != 3)
+        throw std::invalid_argument(
+            "a Jacobian table must be (instances, rows, cols)");
+      factors.tables.push_back({t.data(), int64_t(t.shape(0)),
+                                int64_t(t.shape(1)), int64_t(t.shape(2))});
+    }
+    if (slots.ndim() != 2 || slots.shape(1) != 3)
+      throw std::invalid_argument("slots must be (S, 3)");
+    int64_t numSlots = int64_t(slots.shape(0));
+    for (int64_t s = 0; s < numSlots; ++s)
+      factors.slots.push_back({slots.data()[3 * s], slots.data()[3 * s + 1],
+                               slots.data()[3 * s + 2]});
+    if (gradients.size() != size_t(count * m) ||
+        inner.size() != size_t(count * m * m) ||
+        sources.size() != size_t(count * numSlots * 2))
+      throw std::invalid_argument(
+          "energy " + std::to_string(energy) + " expects " +
+          std::to_string(count) + " inner gradients of " + std::to_string(m) +
+          ", inner Hessians of " + std::to_string(m) + "x" + std::to_string(m) +
+          " and " + std::to_string(numSlots) + " slot sources each");
+    factors.sources = sources.data();
+    nb::gil_scoped_release release;
+    system->addSlotFactored(energy, gradients.data(), inner.data(), factors,
+                            &::yasps::python::poolFor(threads));
+  }
+
   void gradient(DoubleArray out) const {
     check(out, size_t(size()));
     std::copy(system->gradient().begin(), system->gradient().end(), out.data());
@@ -292,6 +330,16 @@ NB_MODULE(_yasps_runtime, m) {
       .def("set_dynamic", &PySystem::setDynamic, nb::arg("dof_maps"),
            "Replaces the dynamic energies (numbered after the static ones) "
            "and rebuilds only their structure")
+      .def("add_slot_factored", &PySystem::addSlotFactored, nb::arg("energy"),
+           nb::arg("gradients"), nb::arg("inner"), nb::arg("m"),
+           nb::arg("tables"), nb::arg("slots"), nb::arg("sources"),
+           nb::arg("threads") = 0,
+           "Adds an energy whose local Hessians are J^T P J with J taken "
+           "slot by slot from shared Jacobian tables (instances, rows, "
+           "cols): inner gradients (count, m), projected inner Hessians P "
+           "(count, m, m), slots (S, 3) of (inner start, inner stride, "
+           "column), sources (count, S, 2) of (table, instance), table -1 "
+           "for none")
       .def("add_factored", &PySystem::addFactored, nb::arg("energy"),
            nb::arg("gradients"), nb::arg("maps"), nb::arg("inner"),
            nb::arg("m"), nb::arg("threads") = 0,

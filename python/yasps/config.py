@@ -25,6 +25,13 @@
   ``None``, the default, decides per energy (factors when they hold at most
   half the values of the dense local Hessian); ``True`` or ``False`` forces
   it.
+- ``slot_jacobians``: with factored local Hessians on the CPU, take J slot by
+  slot from Jacobian tables of the sources (each UNION member's ``X__jac``
+  over its own instances, the identity for targets), computed once per
+  assembly and shared by every energy that reaches them, so that each
+  instance stores only its inner gradient and P, whatever the widest UNION
+  member (paper 7.1, 10.9, E.3.3). On by default; ``False`` stores the
+  per-instance J, padded to the widest member (the GPU's path).
 - ``compress_local_hessians``: before a full (not reduced-space) projection
   in assembly, merge the rows and columns of parameters that share a DoF
   and drop UNION padding, then project the k x k matrix with a kernel
@@ -56,5 +63,6 @@ opt_level: int = 3
 backend: str = os.environ.get("YASPS_BACKEND", "auto").strip().lower() or "auto"
 simd_lanes: int = 0
 separate_reduced_hessians: Optional[bool] = None
+slot_jacobians: bool = True
 compress_local_hessians: bool = True
 gpu_derivatives: bool = True

@@ -209,6 +209,57 @@ void GlobalSystem::addFactored(std::size_t energy, const double *gradients,
       });
 }
 
+/// Throws unless every local parameter that is a DoF lies in a slot with a
+/// Jacobian: formLocal writes only those, and a DoF outside them would
+/// read another instance's values.
+static void requireCovered(const GlobalSystem::EnergyMap &map,
+                           const SlotFactors &factors) {
+  const std::int64_t n = map.numParams;
+  const std::int64_t numSlots = static_cast<std::int64_t>(factors.slots.size());
+  std::vector<char> covered(n);
+  for (std::int64_t i = 0; i < map.count; ++i) {
+    std::fill(covered.begin(), covered.end(), 0);
+    for (std::int64_t s = 0; s < numSlots; ++s) {
+      std::int64_t table = factors.sources[(i * numSlots + s) * 2];
+      if (table < 0)
+        continue;
+      std::int64_t column = factors.slots[s].column;
+      std::fill(covered.begin() + column,
+                covered.begin() + column + factors.tables[table].cols, 1);
+    }
+    for (std::int64_t a = 0; a < n; ++a)
+      if (map.localBlock[i * n + a] >= 0 && !covered[a])
+        throw std::invalid_argument("instance " + std::to_string(i) +
+                                    ": local parameter " + std::to_string(a) +
+                                    " is a DoF but in no slot's Jacobian");
+  }
+}
+
+void GlobalSystem::addSlotFactored(std::size_t energy,
+                                   const double *innerGradients,
+                                   const double *innerHessians,
+                                   const SlotFactors &factors,
+                                   ThreadPool *pool) {
+  auto [part, map] = energyMap(energy);
+  const std::int64_t n = map->numParams, m = factors.numInner;
+  factors.check(map->count, n);
+  requireCovered(*map, factors);
+  forInstances(pool, map->count,
+               [&](auto atomic, std::int64_t begin, std::int64_t end) {
+                 // Per thread, not per instance: only the slots' entries are
+                 // written (padding is skipped by addInstance), so nothing is
+                 // cleared.
+                 std::vector<double> g(n), h(n * n), scratch(m * n);
+                 for (std::int64_t i = begin; i < end; ++i) {
+                   factors.formLocal(i, n, innerGradients + i * m,
+                                     innerHessians + i * m * m, g.data(),
+                                     h.data(), scratch.data());
+                   addInstance<decltype(atomic)::value>(
+                       *part, *map, i, g.data(), h.data(), gradientValues);
+                 }
+               });
+}
+
 template <bool Atomic>
 void GlobalSystem::addInstance(Part &part, const EnergyMap &map, std::int64_t i,
                                const double *g, const double *h,

@@ -258,3 +258,75 @@ TEST(GlobalSystem, AssemblesFactoredHessians) {
   EXPECT_THROW(factored.addFactored(2, g.data(), j.data(), p.data(), m),
                std::out_of_range);
 }
+
+TEST(GlobalSystem, AssemblesSlotFactoredHessians) {
+  // Pairs of a soft vertex (3 DoFs, identity Jacobian) or an affine body's
+  // vertex (12 DoFs, a 3 x 12 Jacobian per vertex) in one UNION, slots
+  // padded to 12: J taken from the tables gives what the padded
+  // per-instance J (m = 6 inner variables, the join's entry e of slot s at
+  // e * 2 + s) gives.
+  BlockLayout layout{{0, 3, 6, 9, 21}};
+  const std::int64_t m = 6, n = 24, count = 3;
+  std::mt19937 rng(5);
+  std::normal_distribution<double> normal;
+  std::vector<double> identity(9, 0.0), affine(2 * 3 * 12);
+  for (int e = 0; e < 3; ++e)
+    identity[e * 3 + e] = 1.0;
+  for (double &v : affine)
+    v = normal(rng);
+  // (table, row) per slot: 0 = soft (identity), 1 = affine vertex.
+  std::vector<std::int64_t> sources = {0,      0, 1, 1, /**/ 1, 0, 0, 0,
+                                       /**/ 0, 0, 0, 0};
+  int softOf[3][2] = {{0, -1}, {-1, 2}, {1, 0}};
+  std::vector<std::int64_t> dofs(count * n, -1);
+  std::vector<double> j(count * m * n, 0.0);
+  for (std::int64_t i = 0; i < count; ++i)
+    for (std::int64_t s = 0; s < 2; ++s) {
+      bool soft = sources[(i * 2 + s) * 2] == 0;
+      std::int64_t row = sources[(i * 2 + s) * 2 + 1];
+      std::int64_t cols = soft ? 3 : 12;
+      const double *t = soft ? identity.data() : &affine[row * 36];
+      for (std::int64_t c = 0; c < cols; ++c) {
+        dofs[i * n + 12 * s + c] = soft ? 3 * softOf[i][s] + c : 9 + c;
+        for (std::int64_t e = 0; e < 3; ++e)
+          j[(i * m + e * 2 + s) * n + 12 * s + c] = t[e * cols + c];
+      }
+    }
+  std::vector<double> gInner(count * m), g(count * n, 0.0);
+  for (double &v : gInner)
+    v = normal(rng);
+  for (std::int64_t i = 0; i < count; ++i)
+    for (std::int64_t a = 0; a < n; ++a)
+      for (std::int64_t k = 0; k < m; ++k)
+        g[i * n + a] += j[(i * m + k) * n + a] * gInner[i * m + k];
+  auto p = randomSpd(rng, m, count);
+  std::vector<DofMap> maps = {{count, n, dofs.data()}};
+  GlobalSystem padded(layout, maps), slotted(layout, maps);
+  padded.setZero();
+  padded.addFactored(0, g.data(), j.data(), p.data(), m);
+  SlotFactors factors;
+  factors.numInner = m;
+  factors.tables = {{identity.data(), 1, 3, 3}, {affine.data(), 2, 3, 12}};
+  factors.slots = {{0, 2, 0}, {1, 2, 12}};
+  factors.sources = sources.data();
+  slotted.setZero();
+  ThreadPool pool(2);
+  slotted.addSlotFactored(0, gInner.data(), p.data(), factors, &pool);
+  std::vector<double> a = padded.toDense(), b = slotted.toDense();
+  for (std::size_t k = 0; k < a.size(); ++k)
+    ASSERT_NEAR(a[k], b[k], 1e-12 * (1 + std::abs(a[k]))) << "entry " << k;
+  for (std::size_t k = 0; k < padded.gradient().size(); ++k)
+    ASSERT_NEAR(padded.gradient()[k], slotted.gradient()[k], 1e-12);
+
+  // A row outside its table, and a DoF that no slot's Jacobian covers.
+  std::vector<std::int64_t> outside = sources;
+  outside[3] = 2;
+  factors.sources = outside.data();
+  EXPECT_THROW(slotted.addSlotFactored(0, gInner.data(), p.data(), factors),
+               std::invalid_argument);
+  std::vector<std::int64_t> uncovered = sources;
+  uncovered[2] = -1;
+  factors.sources = uncovered.data();
+  EXPECT_THROW(slotted.addSlotFactored(0, gInner.data(), p.data(), factors),
+               std::invalid_argument);
+}

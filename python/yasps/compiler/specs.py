@@ -34,7 +34,7 @@ class DerivativeKernels:
 
     def path(self, role: str) -> str:
         """The derivative attribute of ``role`` (grad, hess, hess_proj,
-        ij, hess_inner_proj, dofs)."""
+        ij, hess_inner_proj, dofs, ijac: the inner gradient)."""
         return f"{self.base}__{role}"
 
 

@@ -24,8 +24,11 @@ Shape = Tuple[int, int, int]
 class LocalInputs:
     """One energy's contribution to the Newton system, in the memory of the
     backend that computed it: local gradients (count x n) and either the
-    projected local Hessians (count x n x n) or their factors J (count x m x
-    n) and P (count x m x m), each instance column-major."""
+    projected local Hessians (count x n x n) or their factors: J (count x m
+    x n) and P (count x m x m), each instance column-major, or P with J
+    taken slot by slot from shared Jacobian tables (``slot_factors``, a
+    ``yasps.solve.slots.SlotInputs``; the gradient is then the inner one,
+    count x m)."""
     backend: "Backend"
     count: int
     n: int
@@ -34,6 +37,7 @@ class LocalInputs:
     inner_map: Optional[Any] = None
     inner_hessian: Optional[Any] = None
     inner_size: int = 0
+    slot_factors: Optional[Any] = None
 
 
 class Backend(Protocol):
@@ -41,6 +45,8 @@ class Backend(Protocol):
 
     #: "cpu" or "gpu"
     name: str
+    #: whether add() forms J^T P J from shared slot Jacobian tables
+    slot_factors: bool
 
     @property
     def host(self) -> "Backend":

@@ -22,6 +22,7 @@ class CpuBackend:
     """Kernels and the Newton system on the host."""
 
     name = "cpu"
+    slot_factors = True
 
     @property
     def host(self) -> "CpuBackend":
@@ -80,6 +81,15 @@ def add_host_arrays(system, energy_index: int, inputs: LocalInputs,
     GlobalSystem, or a GpuSystem, which uploads them); ``options`` are the
     system's further arguments (the CPU's thread count)."""
     count, n, m = inputs.count, inputs.n, inputs.inner_size
+    slots = inputs.slot_factors
+    if slots is not None:
+        # P is symmetric: row- and column-major storage agree.
+        system.add_slot_factored(
+            energy_index, np.ascontiguousarray(inputs.gradient).reshape(
+                count, m),
+            np.ascontiguousarray(inputs.inner_hessian).reshape(count, m, m),
+            m, slots.tables, slots.slots, slots.sources, *options)
+        return
     gradient = np.ascontiguousarray(inputs.gradient).reshape(count, n)
     if inputs.inner_map is not None:
         # Hessians kept as factors: J^T P J is formed while assembling.

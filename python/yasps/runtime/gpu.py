@@ -129,6 +129,9 @@ class GpuBackend:
     """Kernels and the Newton system on the GPU session's device."""
 
     name = "gpu"
+    #: The device system assembles per-instance factors J and P; shared
+    #: slot Jacobian tables are a CPU path so far.
+    slot_factors = False
 
     def __init__(self, host: CpuBackend):
         self._host = host

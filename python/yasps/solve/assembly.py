@@ -105,11 +105,14 @@ def assemble(scene: Scene, backend: Backend, threads: Optional[int] = None,
     # change with the counts of dynamic primitives.
     ir = kernel_ir(scene)
     static, dynamic = [], []
+    # The Jacobian tables of factored energies: one evaluation per source
+    # for every energy that reaches it.
+    tables: dict = {}
     for energy, is_dynamic, _ in scene._energies:
         start = clock()
         try:
             contribution = assembly_inputs(scene, energy, backend, threads,
-                                           ir)
+                                           ir, tables)
         except NoDerivativesError:
             continue
         spent["derivatives"] += clock() - start

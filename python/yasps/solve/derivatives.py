@@ -5,7 +5,7 @@ backend's memory for assembly (:func:`assembly_inputs`)."""
 
 from __future__ import annotations
 
-from typing import Callable, List, Optional, Tuple
+from typing import Callable, Dict, List, Optional, Tuple
 
 import numpy as np
 
@@ -18,6 +18,11 @@ from ..frontend.scene import Scene
 from ..runtime import Backend, LocalInputs, compute
 from .compression import compressed_sizes, project_compressed
 from .params import ParamResolver, ParamSlot
+from .slots import SlotInputs, SlotPlan, slot_plan
+
+#: Jacobian tables evaluated during one assembly, by kernel path: each
+#: source's table is computed once and read by every energy reaching it.
+TableCache = Dict[str, np.ndarray]
 
 
 class NoDerivativesError(SceneError):
@@ -81,15 +86,29 @@ class _Outputs:
 
     def __init__(self, scene: Scene, energy: Attribute, backend: Backend,
                  threads: Optional[int], assembly_only: bool, reuse: bool,
-                 ir: Optional[str] = None):
+                 ir: Optional[str] = None,
+                 tables: Optional[TableCache] = None):
         self.spec: DerivativeKernels = derivative_kernels(scene, energy,
                                                           assembly_only, ir)
         self.scene, self.energy, self.backend = scene, energy, backend
         self.threads, self.reuse = threads, reuse
         self.count = energy.owner.numInstances
+        spec = self.spec
+        paths = list(spec.paths)
+        #: With ``tables`` (assembly on a backend that takes them): J from
+        #: shared slot Jacobian tables instead of per-instance ``__ij``.
+        self.plan: Optional[SlotPlan] = None
+        self.tables = tables
+        if tables is not None and spec.separate:
+            self.plan = slot_plan(scene, energy, spec.ir, spec.pipeline)
+        if self.plan is not None:
+            paths = [p for p in paths if p != spec.path("ij")] + \
+                [spec.path("ijac")] + self.plan.kernel_paths
         try:
-            self.kernels = backend.compile(self.spec.ir, self.spec.paths,
-                                           scene.name, self.spec.pipeline)
+            self.kernels = backend.compile(spec.ir, paths, scene.name,
+                                           spec.pipeline)
+            if self.plan is not None:
+                self.plan.check(self.shape("hess_inner_proj")[1])
         except MissingAttributeError:
             raise NoDerivativesError(f"{energy.describe()} depends on no "
                                      "minimisation target") from None
@@ -129,6 +148,8 @@ class _Outputs:
         """Gradients and projected Hessians (or their factors) as the fused
         kernels compute them."""
         n = self.shape("grad")[1]
+        if self.plan is not None:
+            return self._slot_inputs(n)
         gradient = self.run("grad")
         if self.spec.separate:
             m = self.shape("hess_inner_proj")[1]
@@ -138,6 +159,29 @@ class _Outputs:
                                inner_size=m)
         return LocalInputs(self.backend, self.count, n, gradient,
                            self.run("hess_proj"))
+
+    def _table(self, table) -> np.ndarray:
+        """A Jacobian table (instances, rows, cols), row-major, from the
+        assembly's cache or computed now."""
+        if table.jacobian is None:
+            return np.eye(table.entries)[None]
+        if table.jacobian not in self.tables:
+            count = table.source.owner.numInstances
+            kernel = self.kernels.kernel(table.jacobian)
+            out = self.backend.run(self.kernels, self.scene, table.jacobian,
+                                   count, self.threads)
+            self.tables[table.jacobian] = np.ascontiguousarray(
+                self.backend.to_host(out, (count, kernel.rows, kernel.cols)))
+        return self.tables[table.jacobian]
+
+    def _slot_inputs(self, n: int) -> LocalInputs:
+        """The inner gradients and P, with J in shared tables."""
+        plan = self.plan
+        slots = SlotInputs([self._table(t) for t in plan.tables], plan.slots,
+                           plan.sources(self.count))
+        return LocalInputs(self.backend, self.count, n, self.run("ijac"),
+                           inner_hessian=self.run("hess_inner_proj"),
+                           inner_size=plan.inner_size, slot_factors=slots)
 
     def compressed_inputs(self) -> LocalInputs:
         """Gradients and Hessians projected after compression, on the host."""
@@ -151,15 +195,24 @@ class _Outputs:
 
 
 def assembly_inputs(scene: Scene, energy: Attribute, backend: Backend,
-                    threads: Optional[int] = None, ir: Optional[str] = None
+                    threads: Optional[int] = None, ir: Optional[str] = None,
+                    tables: Optional[TableCache] = None
                     ) -> Tuple[LocalInputs, Callable[[], np.ndarray]]:
     """What assembly needs of a registered energy, computed by the backend
     that differentiates for ``backend``: the local gradients and projected
     Hessians (or their factors) and the DoF map (computed when first asked
-    for). ``ir``: the scene's ``kernel_ir``, if the caller has it. Raises
+    for). ``ir``: the scene's ``kernel_ir``, if the caller has it;
+    ``tables``: the Jacobian tables of this assembly, shared by its
+    energies (factored energies then take J from them where ``backend``
+    assembles slot factors and ``config.slot_jacobians`` allows). Raises
     NoDerivativesError for an energy without derivatives."""
     where = backend.derivatives
-    outputs = _Outputs(scene, energy, where, threads, True, True, ir)
+    if not (backend.slot_factors and where is backend.host and
+            config.slot_jacobians):
+        tables = None
+    elif tables is None:
+        tables = {}
+    outputs = _Outputs(scene, energy, where, threads, True, True, ir, tables)
     if not outputs.needs_compression():
         return outputs.inputs(), outputs.dofs
     if where.host is not where:

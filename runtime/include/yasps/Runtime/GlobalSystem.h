@@ -17,6 +17,7 @@
 
 #include "yasps/Runtime/BlockSparseMatrix.h"
 #include "yasps/Runtime/Pcg.h"
+#include "yasps/Runtime/SlotFactors.h"
 
 #include <cstdint>
 #include <vector>
@@ -68,6 +69,16 @@ public:
   void addFactored(std::size_t energy, const double *gradients,
                    const double *maps, const double *inner, std::int64_t m,
                    ThreadPool *pool = nullptr);
+
+  /// add() for an energy whose local Hessians are J^T P J with J taken, slot
+  /// by slot, from Jacobian tables shared between energies (SlotFactors.h):
+  /// `innerGradients` (count x m) and `innerHessians` (count x m x m, the
+  /// projected P) are all that is stored per instance. Throws
+  /// std::invalid_argument for a reference outside the tables or the
+  /// energy's local parameters.
+  void addSlotFactored(std::size_t energy, const double *innerGradients,
+                       const double *innerHessians, const SlotFactors &factors,
+                       ThreadPool *pool = nullptr);
 
   const std::vector<double> &gradient() const { return gradientValues; }
   const BlockSparseMatrix &staticHessian() const { return staticPart.matrix; }
