@@ -10,9 +10,11 @@ IPC barrier. Prints:
 1. per energy, cold (fresh process and kernel cache): the kernels that
    minimizeEnergy needs (gradient, projected Hessian or its factors,
    placement indices), then what energyDerivatives adds (values, the
-   unprojected Hessian); each energy's local-Hessian storage per instance
-   as assembled (factors J and P, or the dense block) against the dense
-   n x n block;
+   unprojected Hessian); each energy's storage per instance as assembled
+   (inner gradient and P with J in shared per-member tables, or the dense
+   gradient and block) against padded per-instance factors and the dense
+   n x n block, and the size of the tables it reads (per member vertex,
+   not per pair);
 2. the whole scene, cold and warm (a new process with the disk cache): the
    first minimizeEnergy and evaluateEnergy, and the compiler requests made;
 3. ``--calls`` minimizeEnergy calls with every pair type's count drawn
@@ -58,11 +60,23 @@ def worker(task: str, energy: str) -> dict:
         start = time.perf_counter()
         d = s.energyDerivatives(attr)
         extra = time.perf_counter() - start
-        n = d.gradient.shape[1]
-        stored = (inputs.inner_size * (n + inputs.inner_size)
-                  if inputs.inner_map is not None else n * n)
+        n, m = d.gradient.shape[1], inputs.inner_size
+        if inputs.slot_factors is not None:
+            how = "tables"
+            stored = inputs.slot_factors.stored_per_instance(m)
+            tables = sum(t.size for t in inputs.slot_factors.tables)
+        elif inputs.inner_map is not None:
+            how, stored, tables = "padded J", n + m * (n + m), 0
+        else:
+            how, stored, tables = "dense", n + n * n, 0
+        # The padded factors of the same energy, for comparison.
+        yasps.config.slot_jacobians = False
+        padded, _ = assembly_inputs(s, attr, cpu_backend())
+        padded_stored = (n + m * (n + m) if padded.inner_map is not None
+                         else n + n * n)
         return {"assembly": assembly, "derivatives": extra, "n": n,
-                "stored": stored, "factored": inputs.inner_map is not None}
+                "stored": stored, "how": how, "tables": tables,
+                "padded": padded_stored}
     start = time.perf_counter()
     s.minimizeEnergy()
     s.evaluateEnergy()
@@ -136,16 +150,20 @@ def main() -> None:
     from contact_scene import build
     s, *_ = build()
     names = [e.owner.qualifiedName + "." + e.name for e in s.energies]
-    print("cold compile per energy (fresh process and cache), seconds")
+    print("cold compile per energy (fresh process and cache), seconds; "
+          "doubles stored per instance for assembly (gradient and Hessian "
+          "or its factors) as assembled, with padded per-instance J, and "
+          "dense; doubles of the shared Jacobian tables it reads")
     print(f"{'energy':24} {'minimizeEnergy':>15} {'+energyDerivatives':>19} "
-          f"{'n':>4} {'Hessian storage per instance':>30}")
+          f"{'n':>4} {'stored':>16} {'padded J':>9} {'dense':>6} "
+          f"{'tables':>7}")
     for name in names:
         with tempfile.TemporaryDirectory() as cache:
             r = run_worker("energy", name, cache)
-        storage = (f"{r['stored']} ({'factors' if r['factored'] else 'dense'}"
-                   f", dense {r['n'] ** 2})")
+        n = r["n"]
         print(f"{name:24} {r['assembly']:15.2f} {r['derivatives']:19.2f} "
-              f"{r['n']:4d} {storage:>30}")
+              f"{n:4d} {r['stored']:>6} ({r['how']:>7}) {r['padded']:>9} "
+              f"{n + n * n:>6} {r['tables']:>7}")
     with tempfile.TemporaryDirectory() as cache:
         cold = run_worker("scene", "", cache)
         warm = run_worker("scene", "", cache)

@@ -13,6 +13,7 @@ from ..frontend.errors import SceneError
 from ..frontend.scene import Scene
 from ..ir import kernel_ir, symbol_path
 from .errors import native, translated
+from .params import Param, decode_params
 from .pipelines import differentiation_pipeline
 
 
@@ -38,22 +39,60 @@ class DerivativeKernels:
         return f"{self.base}__{role}"
 
 
-#: The energies whose projected Hessians are factored, by (IR, pipeline):
-#: asked of the compiler once per scene structure, for all energies at once.
-_factored: Dict[Tuple[str, str], Set[str]] = {}
+@dataclass
+class SceneParams:
+    """What the differentiation pipeline made of a scene's energies, asked
+    of the compiler once per scene structure (one parse and one run of the
+    pipeline for all energies)."""
+    #: each energy's local parameter groups (of ``E__grad``), by path;
+    #: empty for energies that depend on no target
+    gradients: Dict[str, List[Param]]
+    #: the energies whose projected Hessians are kept as factors
+    factored: Set[str]
+    #: whether each computed attribute has a Jacobian ``X__jac``, by the
+    #: Jacobian's path
+    jacobians: Dict[str, bool]
+
+
+#: SceneParams by (IR, pipeline).
+_scene_params: Dict[Tuple[str, str], SceneParams] = {}
+
+
+def _named_attributes(scene: Scene) -> List[Attribute]:
+    """Every named attribute of the scene, entity by entity."""
+    out, pending = [], list(scene._symbols.values())
+    while pending:
+        entity = pending.pop()
+        if isinstance(entity, Attribute):
+            out.append(entity)
+        elif hasattr(entity, "_symbols"):
+            pending += list(entity._symbols.values())
+    return out
+
+
+def scene_params(scene: Scene, ir: str, pipeline: str) -> SceneParams:
+    """The scene's SceneParams for its ``kernel_ir`` ``ir``."""
+    key = (ir, pipeline)
+    if key not in _scene_params:
+        bases = [symbol_path(e) for e in scene.energies]
+        sources = [symbol_path(a) + "__jac" for a in _named_attributes(scene)
+                   if a.kind in ("computed", "join")]
+        paths = [b + "__grad" for b in bases] + \
+            [b + "__hess_inner_proj" for b in bases] + sources
+        with translated("attribute_params"):
+            params = native().attribute_params(ir, pipeline, paths,
+                                               scene.name)
+        k = len(bases)
+        _scene_params[key] = SceneParams(
+            {b: decode_params(p) for b, p in zip(bases, params)},
+            {b for b, p in zip(bases, params[k:2 * k]) if p},
+            {path: bool(p) for path, p in zip(sources, params[2 * k:])})
+    return _scene_params[key]
 
 
 def _has_inner_factors(scene: Scene, ir: str, pipeline: str,
                        base: str) -> bool:
-    key = (ir, pipeline)
-    if key not in _factored:
-        bases = [symbol_path(e) for e in scene.energies]
-        with translated("attribute_params"):
-            params = native().attribute_params(
-                ir, pipeline, [b + "__hess_inner_proj" for b in bases],
-                scene.name)
-        _factored[key] = {b for b, p in zip(bases, params) if p}
-    return base in _factored[key]
+    return base in scene_params(scene, ir, pipeline).factored
 
 
 def derivative_kernels(scene: Scene, energy: Attribute, assembly_only: bool,
@@ -98,11 +137,9 @@ def scene_kernel_paths(scene: Scene) -> List[str]:
     bases = [symbol_path(e) for e in scene.energies]
     derived = [False] * len(bases)
     if scene.minimizeTargets:
-        with translated("attribute_params"):
-            params = native().attribute_params(
-                kernel_ir(scene), differentiation_pipeline(),
-                [b + "__grad" for b in bases], scene.name)
-        derived = [bool(p) for p in params]
+        gradients = scene_params(scene, kernel_ir(scene),
+                                 differentiation_pipeline()).gradients
+        derived = [bool(gradients[b]) for b in bases]
     for energy, base, has_derivatives in zip(scene.energies, bases, derived):
         paths.append(base)
         if has_derivatives:

@@ -177,8 +177,9 @@ class _Outputs:
     def _slot_inputs(self, n: int) -> LocalInputs:
         """The inner gradients and P, with J in shared tables."""
         plan = self.plan
-        slots = SlotInputs([self._table(t) for t in plan.tables], plan.slots,
-                           plan.sources(self.count))
+        # No instances read no table: none is evaluated for them.
+        tables = [self._table(t) for t in plan.tables] if self.count else []
+        slots = SlotInputs(tables, plan.slots, plan.sources(self.count))
         return LocalInputs(self.backend, self.count, n, self.run("ijac"),
                            inner_hessian=self.run("hess_inner_proj"),
                            inner_size=plan.inner_size, slot_factors=slots)

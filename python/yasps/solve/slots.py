@@ -22,14 +22,14 @@ instances (JOIN indices, UNION offsets) on every call.
 
 from __future__ import annotations
 
+import weakref
 from dataclasses import dataclass
 from typing import Dict, List, Optional, Sequence, Tuple
 
 import numpy as np
 
-from ..compiler.errors import native, translated
-from ..compiler.params import JoinParam, Param, ReadParam, UnionParam, \
-    decode_params
+from ..compiler.params import JoinParam, Param, ReadParam, UnionParam
+from ..compiler.specs import scene_params
 from ..frontend.attribute import Attribute
 from ..frontend.scene import Primitive, PrimitiveUnion, Scene
 from ..ir import resolve, symbol_path
@@ -76,6 +76,7 @@ class SlotPlan:
         self._has_jacobian = has_jacobian
         self.tables: List[JacobianTable] = []
         self._table_of: Dict[object, int] = {}
+        self._source_of: Dict[int, Tuple[int, bool]] = {}
         #: per slot: how to find its instances (kind, parameter)
         self._slots: List[Param] = list(params)
         placements, inner, column = [], 0, 0
@@ -146,17 +147,25 @@ class SlotPlan:
                 out += self._leaves(member._attributes[attr.name],
                                     start + int(offset))
             return out
+        if id(attr) not in self._source_of:
+            self._source_of[id(attr)] = self._source(attr)
+        table, fixed = self._source_of[id(attr)]
+        return [(table, start, fixed)]
+
+    def _source(self, attr: Attribute) -> Tuple[int, bool]:
+        """The table of a source attribute (-1: no parameters) and whether
+        every instance reads its row 0 (the identity)."""
         entries = attr.rows * attr.cols
         if attr.kind == "data" and any(t is attr for t in
                                        self.scene.minimizeTargets):
-            return [(self._table(("identity", entries),
-                                 JacobianTable(entries)), start, True)]
+            return self._table(("identity", entries),
+                               JacobianTable(entries)), True
         path = symbol_path(attr)
         if attr.kind in ("computed", "join") and \
                 self._has_jacobian.get(path + "__jac"):
-            return [(self._table(path, JacobianTable(
-                entries, path + "__jac", attr)), start, False)]
-        return [(-1, start, True)]  # constant: no parameters
+            return self._table(path, JacobianTable(entries, path + "__jac",
+                                                   attr)), False
+        return -1, True  # constant: no parameters
 
     def _leaves_of_param(self, param: Param) -> List[_Leaf]:
         if isinstance(param, ReadParam):
@@ -171,66 +180,52 @@ class SlotPlan:
         """The (table, row) of every slot of the ``count`` current
         instances, (count, S, 2)."""
         out = np.empty((count, len(self._slots), 2), dtype=np.int64)
+        if not count:
+            return out
+        # The slots of one JOIN share their sources: decoded once per call.
+        decoders: Dict[object, tuple] = {}
         for s, param in enumerate(self._slots):
-            leaves = self._leaves_of_param(param)
+            key = param.base if isinstance(param, JoinParam) else param
+            if key not in decoders:
+                leaves = self._leaves_of_param(param)
+                decoders[key] = (
+                    np.array([leaf[1] for leaf in leaves], dtype=np.int64),
+                    np.array([leaf[0] for leaf in leaves], dtype=np.int64),
+                    np.array([leaf[2] for leaf in leaves]))
+            starts, tables, fixed = decoders[key]
             if isinstance(param, JoinParam):
                 conn = self.owner._symbols[param.connectivity.lstrip("@")]
-                index = np.asarray(conn.indices[:count, param.slot],
-                                   dtype=np.int64)
+                index = conn.indices[:count, param.slot]
             elif isinstance(param, UnionParam):
                 index = np.arange(count, dtype=np.int64)
             else:
                 index = np.zeros(count, dtype=np.int64)
-            if len(leaves) == 1:
-                table, start, fixed = leaves[0]
-                out[:, s, 0] = table
-                out[:, s, 1] = 0 if fixed else index - start
+            if len(starts) == 1:
+                out[:, s, 0] = tables[0]
+                out[:, s, 1] = 0 if fixed[0] else index - starts[0]
                 continue
-            starts = np.array([leaf[1] for leaf in leaves], dtype=np.int64)
-            tables = np.array([leaf[0] for leaf in leaves], dtype=np.int64)
-            fixed = np.array([leaf[2] for leaf in leaves])
             which = np.searchsorted(starts, index, side="right") - 1
             out[:, s, 0] = tables[which]
             out[:, s, 1] = np.where(fixed[which], 0, index - starts[which])
         return out
 
 
-def _named_attributes(scene: Scene) -> List[Attribute]:
-    """Every named attribute of the scene, entity by entity."""
-    out, pending = [], list(scene._symbols.values())
-    while pending:
-        entity = pending.pop()
-        if isinstance(entity, Attribute):
-            out.append(entity)
-        elif hasattr(entity, "_symbols"):
-            pending += list(entity._symbols.values())
-    return out
-
-
-#: Per (IR, pipeline): each energy's gradient parameters and which source
-#: attributes have a ``__jac``, asked of the compiler in one request.
-_structure: Dict[Tuple[str, str], Tuple[Dict[str, List[Param]],
-                                        Dict[str, bool]]] = {}
+#: Each scene's plans by (IR, pipeline, energy path): built once per scene
+#: structure, as the tables and placements do not change with counts.
+_plans: "weakref.WeakKeyDictionary[Scene, Dict[tuple, Optional[SlotPlan]]]" \
+    = weakref.WeakKeyDictionary()
 
 
 def slot_plan(scene: Scene, energy: Attribute, ir: str,
               pipeline: str) -> Optional[SlotPlan]:
     """The plan of a factored energy, or None for an energy without
     parameter slots."""
-    key = (ir, pipeline)
-    if key not in _structure:
-        energies = [symbol_path(e) + "__grad" for e in scene.energies]
-        sources = [symbol_path(a) + "__jac" for a in _named_attributes(scene)
-                   if a.kind in ("computed", "join")]
-        with translated("attribute_params"):
-            params = native().attribute_params(ir, pipeline,
-                                               energies + sources, scene.name)
-        _structure[key] = (
-            {p: decode_params(r) for p, r in zip(energies, params)},
-            {p: bool(r) for p, r in zip(sources, params[len(energies):])})
-    grads, has_jacobian = _structure[key]
-    params = grads.get(symbol_path(energy) + "__grad")
-    if not params or not isinstance(energy.owner, (Primitive,
-                                                   PrimitiveUnion)):
-        return None
-    return SlotPlan(scene, energy.owner, params, has_jacobian)
+    plans = _plans.setdefault(scene, {})
+    key = (ir, pipeline, symbol_path(energy))
+    if key not in plans:
+        known = scene_params(scene, ir, pipeline)
+        params = known.gradients.get(key[2])
+        plans[key] = SlotPlan(scene, energy.owner, params, known.jacobians) \
+            if params and isinstance(energy.owner,
+                                     (Primitive, PrimitiveUnion)) else None
+    return plans[key]
