@@ -260,6 +260,14 @@ void GlobalSystem::addSlotFactored(std::size_t energy,
                });
 }
 
+/// Local parameters a local Hessian is scanned over at once: the DoFs of
+/// an instance are gathered first when there are at most this many
+/// parameters (UNION padding can make most of them no DoF at all).
+static constexpr std::int64_t kMaxGatheredParams = 512;
+/// Up to this many parameters that are DoFs, those sharing a DoF are merged
+/// before accumulating (a k x k sum on the stack).
+static constexpr std::int64_t kMaxMergedParams = 64;
+
 template <bool Atomic>
 void GlobalSystem::addInstance(Part &part, const EnergyMap &map, std::int64_t i,
                                const double *g, const double *h,
@@ -270,24 +278,85 @@ void GlobalSystem::addInstance(Part &part, const EnergyMap &map, std::int64_t i,
   const std::int32_t *local = &map.localBlock[i * n];
   const std::int32_t *offset = &map.offset[i * n];
   const std::int64_t *global = &map.globalBlock[i * m];
+  // The parameters that are DoFs: a tet of soft vertices in a UNION padded
+  // to affine bodies has 12 of 48, so the n x n scan would be 16x the work.
+  std::int32_t gathered[kMaxGatheredParams];
+  std::int64_t numActive = 0;
+  if (n <= kMaxGatheredParams) {
+    for (std::int64_t a = 0; a < n; ++a)
+      if (local[a] >= 0)
+        gathered[numActive++] = static_cast<std::int32_t>(a);
+  }
+  auto addPair = [&](std::int64_t a, std::int64_t b, std::int64_t ga) {
+    std::int64_t gb = global[local[b]];
+    // Each pair of distinct blocks is stored once, upper triangle: the
+    // entries with ga > gb are its transpose, added from (b, a).
+    if (ga > gb)
+      return;
+    BlockSlot slot = map.pairSlot[(i * m + local[a]) * m + local[b]];
+    double *data = matrix.blockData(slot.block);
+    std::int64_t cols = layout.blockSize(gb);
+    accumulate<Atomic>(&data[offset[a] * cols + offset[b]], h[a * n + b]);
+  };
+  if (numActive <= kMaxMergedParams) {
+    // Parameters of one DoF (the four vertices of a tet of one affine body:
+    // 48 parameters, 12 DoFs) are summed here first, so that each DoF pair
+    // is accumulated into the matrix once instead of up to 16 times.
+    std::int32_t slotOf[kMaxMergedParams], first[kMaxMergedParams];
+    std::int64_t dofOf[kMaxMergedParams], k = 0;
+    for (std::int64_t x = 0; x < numActive; ++x) {
+      std::int64_t a = gathered[x];
+      std::int64_t dof = layout.blockOffset[global[local[a]]] + offset[a];
+      std::int64_t u = std::find(dofOf, dofOf + k, dof) - dofOf;
+      if (u == k) {
+        dofOf[k] = dof;
+        first[k++] = static_cast<std::int32_t>(a);
+      }
+      slotOf[x] = static_cast<std::int32_t>(u);
+    }
+    if (k < numActive) {
+      double merged[kMaxMergedParams * kMaxMergedParams] = {};
+      double mergedGradient[kMaxMergedParams] = {};
+      for (std::int64_t x = 0; x < numActive; ++x) {
+        std::int64_t a = gathered[x];
+        mergedGradient[slotOf[x]] += g[a];
+        for (std::int64_t y = 0; y < numActive; ++y)
+          merged[slotOf[x] * k + slotOf[y]] += h[a * n + gathered[y]];
+      }
+      for (std::int64_t u = 0; u < k; ++u) {
+        std::int64_t a = first[u], ga = global[local[a]];
+        accumulate<Atomic>(&gradient[dofOf[u]], mergedGradient[u]);
+        for (std::int64_t v = 0; v < k; ++v) {
+          std::int64_t b = first[v], gb = global[local[b]];
+          if (ga > gb)
+            continue;
+          BlockSlot slot = map.pairSlot[(i * m + local[a]) * m + local[b]];
+          accumulate<Atomic>(
+              &matrix.blockData(
+                  slot.block)[offset[a] * layout.blockSize(gb) + offset[b]],
+              merged[u * k + v]);
+        }
+      }
+      return;
+    }
+  }
+  if (n <= kMaxGatheredParams) {
+    for (std::int64_t x = 0; x < numActive; ++x) {
+      std::int64_t a = gathered[x], ga = global[local[a]];
+      accumulate<Atomic>(&gradient[layout.blockOffset[ga] + offset[a]], g[a]);
+      for (std::int64_t y = 0; y < numActive; ++y)
+        addPair(a, gathered[y], ga);
+    }
+    return;
+  }
   for (std::int64_t a = 0; a < n; ++a) {
     if (local[a] < 0)
       continue;
     std::int64_t ga = global[local[a]];
     accumulate<Atomic>(&gradient[layout.blockOffset[ga] + offset[a]], g[a]);
-    for (std::int64_t b = 0; b < n; ++b) {
-      if (local[b] < 0)
-        continue;
-      std::int64_t gb = global[local[b]];
-      // Each pair of distinct blocks is stored once, upper triangle: the
-      // entries with ga > gb are its transpose, added from (b, a).
-      if (ga > gb)
-        continue;
-      BlockSlot slot = map.pairSlot[(i * m + local[a]) * m + local[b]];
-      double *data = matrix.blockData(slot.block);
-      std::int64_t cols = layout.blockSize(gb);
-      accumulate<Atomic>(&data[offset[a] * cols + offset[b]], h[a * n + b]);
-    }
+    for (std::int64_t b = 0; b < n; ++b)
+      if (local[b] >= 0)
+        addPair(a, b, ga);
   }
 }
 

@@ -330,3 +330,36 @@ TEST(GlobalSystem, AssemblesSlotFactoredHessians) {
   EXPECT_THROW(slotted.addSlotFactored(0, gInner.data(), p.data(), factors),
                std::invalid_argument);
 }
+
+TEST(GlobalSystem, MergesParametersOfOneDof) {
+  // Two slots of one instance on the same vertex (a pair of an affine body
+  // with itself): the parameters sharing a DoF are summed before they are
+  // accumulated, and the system is the local one folded onto the DoFs.
+  BlockLayout layout{{0, 3, 6}};
+  std::vector<std::int64_t> dofs = {3, 4, 5, 3, 4, 5, 0, -1};
+  const std::int64_t n = 8;
+  std::vector<DofMap> maps = {{1, n, dofs.data()}};
+  std::mt19937 rng(9);
+  auto h = randomSpd(rng, n, 1);
+  std::vector<double> g(n);
+  std::normal_distribution<double> normal;
+  for (double &v : g)
+    v = normal(rng);
+  GlobalSystem system(layout, maps);
+  system.setZero();
+  system.add(0, g.data(), h.data());
+  std::vector<double> want(36, 0.0), wantGradient(6, 0.0);
+  for (std::int64_t a = 0; a < n; ++a) {
+    if (dofs[a] < 0)
+      continue;
+    wantGradient[dofs[a]] += g[a];
+    for (std::int64_t b = 0; b < n; ++b)
+      if (dofs[b] >= 0)
+        want[dofs[a] * 6 + dofs[b]] += h[a * n + b];
+  }
+  std::vector<double> got = system.toDense();
+  for (std::size_t k = 0; k < want.size(); ++k)
+    ASSERT_NEAR(got[k], want[k], 1e-12 * (1 + std::abs(want[k]))) << k;
+  for (std::size_t k = 0; k < wantGradient.size(); ++k)
+    ASSERT_NEAR(system.gradient()[k], wantGradient[k], 1e-12);
+}
