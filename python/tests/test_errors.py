@@ -140,6 +140,12 @@ def test_connectivity_errors():
     unchanged(s, lambda: m.tets.addConnectivity("t", m.vertices, bad, 4),
               SceneError, "index 8 (instance 2, slot 1) is out of range: the "
               "target has 8 instances")
+    # An unsigned index past the int64 range is reported as itself.
+    huge = tets.astype(np.uint64)
+    huge[1, 3] = np.uint64(2 ** 64 - 1)
+    unchanged(s, lambda: m.tets.addConnectivity("t", m.vertices, huge, 4),
+              SceneError, "index 18446744073709551615 (instance 1, slot 3) "
+              "is out of range")
     unchanged(s, lambda: m.tets.addConnectivity("t", m.vertices, tets[:3], 4),
               SceneError, "expected 6 instance(s) of arity 4")
     unchanged(s, lambda: m.tets.addConnectivity("t", m.vertices,

@@ -80,11 +80,13 @@ def to_indices(indices: Any, count: int, arity: int, bound: int,
             f"{what}: expected {count} instance(s) of arity {arity}, i.e. "
             f"shape ({count}, {arity}) or ({count * arity},); got shape "
             f"{array.shape}")
-    flat = array.reshape(-1).astype(np.int64)
-    bad = np.flatnonzero((flat < 0) | (flat >= bound))
+    # Checked in the caller's own dtype: a uint64 past the int64 range
+    # must be reported as itself, not as the negative number it wraps to.
+    given = array.reshape(-1)
+    bad = np.flatnonzero((given < 0) | (given >= bound))
     if bad.size:
         i = int(bad[0])
         raise SceneError(
-            f"{what}: index {int(flat[i])} (instance {i // arity}, slot "
+            f"{what}: index {int(given[i])} (instance {i // arity}, slot "
             f"{i % arity}) is out of range: the target has {bound} instances")
-    return flat.astype(np.int32)
+    return given.astype(np.int32)
