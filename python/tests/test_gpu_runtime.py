@@ -312,3 +312,43 @@ def test_gpu_results_are_dlpack_views_of_device_memory(monkeypatch):
     on_device = torch.from_dlpack(r)
     assert on_device.is_cuda
     assert np.array_equal(on_device.cpu().numpy(), r.value)
+
+
+GPU_COMPILES_ONCE = """
+    import sys
+    import yasps
+    import yasps.runtime.gpu as gpu
+    sys.path.insert(0, %r)
+    from test_minimize import mixed_scene
+    yasps.config.compress_local_hessians = False
+    compiled = []
+    original = gpu.compile_ir
+    def counting(ir, paths, *args, **kwargs):
+        compiled.extend(paths)
+        return original(ir, paths, *args, **kwargs)
+    gpu.compile_ir = counting
+    s, pp, *_ = mixed_scene([[0, 3], [1, 4]])
+    # Requests of different kernel sets, in both orders, twice over.
+    for _ in range(2):
+        for energy in s.energies:
+            energy.compute()
+        s.minimizeEnergy()
+        s.evaluateEnergy()
+        for energy in s.energies:
+            s.energyDerivatives(energy)
+    print(len(compiled) > 0, len(compiled) == len(set(compiled)),
+          s.lastSolve["backend"])
+"""
+
+
+@pytest.mark.skipif(not FAKE_DRIVER.exists(),
+                    reason=f"the stand-in driver {FAKE_DRIVER} is not built")
+@pytest.mark.skipif(not HAS_PTXAS, reason="the CUDA toolkit (ptxas) is not "
+                    "installed")
+def test_gpu_kernels_are_compiled_once_per_process():
+    """The GPU session compiles, per request, only the kernels no earlier
+    request compiled: compute(), minimizeEnergy, evaluateEnergy and
+    energyDerivatives share them (on the stand-in driver)."""
+    out = run_python(GPU_COMPILES_ONCE % str(REPO / "python" / "tests"),
+                     YASPS_CUDA_LIBRARY=str(FAKE_DRIVER))
+    assert out.split() == ["True", "True", "gpu"], out

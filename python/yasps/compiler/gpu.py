@@ -55,6 +55,13 @@ class GpuKernels:
     stats: Dict[str, object] = field(default_factory=dict)
     #: the IR and pipeline they were compiled from (for params())
     source: Tuple[str, str, str] = ("", "", "")
+    #: for a set gathered from several compilations: the library that holds
+    #: each kernel's binaries, by attribute (empty: all are in this one)
+    libraries: Dict[str, "GpuKernels"] = field(default_factory=dict)
+
+    def library(self, attribute: str) -> "GpuKernels":
+        """The compiled library whose binaries hold ``attribute``'s kernel."""
+        return self.libraries.get(attribute, self)
 
     def kernel(self, attribute: str) -> GpuKernel:
         """The kernel evaluating ``attribute`` (a scene-relative path)."""

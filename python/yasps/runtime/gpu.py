@@ -35,6 +35,8 @@ class GpuSession:
         self.device = self._native.GpuDevice(ordinal)
         self.chip = gpu_status().devices[ordinal][1]
         self._libraries: Dict[Tuple[str, str, str], GpuKernels] = {}
+        #: the compiled library of each kernel, by (IR, pipeline, path)
+        self._library_of: Dict[Tuple[str, str, str], GpuKernels] = {}
         self._modules: Dict[str, object] = {}
         # (kind, path) -> (what the copy was made from, device buffer, and
         # the source object, held so that its id is not reused by another
@@ -47,15 +49,31 @@ class GpuSession:
 
     def kernels(self, ir: str, paths, name: str,
                 pipeline: str = "") -> GpuKernels:
-        """The kernels of ``paths`` (one path or a list, compiled into one
-        module) for this device, compiled once."""
+        """The kernels of ``paths`` (one path or a list) for this device.
+        Each kernel is compiled once per process: a request compiles, in
+        one module, only the kernels no earlier request of the same IR and
+        pipeline compiled, and the set it returns refers to the libraries
+        that hold the others (``GpuKernels.library``)."""
         paths = (paths,) if isinstance(paths, str) else tuple(paths)
         key = (ir, paths, pipeline)
-        if key not in self._libraries:
-            self._libraries[key] = compile_ir(ir, list(paths), name, pipeline,
-                                              chips=(self.chip,),
-                                              keep_ptx=False)
-        return self._libraries[key]
+        if key in self._libraries:
+            return self._libraries[key]
+        missing = [p for p in dict.fromkeys(paths)
+                   if (ir, pipeline, p) not in self._library_of]
+        if missing:
+            library = compile_ir(ir, missing, name, pipeline,
+                                 chips=(self.chip,), keep_ptx=False)
+            for kernel in library.kernels:
+                self._library_of[(ir, pipeline, kernel.attribute)] = library
+            stats = dict(library.stats, from_memory=False)
+        else:
+            stats = {"from_memory": True, "from_disk": False}
+        libraries = {p: self._library_of[(ir, pipeline, p)] for p in paths}
+        gathered = GpuKernels([libraries[p].kernel(p) for p in
+                               dict.fromkeys(paths)], {}, stats,
+                              (ir, pipeline, name), libraries)
+        self._libraries[key] = gathered
+        return gathered
 
     def module(self, kernels: GpuKernels):
         """The loaded module of a library (the cubin or PTX that fits)."""
@@ -109,7 +127,8 @@ class GpuSession:
                buffers: List[object]) -> None:
         """Runs the kernel of ``path`` on ``count`` instances."""
         kernel = kernels.kernel(path)
-        self._native.gpu_launch(self.module(kernels), kernel.name,
+        self._native.gpu_launch(self.module(kernels.library(path)),
+                                kernel.name,
                                 kernel.launch_params, buffers, 0, count,
                                 kernel.threads_per_block)
 
