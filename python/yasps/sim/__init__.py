@@ -10,7 +10,7 @@ from .meshes import (HEX_CORNERS, Cage, box_tet_mesh, cage_grid,
                      cloth_corners, cloth_grid, hex_tets, hinges_of,
                      orient_tets, polyline_segments, read_tet_mesh,
                      signed_tet_volumes, trilinear_weights, zigzag_spring)
-from .newton import ImplicitEuler, NewtonReport, newton
+from .newton import ImplicitEuler, NewtonReport, iteration_totals, newton
 from .output import (RecordedFrame, SurfaceRecorder, render_surfaces,
                      render_surfaces_array, write_video)
 from .run import Body, RunSummary, simulate
@@ -22,5 +22,5 @@ __all__ = ["AffineBody", "Body", "Cage", "FreeVertices", "HEX_CORNERS",
            "SurfaceRecorder", "add_affine_body", "add_affine_inertia",
            "add_cloth", "add_elastic_tets",
            "box_tet_mesh", "cloth_corners", "cloth_grid", "hinges_of",
-           "newton", "orient_tets", "read_tet_mesh", "render_surfaces",
+           "iteration_totals", "newton", "orient_tets", "read_tet_mesh", "render_surfaces",
            "render_surfaces_array", "signed_tet_volumes", "write_video"]

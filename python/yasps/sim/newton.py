@@ -77,6 +77,17 @@ def _check_targets(scene, targets: List[Attribute]) -> None:
                          f"minimisation targets in order ({names})")
 
 
+#: Newton and CG iterations of every newton() call in this process (what a
+#: parameter sweep reports per run, whatever loop the user wrote).
+_totals = {"newton": 0, "cg": 0}
+
+
+def iteration_totals() -> Dict[str, int]:
+    """Newton iterations and CG iterations done by :func:`newton` in this
+    process so far."""
+    return dict(_totals)
+
+
 def newton(scene, x: Targets, tolerance: float,
            step_bound: Optional[Callable[[np.ndarray, np.ndarray], float]] = None,
            max_iterations: int = 20, cg_tolerance: float = 1e-4,
@@ -142,6 +153,7 @@ def newton(scene, x: Targets, tolerance: float,
         report.seconds["assembly"] += spent["indices"] + spent["assembly"]
         report.seconds["pcg"] += spent["solve"]
         report.cgIterations.append(solve["iterations"])
+        _totals["cg"] += int(solve["iterations"])
         current = [t.value for t in targets]
         alpha = 1.0
         if step_bound is not None:
@@ -170,6 +182,7 @@ def newton(scene, x: Targets, tolerance: float,
         report.stepEnergies.append((current_energy, candidate))
         current_energy = candidate
         report.iterations += 1
+        _totals["newton"] += 1
         report.energies.append(current_energy)
         if contact is not None:
             current_energy = adapt()
