@@ -242,3 +242,24 @@ def test_stale_connectivity_into_a_shrunk_dynamic_primitive():
     x.updateValue([[1.0], [2.0]])
     with pytest.raises(SceneError, match="refers to instance 2 .* which now has 2"):
         joined.compute()
+
+
+def test_a_huge_primitive_is_a_yasps_error_before_any_allocation(monkeypatch):
+    """10^9 instances without values: the missing values are reported
+    before the 8 GB output is allocated; 10^12 instances of a value that
+    needs no inputs: the allocation fails as a yasps error naming the
+    attribute and the bytes (not numpy's MemoryError)."""
+    monkeypatch.setattr(yasps.config, "backend", "cpu")
+    s = yasps.scene("huge")
+    p = s.addMesh("m").addPrimitive("p", numInstances=10 ** 9)
+    x = p.addAttribute("x", rows=3)
+    doubled = p.addAttribute("d", computed_attribute=2.0 * x)
+    with pytest.raises(yasps.ValueUpdateError, match="has no values"):
+        doubled.compute()
+    q = s.m.addPrimitive("q", numInstances=10 ** 12)
+    one = q.addAttribute("one", computed_attribute=yasps.constant(
+        np.ones((3, 1))) * 1.0)
+    with pytest.raises(yasps.SceneError,
+                       match=r"@m::@q::@one: 1000000000000 instances of "
+                             r"3x1 doubles need 24,000,000,000,000 bytes"):
+        one.compute()

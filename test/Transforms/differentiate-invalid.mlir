@@ -60,3 +60,24 @@ yasps.scene @s {
   yasps.energy @m::@p::@e
   yasps.minimize [@m::@p::@x]
 }
+
+// -----
+
+// 200 local parameters: the 200x200 Hessian is past the matrix limit, and
+// the pass says so instead of building it.
+yasps.scene @s {
+  yasps.mesh @m {
+    yasps.primitive @p(1) {
+      yasps.data_attr @x : !yasps.mat<1x200xf64>
+      // expected-error @+1 {{needs @e__jac__jac of 200x200 entries per instance, more than the 16384 a yasps matrix may have}}
+      yasps.attr @e : !yasps.mat<1x1xf64> {
+        %x = yasps.read @m::@p::@x : !yasps.mat<1x200xf64>
+        %n = yasps.squared_norm %x : !yasps.mat<1x200xf64>
+        %q = yasps.scale %n, %n : !yasps.mat<1x1xf64>, !yasps.mat<1x1xf64>
+        yasps.yield %q : !yasps.mat<1x1xf64>
+      }
+    }
+  }
+  yasps.energy @m::@p::@e
+  yasps.minimize [@m::@p::@x]
+}

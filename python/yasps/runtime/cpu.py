@@ -9,9 +9,22 @@ import numpy as np
 
 from .. import config
 from ..compiler.cpu import CpuKernels, compile_cpu
+from ..frontend.errors import SceneError
 from ..frontend.values import from_column_major
 from .base import LocalInputs, Shape
 from .inputs import host_input
+
+
+def allocate_output(path: str, count: int, rows: int, cols: int) -> np.ndarray:
+    """The output of ``count`` instances of ``rows x cols`` doubles; a yasps
+    error naming the attribute and the bytes where memory runs out."""
+    try:
+        return np.empty(count * rows * cols, dtype=np.float64)
+    except MemoryError:
+        raise SceneError(
+            f"{path}: {count} instances of {rows}x{cols} doubles need "
+            f"{8 * count * rows * cols:,} bytes, more than this machine can "
+            "allocate") from None
 
 
 def _threads(threads: Optional[int]) -> int:
@@ -39,9 +52,13 @@ class CpuBackend:
     def run(self, kernels: CpuKernels, scene, path: str, count: int,
             threads: Optional[int] = None, reuse: object = None) -> np.ndarray:
         kernel = kernels.kernel(path)
-        out = np.empty(count * kernel.rows * kernel.cols, dtype=np.float64)
-        buffers = [out if a.kind == "out" else host_input(scene, a)
-                   for a in kernel.arguments]
+        # The inputs are checked (values present, indices in bounds) before
+        # the output is allocated.
+        inputs = [None if a.kind == "out" else host_input(scene, a)
+                  for a in kernel.arguments]
+        out = allocate_output(path, count, kernel.rows, kernel.cols)
+        buffers = [out if a.kind == "out" else given
+                   for a, given in zip(kernel.arguments, inputs)]
         kernels.launch(path, count, buffers, _threads(threads))
         return out
 

@@ -22,6 +22,30 @@ yasps.scene @s {
 
 // -----
 
+// Matrix type: more entries than kernels can hold (found by fuzzing: the
+// differentiation then aborted growing a vector of 2^32 entries).
+yasps.scene @s {
+  // expected-error @+1 {{matrix shape 4294967296x1 has more than the 16384 entries a yasps matrix may have}}
+  yasps.const_attr @a : !yasps.mat<4294967296x1xf64>
+}
+
+// -----
+
+// Matrix type: each side within the limit, the product not.
+yasps.scene @s {
+  // expected-error @+1 {{matrix shape 65536x65536 has more than the 16384 entries a yasps matrix may have}}
+  yasps.const_attr @a : !yasps.mat<65536x65536xf64>
+}
+
+// -----
+
+// Matrix type: the largest accepted.
+yasps.scene @s {
+  yasps.const_attr @a : !yasps.mat<128x128xf64>
+}
+
+// -----
+
 // Matrix type: non-float element type.
 yasps.scene @s {
   // expected-error @+1 {{expected f32 or f64 element type, got 'i32'}}

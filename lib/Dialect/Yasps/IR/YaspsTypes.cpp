@@ -43,6 +43,13 @@ LogicalResult MatrixType::verify(function_ref<InFlightDiagnostic()> emitError,
   if (rows < 1 || cols < 1)
     return emitError() << "matrix shape must be at least 1x1, got " << rows
                        << "x" << cols;
+  // rows and cols are each at most kMaxEntries here, so the product cannot
+  // overflow.
+  if (rows > kMaxEntries || cols > kMaxEntries ||
+      rows * cols > kMaxEntries)
+    return emitError() << "matrix shape " << rows << "x" << cols
+                       << " has more than the " << kMaxEntries
+                       << " entries a yasps matrix may have";
   if (!elementType.isF32() && !elementType.isF64())
     return emitError() << "matrix element type must be f32 or f64, got "
                        << elementType;

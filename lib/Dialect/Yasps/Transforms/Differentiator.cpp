@@ -225,6 +225,21 @@ ArrayAttr Differentiator::describe(ArrayRef<ParamGroup> groups) {
   return ArrayAttr::get(ctx, out);
 }
 
+LogicalResult differentiation::checkSize(Operation *at, StringRef name,
+                                        MatrixType type) {
+  // Rows and columns are checked first: the product cannot overflow.
+  if (type.getRows() <= MatrixType::kMaxEntries &&
+      type.getCols() <= MatrixType::kMaxEntries &&
+      type.getNumElements() <= MatrixType::kMaxEntries)
+    return success();
+  return at->emitOpError()
+         << "needs @" << name << " of " << type.getRows() << "x"
+         << type.getCols() << " entries per instance, more than the "
+         << MatrixType::kMaxEntries
+         << " a yasps matrix may have: fewer local parameters (a smaller "
+            "JOIN, narrower UNION members) or a reduced space (paper 5.4)";
+}
+
 FailureOr<AttrOp>
 Differentiator::createAttr(AttrOp next, StringRef name, MatrixType type,
                            Operation *derivedFromOp, ArrayAttr params,
@@ -236,6 +251,8 @@ Differentiator::createAttr(AttrOp next, StringRef name, MatrixType type,
   if (table.lookup(name))
     return next.emitOpError()
            << "cannot add @" << name << ": the name is taken";
+  if (failed(checkSize(next, name, type)))
+    return failure();
   OpBuilder b(next.getContext());
   auto attr = AttrOp::create(b, next.getLoc(), b.getStringAttr(name),
                              TypeAttr::get(type));
@@ -264,6 +281,8 @@ FailureOr<Operation *> Differentiator::unionJacobian(Operation *member,
   MatrixType type = getAttributeType(attr);
   int64_t rc = type.getNumElements();
   MatrixType jacType = type.withShape(rc, width);
+  if (failed(checkSize(attr, jacName, jacType)))
+    return failure();
   OpBuilder detached(member->getContext());
   auto result =
       AttrOp::create(detached, attr->getLoc(), detached.getStringAttr(jacName),

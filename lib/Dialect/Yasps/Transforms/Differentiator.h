@@ -103,6 +103,10 @@ private:
 Value constantMatrix(OpBuilder &b, Location loc, MatrixType type,
                      ArrayRef<double> rowMajor);
 
+/// Fails, with an error at `at`, when a derivative attribute `name` of
+/// `type` would exceed the matrix type's limit (MatrixType::kMaxEntries).
+LogicalResult checkSize(Operation *at, StringRef name, MatrixType type);
+
 /// The zero matrix of `type`.
 Value zeros(OpBuilder &b, Location loc, MatrixType type);
 

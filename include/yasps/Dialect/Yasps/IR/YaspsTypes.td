@@ -17,12 +17,19 @@ def Yasps_MatrixType : TypeDef<Yasps_Dialect, "Matrix"> {
     instance, instances back to back.
 
     Example: `!yasps.mat<3x1xf64>`, `!yasps.mat<12x12xf32>`.
+
+    At most `kMaxEntries` (16384, e.g. 128x128) entries: kernels keep an
+    instance's matrices in registers and on the stack, and the passes
+    unroll them entry by entry (a point-triangle Hessian over caged
+    vertices, 96x96, is the largest the paper's scenes need).
   }];
   let parameters = (ins "int64_t":$rows, "int64_t":$cols,
                         "::mlir::FloatType":$elementType);
   let hasCustomAssemblyFormat = 1;
   let genVerifyDecl = 1;
   let extraClassDeclaration = [{
+    /// The most entries a matrix may have (the verifier's limit).
+    static constexpr int64_t kMaxEntries = 16384;
     /// Number of scalars per instance.
     int64_t getNumElements() const { return getRows() * getCols(); }
     bool isSquare() const { return getRows() == getCols(); }
