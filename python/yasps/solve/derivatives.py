@@ -102,13 +102,16 @@ class _Outputs:
         if tables is not None and spec.separate:
             self.plan = slot_plan(scene, energy, spec.ir, spec.pipeline)
         if self.plan is not None:
-            paths = [p for p in paths if p != spec.path("ij")] + \
+            # The inner gradient replaces __grad, the tables __ij.
+            unused = (spec.path("ij"), spec.path("grad"))
+            paths = [p for p in paths if p not in unused] + \
                 [spec.path("ijac")] + self.plan.kernel_paths
         try:
             self.kernels = backend.compile(spec.ir, paths, scene.name,
                                            spec.pipeline)
             if self.plan is not None:
-                self.plan.check(self.shape("hess_inner_proj")[1])
+                self.plan.check(self.shape("hess_inner_proj")[1],
+                                self.shape("dofs")[1])
         except MissingAttributeError:
             raise NoDerivativesError(f"{energy.describe()} depends on no "
                                      "minimisation target") from None
@@ -147,9 +150,9 @@ class _Outputs:
     def inputs(self) -> LocalInputs:
         """Gradients and projected Hessians (or their factors) as the fused
         kernels compute them."""
-        n = self.shape("grad")[1]
         if self.plan is not None:
-            return self._slot_inputs(n)
+            return self._slot_inputs()
+        n = self.shape("grad")[1]
         gradient = self.run("grad")
         if self.spec.separate:
             m = self.shape("hess_inner_proj")[1]
@@ -174,13 +177,14 @@ class _Outputs:
                 self.backend.to_host(out, (count, kernel.rows, kernel.cols)))
         return self.tables[table.jacobian]
 
-    def _slot_inputs(self, n: int) -> LocalInputs:
+    def _slot_inputs(self) -> LocalInputs:
         """The inner gradients and P, with J in shared tables."""
         plan = self.plan
         # No instances read no table: none is evaluated for them.
         tables = [self._table(t) for t in plan.tables] if self.count else []
         slots = SlotInputs(tables, plan.slots, plan.sources(self.count))
-        return LocalInputs(self.backend, self.count, n, self.run("ijac"),
+        return LocalInputs(self.backend, self.count, plan.num_params,
+                           self.run("ijac"),
                            inner_hessian=self.run("hess_inner_proj"),
                            inner_size=plan.inner_size, slot_factors=slots)
 

@@ -116,14 +116,16 @@ class SlotPlan:
         for param in self._slots:
             self._leaves_of_param(param)
 
-    def check(self, inner_size: int) -> None:
+    def check(self, inner_size: int, num_params: int) -> None:
         """Raises AssertionError unless the slots account for the
-        ``inner_size`` inner variables of the compiled inner Hessian."""
-        if self.inner_size != inner_size:
+        ``inner_size`` inner variables of the compiled inner Hessian and
+        the ``num_params`` local parameters of the DoF map."""
+        if (self.inner_size, self.num_params) != (inner_size, num_params):
             raise AssertionError(
-                f"{self.inner_size} inner variables from the slots of an "
-                f"energy of {self.owner.describe()}, but its inner Hessian "
-                f"has {inner_size}")
+                f"{self.inner_size} inner variables and {self.num_params} "
+                f"parameters from the slots of an energy of "
+                f"{self.owner.describe()}, but its kernels have "
+                f"{inner_size} and {num_params}")
 
     @property
     def kernel_paths(self) -> List[str]:
