@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <stdexcept>
 #include <string>
+#include <tuple>
 
 using namespace yasps::runtime;
 
@@ -164,7 +165,10 @@ static void forInstances(ThreadPool *pool, std::int64_t count, Body body) {
 
 void GlobalSystem::add(std::size_t energy, const double *gradients,
                        const double *hessians, ThreadPool *pool) {
-  auto [part, map] = energyMap(energy);
+  // Named, not structured bindings: lambdas capture them (C++17).
+  Part *part;
+  const EnergyMap *map;
+  std::tie(part, map) = energyMap(energy);
   const std::int64_t n = map->numParams;
   forInstances(pool, map->count,
                [&](auto atomic, std::int64_t begin, std::int64_t end) {
@@ -178,7 +182,10 @@ void GlobalSystem::add(std::size_t energy, const double *gradients,
 void GlobalSystem::addFactored(std::size_t energy, const double *gradients,
                                const double *maps, const double *inner,
                                std::int64_t m, ThreadPool *pool) {
-  auto [part, map] = energyMap(energy);
+  // Named, not structured bindings: lambdas capture them (C++17).
+  Part *part;
+  const EnergyMap *map;
+  std::tie(part, map) = energyMap(energy);
   const std::int64_t n = map->numParams;
   forInstances(
       pool, map->count, [&](auto atomic, std::int64_t begin, std::int64_t end) {
@@ -240,7 +247,10 @@ void GlobalSystem::addSlotFactored(std::size_t energy,
                                    const double *innerHessians,
                                    const SlotFactors &factors,
                                    ThreadPool *pool) {
-  auto [part, map] = energyMap(energy);
+  // Named, not structured bindings: lambdas capture them (C++17).
+  Part *part;
+  const EnergyMap *map;
+  std::tie(part, map) = energyMap(energy);
   const std::int64_t n = map->numParams, m = factors.numInner;
   factors.check(map->count, n);
   requireCovered(*map, factors);

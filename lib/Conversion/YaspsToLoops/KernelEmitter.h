@@ -26,6 +26,12 @@ namespace mlir::yasps {
 /// the evaluation meets stored attributes, connectivities and unions.
 class KernelEmitter {
 public:
+  /// Scalar operations one kernel may emit per instance (or lane group):
+  /// ten times the largest kernel of the tests and the paper's scenes (a
+  /// point-edge barrier Hessian, 107k), and few enough that lowering takes
+  /// seconds (a 1M-operation product: about 5 s), not minutes.
+  static constexpr int64_t kMaxKernelOperations = int64_t(1) << 20;
+
   KernelEmitter(SceneOp scene, SymbolTableCollection &tables, func::FuncOp func,
                 bool symbolicZeros)
       : scene(scene), tables(tables), func(func), symbolicZeros(symbolicZeros) {
@@ -77,11 +83,28 @@ public:
 
   /// Forgets computed values (before emitting the body again elsewhere).
   void resetScopes() {
+    spent = 0;
     scopes.clear();
     scopes.emplace_back();
   }
 
   bool hasSymbolicZeros() const { return symbolicZeros; }
+
+  /// Adds the scalar operations that lowering `op` emits to the kernel's
+  /// total. Past kMaxKernelOperations it fails with an error on `op`: kernels
+  /// are straight-line code per instance, and JOINs evaluate their source
+  /// once per gathered instance, so a small scene (nested JOINs, a chain of
+  /// large products) can ask for more code than any compiler should emit.
+  LogicalResult charge(Operation *op) {
+    spent += scalarCost(op);
+    if (spent <= kMaxKernelOperations)
+      return success();
+    return op->emitOpError()
+           << "makes kernel @" << func.getSymName() << " exceed "
+           << kMaxKernelOperations
+           << " scalar operations per instance (docs/robustness.md: split "
+              "the attribute, or keep large Hessians factored)";
+  }
 
   /// The computed attribute of `owner` that `read` reads, or null when the
   /// read is a leaf (a stored attribute, or another entity's).
@@ -116,6 +139,31 @@ public:
   }
 
 private:
+  /// Scalar operations per instance of lowering `op`, as emitted: a product
+  /// of its multiply-adds, a projection its unrolled LDL^T test and rebuild,
+  /// anything else the larger of its operands' and its result's entries.
+  static int64_t scalarCost(Operation *op) {
+    auto entries = [](Type type) {
+      auto matrix = dyn_cast<MatrixType>(type);
+      return matrix ? matrix.getNumElements() : int64_t(1);
+    };
+    if (auto product = dyn_cast<MatmulOp>(op)) {
+      auto lhs = cast<MatrixType>(product.getLhs().getType());
+      return lhs.getNumElements() *
+             cast<MatrixType>(product.getType()).getCols();
+    }
+    if (isa<ProjectOp>(op)) {
+      int64_t n = cast<MatrixType>(op->getResult(0).getType()).getRows();
+      return n * n * n;
+    }
+    int64_t cost = 0;
+    for (Value operand : op->getOperands())
+      cost += entries(operand.getType());
+    for (Value result : op->getResults())
+      cost = std::max(cost, entries(result.getType()));
+    return std::max<int64_t>(cost, 1);
+  }
+
   Value constIndex(OpBuilder &b, int64_t value) {
     return arith::ConstantIndexOp::create(b, func.getLoc(), value);
   }
@@ -150,6 +198,9 @@ private:
     for (Operation &op : attr.getBodyBlock()) {
       if (auto yield = dyn_cast<YieldOp>(op))
         return values.lookup(yield.getValue());
+      // Leaves too: a gather's loads and index arithmetic are code.
+      if (failed(charge(&op)))
+        return failure();
       FailureOr<ScalarMatrix> result = failure();
       if (isLeaf(op)) {
         result = evaluateLeaf(b, op, owner, index);
@@ -283,6 +334,8 @@ private:
   SymbolTableCollection &tables;
   func::FuncOp func;
   bool symbolicZeros;
+  /// Scalar operations emitted so far (charge).
+  int64_t spent = 0;
   std::map<std::pair<KernelArgKind, Operation *>, Value> buffers;
   SmallVector<Attribute> roles;
   /// Values already computed, per region: an inner region may reuse the

@@ -101,6 +101,8 @@ FailureOr<ScalarMatrix> LaneBatch::evaluateLanes(OpBuilder &b, AttrOp attr) {
       SmallVector<ScalarMatrix> operands;
       for (Value operand : op.getOperands())
         operands.push_back(values.lookup(operand));
+      if (failed(emitter.charge(&op)))
+        return failure();
       result =
           lowerToScalars(b, &op, operands, emitter.hasSymbolicZeros(), lanes);
     }

@@ -305,8 +305,12 @@ std::vector<KernelUnit> splitKernels(ModuleOp kernels,
 llvm::Error jitUnit(KernelUnit &unit, const CpuCompileOptions &options) {
   std::string objectPath = objectPathOf(unit.key, options);
   ExecutionEngineOptions engineOptions;
-  engineOptions.transformer = makeOptimizingTransformer(
-      options.optLevel, /*sizeLevel=*/0, /*targetMachine=*/nullptr);
+  // `transformer` is a function_ref: the function it refers to must outlive
+  // ExecutionEngine::create, which runs it.
+  std::function<llvm::Error(llvm::Module *)> optimize =
+      makeOptimizingTransformer(options.optLevel, /*sizeLevel=*/0,
+                                /*targetMachine=*/nullptr);
+  engineOptions.transformer = optimize;
   engineOptions.jitCodeGenOptLevel =
       static_cast<llvm::CodeGenOptLevel>(std::min(options.optLevel, 3u));
   engineOptions.enableObjectDump = !objectPath.empty();
