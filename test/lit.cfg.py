@@ -46,5 +46,6 @@ llvm_config.use_default_substitutions()
 tool_dirs = [os.path.join(config.yasps_obj_root, "bin"), config.llvm_tools_dir]
 llvm_config.add_tool_substitutions(
     [ToolSubst("yasps-opt", unresolved="fatal"),
-     ToolSubst("mlir-tblgen", unresolved="fatal")],
+     ToolSubst("mlir-tblgen", unresolved="fatal"),
+     ToolSubst("not", unresolved="fatal")],
     tool_dirs)

@@ -3,7 +3,7 @@
 // Treats each input as the text of a module and puts it through what a
 // scene goes through when Python compiles it: parse and verify, the
 // differentiation pipeline (inline reads, canonicalize, cse, differentiate,
-// generate indices), loop kernels for every attribute the scene then has
+// generate indices), loop kernels for each attribute the scene then has
 // (yasps-lower-to-loops, one lane or four), and from there both back ends'
 // lowerings: to the LLVM dialect (CPU) and to outlined gpu.func kernels
 // (GPU). Machine code is not generated: that is LLVM's, not ours, and would
@@ -21,7 +21,9 @@
 //===----------------------------------------------------------------------===//
 
 #include "yasps/Conversion/LoopsToGPU/LoopsToGpuPipeline.h"
+#include "yasps/Conversion/Passes.h"
 #include "yasps/Dialect/Yasps/IR/Yasps.h"
+#include "yasps/Dialect/Yasps/Transforms/Passes.h"
 #include "yasps/Dialect/Yasps/Transforms/Pipelines.h"
 #include "yasps/Target/CPU/CpuCompiler.h"
 #include "yasps/Target/GPU/GpuCompiler.h"
@@ -30,6 +32,7 @@
 #include "mlir/IR/BuiltinOps.h"
 #include "mlir/IR/Diagnostics.h"
 #include "mlir/IR/MLIRContext.h"
+#include "mlir/InitAllPasses.h"
 #include "mlir/Parser/Parser.h"
 #include "mlir/Pass/PassManager.h"
 #include "mlir/Pass/PassRegistry.h"
@@ -49,6 +52,11 @@ namespace {
 /// small input, and nothing an input does outlives its module.
 MLIRContext &fuzzContext() {
   static MLIRContext *context = [] {
+    // The pipelines are named in text, as Python names them.
+    registerAllPasses();
+    registerYaspsPasses();
+    registerYaspsConversionPasses();
+    registerDifferentiatePipeline();
     DialectRegistry registry;
     registerCpuCompilerDialects(registry);
     registerGpuCompilerDialects(registry);
@@ -84,6 +92,9 @@ bool runPipeline(ModuleOp module, StringRef pipeline) {
     return false;
   return succeeded(pm.run(module));
 }
+
+/// Kernel ops one input may generate in all (see fuzzOne).
+constexpr int64_t kMaxOperationsPerInput = int64_t(1) << 20;
 
 /// Deeper bracket nesting than any scene has (a scene, a mesh, a primitive,
 /// an attribute and its expressions nest a dozen levels at most).
@@ -131,20 +142,27 @@ void fuzzOne(StringRef text) {
                                      : "yasps-differentiate-pipeline{hessian-"
                                        "factors=auto}"))
     return;
-  std::vector<std::string> attributes =
-      attributePaths(cast<SceneOp>(module->getBody()->front()));
-  auto kernels = generateLoopKernels(*module, attributes, "", lanes);
-  if (!kernels) {
-    llvm::consumeError(kernels.takeError());
-    return;
+  // One attribute at a time, as Python requests them, until the kernels
+  // made so far hold kMaxOperationsPerInput ops: each kernel is bounded by
+  // yasps-lower-to-loops' own limit, and this bounds an input of many.
+  int64_t operations = 0;
+  for (const std::string &attribute :
+       attributePaths(cast<SceneOp>(module->getBody()->front()))) {
+    if (operations > kMaxOperationsPerInput)
+      break;
+    auto kernels = generateLoopKernels(*module, {attribute}, "", lanes);
+    if (!kernels) {
+      llvm::consumeError(kernels.takeError());
+      continue;
+    }
+    (*kernels)->walk([&](Operation *) { ++operations; });
+    (void)describeKernels(**kernels);
+    OwningOpRef<ModuleOp> gpu(cast<ModuleOp>((*kernels)->clone()));
+    (void)runPipeline(**kernels, getCpuLoweringPipeline());
+    PassManager pm(&context);
+    buildLoopsToGpuKernelsPipeline(pm, kDefaultThreadsPerBlock);
+    (void)pm.run(*gpu);
   }
-  (void)describeKernels(**kernels);
-
-  OwningOpRef<ModuleOp> gpu(cast<ModuleOp>((*kernels)->clone()));
-  (void)runPipeline(**kernels, getCpuLoweringPipeline());
-  PassManager pm(&context);
-  buildLoopsToGpuKernelsPipeline(pm, kDefaultThreadsPerBlock);
-  (void)pm.run(*gpu);
 }
 } // namespace
 

@@ -116,8 +116,10 @@ LogicalResult AttrOp::verify() {
   if (body.empty() || !isa<YieldOp>(body.back()))
     return emitOpError() << describe(*this)
                          << " must end its region with 'yasps.yield'";
+  // An unregistered op (generic syntax, even one named "yasps.") has no
+  // dialect object to ask.
   for (Operation &op : body)
-    if (!isa<YaspsDialect>(op.getDialect()))
+    if (!op.isRegistered() || !isa_and_nonnull<YaspsDialect>(op.getDialect()))
       return op.emitOpError()
              << "is not a yasps expression; " << describe(*this)
              << " may only contain yasps ops";

@@ -28,7 +28,7 @@ struct CountOpsPass
           ++add;
         else if (isa<arith::DivFOp>(op))
           ++div;
-        else if (isa<math::MathDialect>(op->getDialect()))
+        else if (isa_and_nonnull<math::MathDialect>(op->getDialect()))
           ++math;
       });
       Builder b(func.getContext());
