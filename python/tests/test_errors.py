@@ -263,3 +263,90 @@ def test_a_huge_primitive_is_a_yasps_error_before_any_allocation(monkeypatch):
                        match=r"@m::@q::@one: 1000000000000 instances of "
                              r"3x1 doubles need 24,000,000,000,000 bytes"):
         one.compute()
+
+
+def test_counts_past_int64_are_reported_as_given():
+    s = small_scene()
+    for count in (2 ** 63, 2 ** 70, np.uint64(2 ** 64 - 1), -1):
+        unchanged(s, lambda: s.bunny.addPrimitive("p", numInstances=count),
+                  SceneError, "numInstances must be an integer in [0, 2^63-1]",
+                  repr(count))
+    pp = s.bunny.addPrimitive("pp", numInstances=0, isDynamic=True)
+    with pytest.raises(SceneError, match=r"got 9223372036854775808$"):
+        pp.updateNumInstances(2 ** 63)
+    assert pp.numInstances == 0
+
+
+def test_list_indices_past_int64_are_reported_as_given():
+    """numpy reads [[0, 2**63]] as floats and [[0, 2**70]] as objects: the
+    index is still reported as the integer it is, for addConnectivity and
+    updateConnectivity alike."""
+    s = small_scene()
+    m = s.bunny
+    pp = m.addPrimitive("pp", numInstances=1, isDynamic=True)
+    conn = pp.addConnectivity("c", m.vertices, [[0, 1]], 2)
+    for index in (2 ** 63, 2 ** 70, -2 ** 70):
+        with pytest.raises(SceneError, match=rf"index {index} \(instance 0, "
+                                             r"slot 1\) is out of range"):
+            conn.updateConnectivity([[0, index]])
+        unchanged(s, lambda: pp.addConnectivity("d", m.vertices,
+                                                [[0, index]], 2),
+                  SceneError, f"index {index} (instance 0, slot 1)")
+    assert conn.indices.tolist() == [[0, 1]]
+    with pytest.raises(SceneError, match="indices must be integers"):
+        conn.updateConnectivity([[0, 1.0]])
+
+
+def test_a_connectivity_into_more_instances_than_int32_indices_reach():
+    s = small_scene()
+    big = s.other.addPrimitive("big", numInstances=2 ** 31)
+    unchanged(s, lambda: s.bunny.tets.addConnectivity("c", big, [[0]] * 6, 1),
+              SceneError, "the target has 2147483648 instances; connectivity "
+              "indices are int32")
+
+
+def test_values_given_as_large_python_ints():
+    s = small_scene()
+    x = s.bunny.vertices["position"]
+    x.updateValue([[2 ** 70, 0, 0]] * 8)
+    assert x.value[0, 0, 0] == float(2 ** 70)
+    unchanged(s, lambda: x.updateValue([[10 ** 400, 0, 0]] * 8),
+              ValueUpdateError, "an integer is too large")
+
+
+def test_matrix_entries_are_limited_as_in_the_verifier():
+    s = small_scene()
+    unchanged(s, lambda: s.bunny.vertices.addAttribute("h", rows=129,
+                                                       cols=128),
+              ShapeError, "129x128 has 16512 entries; a matrix has at most "
+              "16384")
+    s.bunny.vertices.addConstant("h", rows=128, cols=128)
+    assert "!yasps.mat<128x128xf64>" in s.ir()  # the verifier accepts it
+
+
+def test_fixed_masks_must_be_boolean_and_one_per_target():
+    from yasps.sim import ImplicitEuler
+
+    s = small_scene()
+    v = s.bunny.vertices
+    x = v["position"]
+    x_hat = v.addConstant("x_hat", rows=3)
+    x_hat.updateValue(x.value)
+    s.addEnergy(v.addAttribute("inertia", computed_attribute=(
+        x - x_hat).squaredNorm()))
+    s.addMinimizeTarget([x])
+    half = np.full(8, 0.5)
+    with pytest.raises(SceneError, match="must be boolean .* got dtype "
+                                         "float64"):
+        s.minimizeEnergy(fixed=[half])
+    with pytest.raises(SceneError, match="must be boolean"):
+        ImplicitEuler(s, targets=[x], predicted=[x_hat], dt=0.01,
+                      gravity=[None], fixed=[half])
+    with pytest.raises(SceneError, match="one fixed mask"):
+        ImplicitEuler(s, targets=[x], predicted=[x_hat], dt=0.01,
+                      gravity=[None], fixed=[None, None])
+    with pytest.raises(SceneError, match="fixed has 2 entries"):
+        s.minimizeEnergy(fixed=[None, None])
+    # 0/1 integers are a mask.
+    (dx,) = s.minimizeEnergy(fixed=[(np.arange(8) < 2).astype(np.int64)])
+    assert (dx[:2] == 0).all()

@@ -352,3 +352,43 @@ def test_gpu_kernels_are_compiled_once_per_process():
     out = run_python(GPU_COMPILES_ONCE % str(REPO / "python" / "tests"),
                      YASPS_CUDA_LIBRARY=str(FAKE_DRIVER))
     assert out.split() == ["True", "True", "gpu"], out
+
+
+@pytest.mark.skipif(not FAKE_DRIVER.exists(),
+                    reason=f"the stand-in driver {FAKE_DRIVER} is not built")
+@pytest.mark.skipif(not HAS_PTXAS, reason="the CUDA toolkit (ptxas) is not "
+                    "installed")
+def test_huge_outputs_on_the_gpu_are_yasps_errors_after_the_input_checks():
+    """As on the CPU: 10^9 instances without values are reported as missing
+    values before any device memory is allocated, and an output the device
+    cannot hold (the stand-in refuses more than 1 GiB) is a SceneError naming
+    the attribute and the bytes, with the driver's reason."""
+    out = run_python("""
+        import ctypes, os
+        import numpy as np, yasps
+        fake = ctypes.CDLL(os.environ["YASPS_CUDA_LIBRARY"])
+        assert yasps.backend() == "gpu", yasps.gpu_status()
+        s = yasps.scene("huge")
+        m = s.addMesh("m")
+        p = m.addPrimitive("p", numInstances=10 ** 9)
+        x = p.addAttribute("x", rows=3)
+        doubled = p.addAttribute("d", computed_attribute=2.0 * x)
+        before = fake.fakeCudaAllocations()
+        try:
+            doubled.compute()
+        except yasps.ValueUpdateError as err:
+            print("missing", "has no values" in str(err),
+                  fake.fakeCudaAllocations() == before)
+        q = m.addPrimitive("q", numInstances=10 ** 8)
+        one = q.addAttribute("one", computed_attribute=yasps.constant(
+            np.ones((3, 1))) * 1.0)
+        try:
+            one.compute()
+        except yasps.SceneError as err:
+            print(str(err).split(" on the GPU: ")[0])
+            print("out of GPU memory" in str(err))
+    """, YASPS_CUDA_LIBRARY=str(FAKE_DRIVER))
+    assert out.splitlines() == [
+        "missing True True",
+        "@m::@q::@one: 100000000 instances of 3x1 doubles need "
+        "2,400,000,000 bytes", "True"]

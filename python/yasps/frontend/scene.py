@@ -22,6 +22,7 @@ from typing import Any, Dict, List, Optional, Sequence, Union
 import numpy as np
 
 from . import values as _values
+from .values import MAX_MATRIX_ENTRIES, as_count
 from .attribute import PROJECTION_METHODS, Attribute
 from .errors import LineageError, SceneError, ShapeError
 from .services import services
@@ -135,6 +136,10 @@ class Entity:
             if not isinstance(n, (int, np.integer)) or isinstance(n, bool) or n < 1:
                 raise ShapeError(f"attribute {name!r} on {self.describe()}: "
                                  f"{what} must be a positive integer, got {n!r}")
+        if rows * cols > MAX_MATRIX_ENTRIES:
+            raise ShapeError(f"attribute {name!r} on {self.describe()}: "
+                             f"{rows}x{cols} has {rows * cols} entries; a "
+                             f"matrix has at most {MAX_MATRIX_ENTRIES}")
         return self._register(Attribute(owner=self, rows=rows, cols=cols,
                                         kind=kind, name=name))
 
@@ -396,11 +401,8 @@ class Mesh(Entity):
         """Adds a primitive type with ``numInstances`` instances. A dynamic
         primitive (collision pairs) may change its count at run time."""
         self._check_new_symbol(name, "primitive")
-        if (not isinstance(numInstances, (int, np.integer))
-                or isinstance(numInstances, bool) or numInstances < 0):
-            raise SceneError(f"addPrimitive({name!r}): numInstances must be a "
-                             f"non-negative integer, got {numInstances!r}")
-        primitive = Primitive(name, self, int(numInstances), bool(isDynamic))
+        count = as_count(numInstances, f"addPrimitive({name!r}): numInstances")
+        primitive = Primitive(name, self, count, bool(isDynamic))
         self._symbols[name] = primitive
         self._children[name] = primitive
         return primitive
@@ -465,10 +467,7 @@ class Primitive(Entity):
         if not self._dynamic:
             raise SceneError(f"updateNumInstances: {self.describe()} is not "
                              "dynamic (create it with isDynamic=True)")
-        if not isinstance(n, (int, np.integer)) or isinstance(n, bool) or n < 0:
-            raise SceneError(f"updateNumInstances: expected a non-negative "
-                             f"integer, got {n!r}")
-        self._count = int(n)
+        self._count = as_count(n, f"updateNumInstances of {self.describe()}")
         for attr in self._attributes.values():
             attr._invalidate_values()
         for conn in self._connectivities.values():

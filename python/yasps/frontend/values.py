@@ -15,6 +15,33 @@ import numpy as np
 from .errors import SceneError, ValueUpdateError
 
 
+#: The most entries one instance's matrix may have: the verifier's limit
+#: (``MatrixType::kMaxEntries``, docs/robustness.md).
+MAX_MATRIX_ENTRIES = 16384
+
+#: The most instances a primitive may have: counts are int64 in the IR and
+#: the runtime.
+MAX_INSTANCES = 2 ** 63 - 1
+
+#: The most instances a connectivity can address: its indices are int32.
+MAX_CONNECTIVITY_TARGET = 2 ** 31 - 1
+
+
+def as_count(value: Any, what: str) -> int:
+    """``value`` as an instance count: an integer (not a bool) in
+    [0, MAX_INSTANCES], else a SceneError that starts with ``what``."""
+    if (not isinstance(value, (int, np.integer)) or isinstance(value, bool)
+            or not 0 <= int(value) <= MAX_INSTANCES):
+        raise SceneError(f"{what} must be an integer in [0, 2^63-1], got "
+                         f"{value!r}")
+    return int(value)
+
+
+def _is_real_number(x: Any) -> bool:
+    return (isinstance(x, (int, float, np.integer, np.floating))
+            and not isinstance(x, (bool, np.bool_)))
+
+
 def _as_array(values: Any, what: str) -> np.ndarray:
     try:
         array = np.asarray(values)
@@ -33,6 +60,13 @@ def to_column_major(values: Any, count: int, rows: int, cols: int,
     flat ``N*r*c`` (read as ``(N, r, c)`` in C order), and ``(r, c)`` for N=1.
     """
     array = _as_array(values, what)
+    # Python ints past int64 (2**70) make an object array of real numbers.
+    if array.dtype == object and all(map(_is_real_number, array.flat)):
+        try:
+            array = array.astype(np.float64)
+        except OverflowError:
+            raise ValueUpdateError(f"{what}: values must be finite doubles; "
+                                   "an integer is too large") from None
     if array.dtype == object or not (np.issubdtype(array.dtype, np.floating)
                                      or np.issubdtype(array.dtype, np.integer)):
         raise ValueUpdateError(
@@ -69,10 +103,23 @@ def to_indices(indices: Any, count: int, arity: int, bound: int,
                what: str) -> np.ndarray:
     """Validates connectivity indices for ``count`` instances of arity
     ``arity`` into a target with ``bound`` instances; returns flat int32."""
+    if bound > MAX_CONNECTIVITY_TARGET:
+        raise SceneError(f"{what}: the target has {bound} instances; "
+                         f"connectivity indices are int32, so at most "
+                         f"{MAX_CONNECTIVITY_TARGET}")
     array = _as_array(indices, what)
+    # A list holding an index past int64 (or one past int64 beside small
+    # ones) reads as objects or floats: keep Python's exact ints instead, so
+    # that the range check below reports the index as given.
+    exact = False
+    if not isinstance(indices, np.ndarray) and array.dtype.kind in "Of":
+        ints = np.array(indices, dtype=object)
+        exact = ints.size > 0 and all(
+            isinstance(i, int) and not isinstance(i, bool) for i in ints.flat)
+        array = ints if exact else array
     if array.size == 0:
         array = array.reshape(0, arity).astype(np.int64)
-    if not np.issubdtype(array.dtype, np.integer):
+    if not (exact or np.issubdtype(array.dtype, np.integer)):
         raise SceneError(f"{what}: indices must be integers, got dtype "
                          f"{array.dtype}")
     if array.shape not in ((count, arity), (count * arity,)):
@@ -90,3 +137,4 @@ def to_indices(indices: Any, count: int, arity: int, bound: int,
             f"{what}: index {int(given[i])} (instance {i // arity}, slot "
             f"{i % arity}) is out of range: the target has {bound} instances")
     return given.astype(np.int32)
+

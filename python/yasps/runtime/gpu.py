@@ -19,6 +19,7 @@ import numpy as np
 
 from .. import config
 from ..compiler.gpu import GpuKernels, compile_ir
+from ..frontend.errors import SceneError
 from ..frontend.values import from_column_major
 from .backend import gpu_status
 from .base import LocalInputs, Shape
@@ -46,6 +47,8 @@ class GpuSession:
         self.uploads: List[Tuple[str, str]] = []
         # Reused outputs (see output()), by key.
         self._outputs: Dict[object, object] = {}
+        #: what the driver raises (an allocation that fails, a bad launch)
+        self.driver_error = self._native.CudaError
 
     def kernels(self, ir: str, paths, name: str,
                 pipeline: str = "") -> GpuKernels:
@@ -179,13 +182,21 @@ class GpuBackend:
         gpu = session()
         kernel = kernels.kernel(path)
         size = count * kernel.rows * kernel.cols
-        out = gpu.output(reuse, size) if reuse is not None else \
-            gpu.allocate(size)
+        # Inputs first: a primitive without values is reported as such, not
+        # as the output it would have filled.
+        inputs = [None if a.kind == "out" else host_input(scene, a)
+                  for a in kernel.arguments]
+        try:
+            out = gpu.output(reuse, size) if reuse is not None else \
+                gpu.allocate(size)
+        except gpu.driver_error as err:
+            raise SceneError(
+                f"{path}: {count} instances of {kernel.rows}x{kernel.cols} "
+                f"doubles need {8 * size:,} bytes on the GPU: {err}") from None
         before = len(gpu.uploads)
         buffers = [out if a.kind == "out" else
-                   gpu.copy_of(a.kind, a.path, source_of(scene, a),
-                               host_input(scene, a))
-                   for a in kernel.arguments]
+                   gpu.copy_of(a.kind, a.path, source_of(scene, a), host)
+                   for a, host in zip(kernel.arguments, inputs)]
         gpu.launch(kernels, path, count, buffers)
         self.last_uploads = gpu.uploads[before:]
         return out

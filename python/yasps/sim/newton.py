@@ -18,6 +18,7 @@ from tqdm import tqdm
 from ..frontend.attribute import Attribute
 from ..frontend.errors import SceneError
 from ..solve import SolverError
+from ..solve.minimize import checked_fixed_mask
 
 Targets = Union[Attribute, Sequence[Attribute]]
 
@@ -243,8 +244,12 @@ class ImplicitEuler:
                         for g in gravities]
         masks = [fixed] if single else (list(fixed) if fixed is not None
                                         else [None] * len(self.targets))
-        self.fixed = [None if m is None else np.asarray(m, dtype=bool)
-                      for m in masks]
+        if len(masks) != len(self.targets):
+            raise SceneError("ImplicitEuler: give one fixed mask (or None) "
+                             "per target")
+        self.fixed = [None if m is None else
+                      checked_fixed_mask(t, m, "ImplicitEuler")
+                      for t, m in zip(self.targets, masks)]
         self.velocity_tolerance = velocity_tolerance
         self.step_bound, self.contact = step_bound, contact
         self.max_iterations, self.cg_tolerance = max_iterations, cg_tolerance

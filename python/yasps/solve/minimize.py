@@ -8,7 +8,7 @@ from typing import Dict, List, Optional
 
 import numpy as np
 
-from ..frontend.errors import YaspsError
+from ..frontend.errors import SceneError, YaspsError
 from ..runtime import Backend
 from .assembly import DofLayout, assemble
 
@@ -23,28 +23,44 @@ class SolverError(YaspsError, RuntimeError):
         self.info = info
 
 
+def checked_fixed_mask(target, mask, where: str) -> np.ndarray:
+    """``mask`` as the boolean fixed mask of ``target``: of its instances
+    (N,) or of its entries (N, rows, cols), boolean or 0/1 integers; else a
+    SceneError that starts with ``where``."""
+    n, r, c = target.owner.numInstances, target.rows, target.cols
+    given = np.asarray(mask)
+    # A float mask (weights, 0.5) is a mistake, not a choice of DoFs.
+    if given.dtype != bool and not (np.issubdtype(given.dtype, np.integer)
+                                    and np.isin(given, (0, 1)).all()):
+        raise SceneError(f"{where}: the fixed mask of {target.describe()} "
+                         f"must be boolean (or 0/1 integers), got dtype "
+                         f"{given.dtype}")
+    if given.shape not in ((n,), (n, r, c)):
+        raise SceneError(
+            f"{where}: the fixed mask of {target.describe()} has shape "
+            f"{given.shape}; expected ({n},) or ({n}, {r}, {c})")
+    return given.astype(bool)
+
+
 def fixed_dof_mask(layout: DofLayout, fixed) -> Optional[np.ndarray]:
     """The per-DoF uint8 mask of ``fixed``: one entry per target (in
-    ``addMinimizeTarget``'s order), each None, a boolean mask of its
-    instances (N,) or of its entries (N, rows, cols)."""
+    ``addMinimizeTarget``'s order), each None or a mask that
+    checked_fixed_mask accepts."""
     if fixed is None:
         return None
     if len(fixed) != len(layout.targets):
-        raise ValueError(f"minimizeEnergy: fixed has {len(fixed)} entries but "
-                         f"there are {len(layout.targets)} targets")
+        raise SceneError(f"minimizeEnergy: fixed has {len(fixed)} entries but "
+                         f"there are {len(layout.targets)} targets (one mask "
+                         f"or None per target, in addMinimizeTarget's order)")
     parts = []
     for target, mask in zip(layout.targets, fixed):
         n, r, c = target.owner.numInstances, target.rows, target.cols
         if mask is None:
             parts.append(np.zeros(n * r * c, dtype=np.uint8))
             continue
-        mask = np.asarray(mask, dtype=bool)
+        mask = checked_fixed_mask(target, mask, "minimizeEnergy")
         if mask.shape == (n,):
             mask = np.broadcast_to(mask[:, None, None], (n, r, c))
-        if mask.shape != (n, r, c):
-            raise ValueError(
-                f"minimizeEnergy: the fixed mask of {target.describe()} has "
-                f"shape {mask.shape}; expected ({n},) or ({n}, {r}, {c})")
         # DoFs are column-major within an instance.
         parts.append(np.transpose(mask, (0, 2, 1)).reshape(-1).astype(np.uint8))
     return np.ascontiguousarray(np.concatenate(parts)) if parts else None
