@@ -3,14 +3,14 @@
 # build's fuzz target (scripts/sanitize.sh), seeds a corpus from the lit
 # tests and the examples' scenes (scripts/fuzz_seeds.py), and runs libFuzzer
 # on it. A crash, sanitizer report, leak or input past TIMEOUT seconds
-# (default 60) stops the run with a non-zero status and leaves the input in
+# (default 120) stops the run with a non-zero status and leaves the input in
 # $FUZZ_DIR/findings/ (default build-sanitize/fuzz/): make it a lit test
 # under test/Regression/. Figures of the run go to $FUZZ_DIR/summary.txt.
 set -euo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
 build=${SANITIZE_DIR:-$root/build-sanitize}
 seconds=${1:-120}
-timeout=${TIMEOUT:-60}
+timeout=${TIMEOUT:-120}
 work=${FUZZ_DIR:-$build/fuzz}
 
 bash "$root/scripts/sanitize.sh" --build-only
