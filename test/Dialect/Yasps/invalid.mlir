@@ -1843,3 +1843,540 @@ yasps.scene @s {
   }
   yasps.minimize [@m::@v::@x]
 }
+
+// -----
+
+// Primitive union: past the 256 members a kernel decodes.
+yasps.scene @s {
+  yasps.mesh @m {
+    yasps.primitive @p0(1) {
+    }
+    yasps.primitive @p1(1) {
+    }
+    yasps.primitive @p2(1) {
+    }
+    yasps.primitive @p3(1) {
+    }
+    yasps.primitive @p4(1) {
+    }
+    yasps.primitive @p5(1) {
+    }
+    yasps.primitive @p6(1) {
+    }
+    yasps.primitive @p7(1) {
+    }
+    yasps.primitive @p8(1) {
+    }
+    yasps.primitive @p9(1) {
+    }
+    yasps.primitive @p10(1) {
+    }
+    yasps.primitive @p11(1) {
+    }
+    yasps.primitive @p12(1) {
+    }
+    yasps.primitive @p13(1) {
+    }
+    yasps.primitive @p14(1) {
+    }
+    yasps.primitive @p15(1) {
+    }
+    yasps.primitive @p16(1) {
+    }
+    yasps.primitive @p17(1) {
+    }
+    yasps.primitive @p18(1) {
+    }
+    yasps.primitive @p19(1) {
+    }
+    yasps.primitive @p20(1) {
+    }
+    yasps.primitive @p21(1) {
+    }
+    yasps.primitive @p22(1) {
+    }
+    yasps.primitive @p23(1) {
+    }
+    yasps.primitive @p24(1) {
+    }
+    yasps.primitive @p25(1) {
+    }
+    yasps.primitive @p26(1) {
+    }
+    yasps.primitive @p27(1) {
+    }
+    yasps.primitive @p28(1) {
+    }
+    yasps.primitive @p29(1) {
+    }
+    yasps.primitive @p30(1) {
+    }
+    yasps.primitive @p31(1) {
+    }
+    yasps.primitive @p32(1) {
+    }
+    yasps.primitive @p33(1) {
+    }
+    yasps.primitive @p34(1) {
+    }
+    yasps.primitive @p35(1) {
+    }
+    yasps.primitive @p36(1) {
+    }
+    yasps.primitive @p37(1) {
+    }
+    yasps.primitive @p38(1) {
+    }
+    yasps.primitive @p39(1) {
+    }
+    yasps.primitive @p40(1) {
+    }
+    yasps.primitive @p41(1) {
+    }
+    yasps.primitive @p42(1) {
+    }
+    yasps.primitive @p43(1) {
+    }
+    yasps.primitive @p44(1) {
+    }
+    yasps.primitive @p45(1) {
+    }
+    yasps.primitive @p46(1) {
+    }
+    yasps.primitive @p47(1) {
+    }
+    yasps.primitive @p48(1) {
+    }
+    yasps.primitive @p49(1) {
+    }
+    yasps.primitive @p50(1) {
+    }
+    yasps.primitive @p51(1) {
+    }
+    yasps.primitive @p52(1) {
+    }
+    yasps.primitive @p53(1) {
+    }
+    yasps.primitive @p54(1) {
+    }
+    yasps.primitive @p55(1) {
+    }
+    yasps.primitive @p56(1) {
+    }
+    yasps.primitive @p57(1) {
+    }
+    yasps.primitive @p58(1) {
+    }
+    yasps.primitive @p59(1) {
+    }
+    yasps.primitive @p60(1) {
+    }
+    yasps.primitive @p61(1) {
+    }
+    yasps.primitive @p62(1) {
+    }
+    yasps.primitive @p63(1) {
+    }
+    yasps.primitive @p64(1) {
+    }
+    yasps.primitive @p65(1) {
+    }
+    yasps.primitive @p66(1) {
+    }
+    yasps.primitive @p67(1) {
+    }
+    yasps.primitive @p68(1) {
+    }
+    yasps.primitive @p69(1) {
+    }
+    yasps.primitive @p70(1) {
+    }
+    yasps.primitive @p71(1) {
+    }
+    yasps.primitive @p72(1) {
+    }
+    yasps.primitive @p73(1) {
+    }
+    yasps.primitive @p74(1) {
+    }
+    yasps.primitive @p75(1) {
+    }
+    yasps.primitive @p76(1) {
+    }
+    yasps.primitive @p77(1) {
+    }
+    yasps.primitive @p78(1) {
+    }
+    yasps.primitive @p79(1) {
+    }
+    yasps.primitive @p80(1) {
+    }
+    yasps.primitive @p81(1) {
+    }
+    yasps.primitive @p82(1) {
+    }
+    yasps.primitive @p83(1) {
+    }
+    yasps.primitive @p84(1) {
+    }
+    yasps.primitive @p85(1) {
+    }
+    yasps.primitive @p86(1) {
+    }
+    yasps.primitive @p87(1) {
+    }
+    yasps.primitive @p88(1) {
+    }
+    yasps.primitive @p89(1) {
+    }
+    yasps.primitive @p90(1) {
+    }
+    yasps.primitive @p91(1) {
+    }
+    yasps.primitive @p92(1) {
+    }
+    yasps.primitive @p93(1) {
+    }
+    yasps.primitive @p94(1) {
+    }
+    yasps.primitive @p95(1) {
+    }
+    yasps.primitive @p96(1) {
+    }
+    yasps.primitive @p97(1) {
+    }
+    yasps.primitive @p98(1) {
+    }
+    yasps.primitive @p99(1) {
+    }
+    yasps.primitive @p100(1) {
+    }
+    yasps.primitive @p101(1) {
+    }
+    yasps.primitive @p102(1) {
+    }
+    yasps.primitive @p103(1) {
+    }
+    yasps.primitive @p104(1) {
+    }
+    yasps.primitive @p105(1) {
+    }
+    yasps.primitive @p106(1) {
+    }
+    yasps.primitive @p107(1) {
+    }
+    yasps.primitive @p108(1) {
+    }
+    yasps.primitive @p109(1) {
+    }
+    yasps.primitive @p110(1) {
+    }
+    yasps.primitive @p111(1) {
+    }
+    yasps.primitive @p112(1) {
+    }
+    yasps.primitive @p113(1) {
+    }
+    yasps.primitive @p114(1) {
+    }
+    yasps.primitive @p115(1) {
+    }
+    yasps.primitive @p116(1) {
+    }
+    yasps.primitive @p117(1) {
+    }
+    yasps.primitive @p118(1) {
+    }
+    yasps.primitive @p119(1) {
+    }
+    yasps.primitive @p120(1) {
+    }
+    yasps.primitive @p121(1) {
+    }
+    yasps.primitive @p122(1) {
+    }
+    yasps.primitive @p123(1) {
+    }
+    yasps.primitive @p124(1) {
+    }
+    yasps.primitive @p125(1) {
+    }
+    yasps.primitive @p126(1) {
+    }
+    yasps.primitive @p127(1) {
+    }
+    yasps.primitive @p128(1) {
+    }
+    yasps.primitive @p129(1) {
+    }
+    yasps.primitive @p130(1) {
+    }
+    yasps.primitive @p131(1) {
+    }
+    yasps.primitive @p132(1) {
+    }
+    yasps.primitive @p133(1) {
+    }
+    yasps.primitive @p134(1) {
+    }
+    yasps.primitive @p135(1) {
+    }
+    yasps.primitive @p136(1) {
+    }
+    yasps.primitive @p137(1) {
+    }
+    yasps.primitive @p138(1) {
+    }
+    yasps.primitive @p139(1) {
+    }
+    yasps.primitive @p140(1) {
+    }
+    yasps.primitive @p141(1) {
+    }
+    yasps.primitive @p142(1) {
+    }
+    yasps.primitive @p143(1) {
+    }
+    yasps.primitive @p144(1) {
+    }
+    yasps.primitive @p145(1) {
+    }
+    yasps.primitive @p146(1) {
+    }
+    yasps.primitive @p147(1) {
+    }
+    yasps.primitive @p148(1) {
+    }
+    yasps.primitive @p149(1) {
+    }
+    yasps.primitive @p150(1) {
+    }
+    yasps.primitive @p151(1) {
+    }
+    yasps.primitive @p152(1) {
+    }
+    yasps.primitive @p153(1) {
+    }
+    yasps.primitive @p154(1) {
+    }
+    yasps.primitive @p155(1) {
+    }
+    yasps.primitive @p156(1) {
+    }
+    yasps.primitive @p157(1) {
+    }
+    yasps.primitive @p158(1) {
+    }
+    yasps.primitive @p159(1) {
+    }
+    yasps.primitive @p160(1) {
+    }
+    yasps.primitive @p161(1) {
+    }
+    yasps.primitive @p162(1) {
+    }
+    yasps.primitive @p163(1) {
+    }
+    yasps.primitive @p164(1) {
+    }
+    yasps.primitive @p165(1) {
+    }
+    yasps.primitive @p166(1) {
+    }
+    yasps.primitive @p167(1) {
+    }
+    yasps.primitive @p168(1) {
+    }
+    yasps.primitive @p169(1) {
+    }
+    yasps.primitive @p170(1) {
+    }
+    yasps.primitive @p171(1) {
+    }
+    yasps.primitive @p172(1) {
+    }
+    yasps.primitive @p173(1) {
+    }
+    yasps.primitive @p174(1) {
+    }
+    yasps.primitive @p175(1) {
+    }
+    yasps.primitive @p176(1) {
+    }
+    yasps.primitive @p177(1) {
+    }
+    yasps.primitive @p178(1) {
+    }
+    yasps.primitive @p179(1) {
+    }
+    yasps.primitive @p180(1) {
+    }
+    yasps.primitive @p181(1) {
+    }
+    yasps.primitive @p182(1) {
+    }
+    yasps.primitive @p183(1) {
+    }
+    yasps.primitive @p184(1) {
+    }
+    yasps.primitive @p185(1) {
+    }
+    yasps.primitive @p186(1) {
+    }
+    yasps.primitive @p187(1) {
+    }
+    yasps.primitive @p188(1) {
+    }
+    yasps.primitive @p189(1) {
+    }
+    yasps.primitive @p190(1) {
+    }
+    yasps.primitive @p191(1) {
+    }
+    yasps.primitive @p192(1) {
+    }
+    yasps.primitive @p193(1) {
+    }
+    yasps.primitive @p194(1) {
+    }
+    yasps.primitive @p195(1) {
+    }
+    yasps.primitive @p196(1) {
+    }
+    yasps.primitive @p197(1) {
+    }
+    yasps.primitive @p198(1) {
+    }
+    yasps.primitive @p199(1) {
+    }
+    yasps.primitive @p200(1) {
+    }
+    yasps.primitive @p201(1) {
+    }
+    yasps.primitive @p202(1) {
+    }
+    yasps.primitive @p203(1) {
+    }
+    yasps.primitive @p204(1) {
+    }
+    yasps.primitive @p205(1) {
+    }
+    yasps.primitive @p206(1) {
+    }
+    yasps.primitive @p207(1) {
+    }
+    yasps.primitive @p208(1) {
+    }
+    yasps.primitive @p209(1) {
+    }
+    yasps.primitive @p210(1) {
+    }
+    yasps.primitive @p211(1) {
+    }
+    yasps.primitive @p212(1) {
+    }
+    yasps.primitive @p213(1) {
+    }
+    yasps.primitive @p214(1) {
+    }
+    yasps.primitive @p215(1) {
+    }
+    yasps.primitive @p216(1) {
+    }
+    yasps.primitive @p217(1) {
+    }
+    yasps.primitive @p218(1) {
+    }
+    yasps.primitive @p219(1) {
+    }
+    yasps.primitive @p220(1) {
+    }
+    yasps.primitive @p221(1) {
+    }
+    yasps.primitive @p222(1) {
+    }
+    yasps.primitive @p223(1) {
+    }
+    yasps.primitive @p224(1) {
+    }
+    yasps.primitive @p225(1) {
+    }
+    yasps.primitive @p226(1) {
+    }
+    yasps.primitive @p227(1) {
+    }
+    yasps.primitive @p228(1) {
+    }
+    yasps.primitive @p229(1) {
+    }
+    yasps.primitive @p230(1) {
+    }
+    yasps.primitive @p231(1) {
+    }
+    yasps.primitive @p232(1) {
+    }
+    yasps.primitive @p233(1) {
+    }
+    yasps.primitive @p234(1) {
+    }
+    yasps.primitive @p235(1) {
+    }
+    yasps.primitive @p236(1) {
+    }
+    yasps.primitive @p237(1) {
+    }
+    yasps.primitive @p238(1) {
+    }
+    yasps.primitive @p239(1) {
+    }
+    yasps.primitive @p240(1) {
+    }
+    yasps.primitive @p241(1) {
+    }
+    yasps.primitive @p242(1) {
+    }
+    yasps.primitive @p243(1) {
+    }
+    yasps.primitive @p244(1) {
+    }
+    yasps.primitive @p245(1) {
+    }
+    yasps.primitive @p246(1) {
+    }
+    yasps.primitive @p247(1) {
+    }
+    yasps.primitive @p248(1) {
+    }
+    yasps.primitive @p249(1) {
+    }
+    yasps.primitive @p250(1) {
+    }
+    yasps.primitive @p251(1) {
+    }
+    yasps.primitive @p252(1) {
+    }
+    yasps.primitive @p253(1) {
+    }
+    yasps.primitive @p254(1) {
+    }
+    yasps.primitive @p255(1) {
+    }
+    yasps.primitive @p256(1) {
+    }
+    // expected-error @+1 {{primitive union @m::@u has 257 members; a union has at most 256}}
+    yasps.primitive_union @u [@m::@p0, @m::@p1, @m::@p2, @m::@p3, @m::@p4, @m::@p5, @m::@p6, @m::@p7, @m::@p8, @m::@p9, @m::@p10, @m::@p11, @m::@p12, @m::@p13, @m::@p14, @m::@p15, @m::@p16, @m::@p17, @m::@p18, @m::@p19, @m::@p20, @m::@p21, @m::@p22, @m::@p23, @m::@p24, @m::@p25, @m::@p26, @m::@p27, @m::@p28, @m::@p29, @m::@p30, @m::@p31, @m::@p32, @m::@p33, @m::@p34, @m::@p35, @m::@p36, @m::@p37, @m::@p38, @m::@p39, @m::@p40, @m::@p41, @m::@p42, @m::@p43, @m::@p44, @m::@p45, @m::@p46, @m::@p47, @m::@p48, @m::@p49, @m::@p50, @m::@p51, @m::@p52, @m::@p53, @m::@p54, @m::@p55, @m::@p56, @m::@p57, @m::@p58, @m::@p59, @m::@p60, @m::@p61, @m::@p62, @m::@p63, @m::@p64, @m::@p65, @m::@p66, @m::@p67, @m::@p68, @m::@p69, @m::@p70, @m::@p71, @m::@p72, @m::@p73, @m::@p74, @m::@p75, @m::@p76, @m::@p77, @m::@p78, @m::@p79, @m::@p80, @m::@p81, @m::@p82, @m::@p83, @m::@p84, @m::@p85, @m::@p86, @m::@p87, @m::@p88, @m::@p89, @m::@p90, @m::@p91, @m::@p92, @m::@p93, @m::@p94, @m::@p95, @m::@p96, @m::@p97, @m::@p98, @m::@p99, @m::@p100, @m::@p101, @m::@p102, @m::@p103, @m::@p104, @m::@p105, @m::@p106, @m::@p107, @m::@p108, @m::@p109, @m::@p110, @m::@p111, @m::@p112, @m::@p113, @m::@p114, @m::@p115, @m::@p116, @m::@p117, @m::@p118, @m::@p119, @m::@p120, @m::@p121, @m::@p122, @m::@p123, @m::@p124, @m::@p125, @m::@p126, @m::@p127, @m::@p128, @m::@p129, @m::@p130, @m::@p131, @m::@p132, @m::@p133, @m::@p134, @m::@p135, @m::@p136, @m::@p137, @m::@p138, @m::@p139, @m::@p140, @m::@p141, @m::@p142, @m::@p143, @m::@p144, @m::@p145, @m::@p146, @m::@p147, @m::@p148, @m::@p149, @m::@p150, @m::@p151, @m::@p152, @m::@p153, @m::@p154, @m::@p155, @m::@p156, @m::@p157, @m::@p158, @m::@p159, @m::@p160, @m::@p161, @m::@p162, @m::@p163, @m::@p164, @m::@p165, @m::@p166, @m::@p167, @m::@p168, @m::@p169, @m::@p170, @m::@p171, @m::@p172, @m::@p173, @m::@p174, @m::@p175, @m::@p176, @m::@p177, @m::@p178, @m::@p179, @m::@p180, @m::@p181, @m::@p182, @m::@p183, @m::@p184, @m::@p185, @m::@p186, @m::@p187, @m::@p188, @m::@p189, @m::@p190, @m::@p191, @m::@p192, @m::@p193, @m::@p194, @m::@p195, @m::@p196, @m::@p197, @m::@p198, @m::@p199, @m::@p200, @m::@p201, @m::@p202, @m::@p203, @m::@p204, @m::@p205, @m::@p206, @m::@p207, @m::@p208, @m::@p209, @m::@p210, @m::@p211, @m::@p212, @m::@p213, @m::@p214, @m::@p215, @m::@p216, @m::@p217, @m::@p218, @m::@p219, @m::@p220, @m::@p221, @m::@p222, @m::@p223, @m::@p224, @m::@p225, @m::@p226, @m::@p227, @m::@p228, @m::@p229, @m::@p230, @m::@p231, @m::@p232, @m::@p233, @m::@p234, @m::@p235, @m::@p236, @m::@p237, @m::@p238, @m::@p239, @m::@p240, @m::@p241, @m::@p242, @m::@p243, @m::@p244, @m::@p245, @m::@p246, @m::@p247, @m::@p248, @m::@p249, @m::@p250, @m::@p251, @m::@p252, @m::@p253, @m::@p254, @m::@p255, @m::@p256] {
+    }
+  }
+}
+
+// -----
+
+// Connectivity: an arity past what a JOIN through it could gather.
+yasps.scene @s {
+  yasps.mesh @m {
+    yasps.primitive @p(1) {
+      // expected-error @+1 {{'arity' failed to satisfy constraint}}
+      yasps.connectivity @c -> @m::@p arity 16385
+    }
+  }
+}

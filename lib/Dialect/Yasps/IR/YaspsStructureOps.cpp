@@ -41,6 +41,9 @@ SmallVector<Operation *> PrimitiveUnionOp::getMemberOps() {
 LogicalResult PrimitiveUnionOp::verify() {
   if (getMembers().empty())
     return emitOpError() << describe(*this) << " must have at least one member";
+  if (static_cast<int64_t>(getMembers().size()) > kMaxMembers)
+    return emitOpError() << describe(*this) << " has " << getMembers().size()
+                         << " members; a union has at most " << kMaxMembers;
   llvm::SmallDenseSet<Attribute> seen;
   for (Attribute member : getMembers()) {
     if (!seen.insert(member).second)

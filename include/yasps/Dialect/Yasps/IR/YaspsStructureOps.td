@@ -122,7 +122,9 @@ def Yasps_PrimitiveUnionOp : Yasps_EntityOp<"primitive_union", [
     other meshes) it unifies. Its instances are the tagged pairs (member,
     instance) of the paper's section 4.6.2, numbered member after member.
     Attributes of a union are usually `yasps.union` reads of the same-named
-    attribute of every member.
+    attribute of every member. A union has at most `kMaxMembers` (256)
+    members: kernels decode a union index by comparing it with each member's
+    first instance, and the paper's scenes need four.
 
     ```mlir
     yasps.primitive_union @vertices [@soft::@vertices, @affine::@vertices] {
@@ -147,6 +149,8 @@ def Yasps_PrimitiveUnionOp : Yasps_EntityOp<"primitive_union", [
     /// The member entities (primitives or unions), in declaration order.
     /// Empty entries stand for members that do not resolve.
     ::llvm::SmallVector<::mlir::Operation *> getMemberOps();
+    /// The most members a union may have (the verifier's limit).
+    static constexpr int64_t kMaxMembers = 256;
   }];
   let hasVerifier = 1;
 }
@@ -160,6 +164,8 @@ def Yasps_ConnectivityOp : Yasps_Op<"connectivity", [
     primitive or primitive union B maps every instance of A to a `k`-tuple of
     instances of B (paper section 4.4). The indices themselves are run-time
     data (an int32 array of N*k entries); the IR records only the shape.
+    The arity is at most 16384: a JOIN through it gathers `k` values into
+    one matrix, which has at most that many entries.
 
     ```mlir
     yasps.primitive @tets(4000) {
@@ -168,7 +174,8 @@ def Yasps_ConnectivityOp : Yasps_Op<"connectivity", [
     ```
   }];
   let arguments = (ins SymbolNameAttr:$sym_name, SymbolRefAttr:$target,
-                       ConfinedAttr<I64Attr, [IntPositive]>:$arity);
+                       ConfinedAttr<I64Attr, [IntPositive,
+                                              IntMaxValue<16384>]>:$arity);
   let assemblyFormat = "$sym_name `->` $target `arity` $arity attr-dict";
 }
 
