@@ -1,9 +1,14 @@
 #!/usr/bin/env bash
 # The test command: installs what is missing, builds, and runs every test
-# (lit/FileCheck compiler tests, runtime unit tests, Python tests).
+# (lit/FileCheck compiler tests, runtime unit tests, Python tests), then the
+# robustness checks: the same lit and unit tests in the sanitizer build
+# (ASan + UBSan), the Python tests of inputs and values on its extensions,
+# and a bounded fuzz run (docs/robustness.md). FUZZ_SECONDS (default 120)
+# bounds the fuzz run; 0 skips it.
 set -euo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
 build=${BUILD_DIR:-$root/build}
+sanitize=${SANITIZE_DIR:-$root/build-sanitize}
 
 bash "$root/scripts/setup.sh"
 bash "$root/scripts/build.sh"
@@ -13,3 +18,20 @@ cmake --build "$build" --target check-yasps
 
 echo "== pytest: Python package"
 YASPS_BUILD_DIR="$build" python3 -m pytest -q "$root/python/tests"
+
+bash "$root/scripts/sanitize.sh"
+
+echo "== pytest under the sanitizers: inputs, values and errors"
+# The extensions of the sanitizer build need the ASan runtime loaded first;
+# allocator_may_return_null lets a refused huge allocation reach numpy as
+# MemoryError, as without ASan (test_errors checks what yasps makes of it).
+YASPS_BUILD_DIR="$sanitize" YASPS_CACHE_DIR=off \
+  LD_PRELOAD="$("${LLVM_PREFIX:-/usr/lib/llvm-22}/bin/clang" -print-file-name=libclang_rt.asan-x86_64.so)" \
+  ASAN_OPTIONS=allow_user_poisoning=0:detect_leaks=0:allocator_may_return_null=1:halt_on_error=1 \
+  UBSAN_OPTIONS=halt_on_error=1:print_stacktrace=1 \
+  python3 -m pytest -q -p no:cacheprovider "$root/python/tests/test_errors.py" \
+  "$root/python/tests/test_values.py" "$root/python/tests/test_compute.py"
+
+if [ "${FUZZ_SECONDS:-120}" != 0 ]; then
+  bash "$root/scripts/fuzz.sh" "${FUZZ_SECONDS:-120}"
+fi

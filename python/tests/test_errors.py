@@ -350,3 +350,16 @@ def test_fixed_masks_must_be_boolean_and_one_per_target():
     # 0/1 integers are a mask.
     (dx,) = s.minimizeEnergy(fixed=[(np.arange(8) < 2).astype(np.int64)])
     assert (dx[:2] == 0).all()
+
+
+def test_a_kernel_past_the_operation_limit_is_an_ir_error():
+    """A 128x128 product is 2M multiply-adds of straight-line code per
+    instance: refused when compiled, naming the op, before it is emitted."""
+    s = yasps.scene("big")
+    p = s.addMesh("m").addPrimitive("p", numInstances=1)
+    a = p.addAttribute("a", rows=128, cols=128)
+    a.updateValue(np.zeros((1, 128, 128)))
+    y = p.addAttribute("y", computed_attribute=a @ a)
+    with pytest.raises(yasps.IRError, match=r"'yasps.matmul' op makes kernel "
+                       r"\S+ exceed 524288 scalar operations per instance"):
+        y.compute()
