@@ -34,10 +34,10 @@ grep -E "^stat::|^Done|^#[0-9]+.*DONE" "$work/log.txt" >"$work/summary.txt" || t
 # Slow units (past 10 s, under the time limit) are kept but are no finding.
 findings=$(find "$work/findings" -name 'crash-*' -o -name 'leak-*' \
   -o -name 'timeout-*' -o -name 'oom-*' | wc -l)
-echo "fuzz: $(grep -Eo 'number_of_executed_units: [0-9]+' "$work/summary.txt" \
+echo "fuzz: $(grep -Eo 'number_of_executed_units:[[:space:]]*[0-9]+' "$work/summary.txt" \
   | grep -Eo '[0-9]+$') runs in ${seconds} s, corpus $(ls "$work/corpus" | wc -l)" \
   "inputs, findings: ${findings}, slowest input" \
-  "$(grep -Eo 'slowest_unit_time_sec: [0-9]+' "$work/summary.txt" | grep -Eo '[0-9]+$') s" \
+  "$(grep -Eo 'slowest_unit_time_sec:[[:space:]]*[0-9]+' "$work/summary.txt" | grep -Eo '[0-9]+$') s" \
   | tee -a "$work/summary.txt"
 if [ $status -ne 0 ]; then
   echo "fuzz: yasps-fuzz stopped with status $status; the end of its log:" >&2
