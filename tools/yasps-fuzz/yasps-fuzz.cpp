@@ -22,6 +22,7 @@
 
 #include "yasps/Conversion/LoopsToGPU/LoopsToGpuPipeline.h"
 #include "yasps/Conversion/Passes.h"
+#include "yasps/Conversion/YaspsToLoops/ScalarLowering.h"
 #include "yasps/Dialect/Yasps/IR/Yasps.h"
 #include "yasps/Dialect/Yasps/Transforms/Passes.h"
 #include "yasps/Dialect/Yasps/Transforms/Pipelines.h"
@@ -72,15 +73,7 @@ MLIRContext &fuzzContext() {
 std::vector<std::string> attributePaths(SceneOp scene) {
   std::vector<std::string> paths;
   scene.walk([&](AttrOp attr) {
-    SmallVector<StringRef> names;
-    for (Operation *op = attr; op && op != scene; op = op->getParentOp())
-      if (auto name =
-              op->getAttrOfType<StringAttr>(SymbolTable::getSymbolAttrName()))
-        names.push_back(name.getValue());
-    std::string path;
-    for (StringRef name : llvm::reverse(names))
-      path += (path.empty() ? "@" : "::@") + name.str();
-    paths.push_back(std::move(path));
+    llvm::raw_string_ostream(paths.emplace_back()) << getScenePath(attr);
   });
   return paths;
 }
@@ -93,10 +86,8 @@ bool runPipeline(ModuleOp module, StringRef pipeline) {
   return succeeded(pm.run(module));
 }
 
-/// Kernel ops one input may generate in all (see fuzzOne), and what a
-/// kernel that failed is charged (yasps-lower-to-loops' per-kernel limit).
-constexpr int64_t kMaxOperationsPerInput = int64_t(1) << 20;
-constexpr int64_t kMaxFailedKernelOperations = int64_t(1) << 19;
+/// Kernel ops one input may generate in all (see fuzzOne).
+constexpr int64_t kMaxOperationsPerInput = 2 * kMaxKernelOperations;
 
 /// Deeper bracket nesting than any scene has (a scene, a mesh, a primitive,
 /// an attribute and its expressions nest a dozen levels at most).
@@ -156,7 +147,7 @@ void fuzzOne(StringRef text) {
     if (!kernels) {
       // It may have failed at the kernel limit, after emitting that much:
       // charged as if it had (the error's kind is not asked of its text).
-      operations += kMaxFailedKernelOperations;
+      operations += kMaxKernelOperations;
       llvm::consumeError(kernels.takeError());
       continue;
     }

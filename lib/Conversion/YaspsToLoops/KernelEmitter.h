@@ -26,12 +26,6 @@ namespace mlir::yasps {
 /// the evaluation meets stored attributes, connectivities and unions.
 class KernelEmitter {
 public:
-  /// Scalar operations one kernel may emit per instance (or lane group):
-  /// five times the largest kernel of the tests and the paper's scenes (a
-  /// point-edge barrier Hessian, 107k), and few enough that lowering takes
-  /// seconds, not minutes (a 1M-operation product took 5 s).
-  static constexpr int64_t kMaxKernelOperations = int64_t(1) << 19;
-
   KernelEmitter(SceneOp scene, SymbolTableCollection &tables, func::FuncOp func,
                 bool symbolicZeros)
       : scene(scene), tables(tables), func(func), symbolicZeros(symbolicZeros) {

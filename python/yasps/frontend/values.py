@@ -137,4 +137,3 @@ def to_indices(indices: Any, count: int, arity: int, bound: int,
             f"{what}: index {int(given[i])} (instance {i // arity}, slot "
             f"{i % arity}) is out of range: the target has {bound} instances")
     return given.astype(np.int32)
-

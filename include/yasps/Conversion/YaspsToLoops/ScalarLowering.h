@@ -20,6 +20,13 @@
 
 namespace mlir::yasps {
 
+/// Scalar operations one kernel may emit per instance (or lane group):
+/// five times the largest kernel of the tests and the paper's scenes (a
+/// point-edge barrier Hessian, 107k), and few enough that lowering takes
+/// seconds, not minutes (a 1M-operation product took 5 s). Past it,
+/// yasps-lower-to-loops stops with an error on the op that crossed it.
+inline constexpr int64_t kMaxKernelOperations = int64_t(1) << 19;
+
 /// A per-instance matrix held as SSA scalars in column-major order.
 struct ScalarMatrix {
   int64_t rows = 0;
