@@ -149,8 +149,8 @@ def newton_kit(kit: Path) -> None:
     np.save(kit / "layout.npy", DofLayout(scene.minimizeTargets).block_offsets)
     system, _ = assemble(scene, cpu_backend())
     solution = np.zeros(system.size)
-    _, _, converged = system.solve(solution, NEWTON_TOLERANCE, 10000, 0, None)
-    assert converged, "the CPU's Newton direction did not converge"
+    report = system.solve(solution, NEWTON_TOLERANCE, 10000, 0, None)
+    assert report.converged, "the CPU's Newton direction did not converge"
     np.save(kit / "solution.npy", solution)
     write_kit(kit, scene, kernels, energies + [
         "layout layout.npy", f"solution solution.npy {NEWTON_TOLERANCE}"])

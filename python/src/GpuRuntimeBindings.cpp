@@ -320,7 +320,7 @@ struct PyGpuSystem {
                                   std::to_string(gpu->size()));
   }
 
-  nb::tuple solve(DoubleArray out, double tolerance, std::int64_t maxIterations,
+  PcgResult solve(DoubleArray out, double tolerance, std::int64_t maxIterations,
                   std::optional<MaskArray> fixed, int checkEvery) {
     checkSize(out);
     PcgOptions options;
@@ -340,8 +340,7 @@ struct PyGpuSystem {
       result = gpu->solve(solution.pointer(), options, checkEvery);
       solution.download(out.data(), out.size() * sizeof(double));
     }
-    return nb::make_tuple(result.iterations, result.relativeResidual,
-                          result.converged);
+    return result;
   }
 
   void multiply(DoubleArray x, DoubleArray y) {
@@ -435,8 +434,7 @@ void yasps::python::bindGpuSystem(nb::module_ &m, HostSystemOf hostSystemOf) {
       .def("solve", &PyGpuSystem::solve, nb::arg("out"), nb::arg("tolerance"),
            nb::arg("max_iterations"), nb::arg("fixed").none() = nb::none(),
            nb::arg("check_every") = 8,
-           "Solves H x = g into `out` on the device; returns (iterations, "
-           "relative residual, converged)")
+           "Solves H x = g into `out` on the device; returns a PcgReport")
       .def("multiply", &PyGpuSystem::multiply, nb::arg("x"), nb::arg("y"),
            "y = H x on the device")
       .def("gradient", &PyGpuSystem::gradient, nb::arg("out"),

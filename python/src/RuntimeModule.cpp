@@ -7,6 +7,7 @@
 //===----------------------------------------------------------------------===//
 
 #include "GpuRuntimeBindings.h"
+#include "PcgBindings.h"
 #include "ThreadPools.h"
 
 #include "yasps/Runtime/GlobalSystem.h"
@@ -147,12 +148,15 @@ public:
   using MaskArray =
       nb::ndarray<uint8_t, nb::ndim<1>, nb::c_contig, nb::device::cpu>;
 
-  nb::tuple solve(DoubleArray out, double tolerance, int64_t maxIterations,
-                  unsigned threads, std::optional<MaskArray> fixed) const {
+  ::yasps::runtime::PcgResult
+  solve(DoubleArray out, double tolerance, int64_t maxIterations,
+        unsigned threads, std::optional<MaskArray> fixed,
+        ::yasps::runtime::PcgStopping stopping) const {
     check(out, size_t(size()));
     ::yasps::runtime::PcgOptions options;
     options.relativeTolerance = tolerance;
     options.maxIterations = maxIterations;
+    options.stopping = stopping;
     std::vector<uint8_t> mask;
     if (fixed) {
       mask.assign(fixed->data(), fixed->data() + fixed->shape(0));
@@ -164,8 +168,7 @@ public:
       result =
           system->solve(out.data(), options, ::yasps::python::poolFor(threads));
     }
-    return nb::make_tuple(result.iterations, result.relativeResidual,
-                          result.converged);
+    return result;
   }
 
   /// Scalar entries of the Hessian (both triangles, both parts; an entry
@@ -321,6 +324,7 @@ NB_MODULE(_yasps_runtime, m) {
   m.doc() = "Bindings over the yasps runtime: the Newton system, local "
             "Hessian compression and the CUDA backend (no compiler).";
 
+  ::yasps::python::bindPcg(m);
   ::yasps::python::bindGpuRuntime(m);
   nb::class_<PySystem>(m, "GlobalSystem",
                        "The block-sparse Newton system of a scene.")
@@ -363,9 +367,9 @@ NB_MODULE(_yasps_runtime, m) {
       .def("solve", &PySystem::solve, nb::arg("out"), nb::arg("tolerance"),
            nb::arg("max_iterations"), nb::arg("threads") = 0,
            nb::arg("fixed") = nb::none(),
+           nb::arg("stopping") = ::yasps::runtime::PcgStopping::Residual,
            "PCG on H x = g into out; `fixed` (uint8 per DoF) excludes DoFs, "
-           "whose solution is 0; returns (iterations, relative residual, "
-           "converged)");
+           "whose solution is 0; returns a PcgReport");
   ::yasps::python::bindGpuSystem(
       m, [](nb::handle system) -> const ::yasps::runtime::GlobalSystem & {
         return nb::cast<const PySystem &>(system).runtime();

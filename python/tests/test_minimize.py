@@ -173,9 +173,11 @@ def test_mixed_soft_affine_system_and_changing_pairs():
 
 def test_non_convergence_is_reported():
     s = soft_box()
-    with pytest.raises(yasps.SolverError, match="PCG stopped after 1 iterations") as err:
+    with pytest.raises(yasps.SolverError,
+                       match="iteration limit, after 1 iterations") as err:
         s.minimizeEnergy(tolerance=1e-14, maxIterations=1)
     assert not err.value.info["converged"]
+    assert err.value.info["stop"] == "max_iterations"
     assert err.value.solution[0].shape == s.m.v["x"].value.shape
 
 

@@ -5,8 +5,10 @@
 #include "yasps/Runtime/GpuSolverKernels.h"
 
 #include <algorithm>
+#include <cmath>
 #include <limits>
 #include <stdexcept>
+#include <vector>
 
 using namespace yasps::runtime;
 using namespace yasps::runtime::gpu;
@@ -324,9 +326,31 @@ void GpuSystem::multiply(cu::DevicePtr x, cu::DevicePtr y) {
   addProducts(as<const double>(x), as<double>(y), nullptr);
 }
 
+double GpuSystem::recomputedResidual(cu::DevicePtr x,
+                                     const unsigned char *mask) {
+  multiply(x, q.pointer());
+  const std::size_t n = static_cast<std::size_t>(numDofs);
+  std::vector<double> product(n), b(n);
+  q.download(product.data(), n * sizeof(double));
+  gradientValues.download(b.data(), n * sizeof(double));
+  std::vector<unsigned char> fixedHost;
+  if (mask) {
+    fixedHost.resize(n);
+    fixed.download(fixedHost.data(), n);
+  }
+  double sum = 0.0;
+  for (std::size_t i = 0; i < n; ++i)
+    if (fixedHost.empty() || !fixedHost[i])
+      sum += (b[i] - product[i]) * (b[i] - product[i]);
+  return std::sqrt(sum);
+}
+
 PcgResult GpuSystem::solve(cu::DevicePtr x, const PcgOptions &options,
                            int checkEvery) {
   checkPcgOptions(options, numDofs);
+  if (options.stopping != PcgStopping::Residual)
+    throw std::invalid_argument("the GPU solve stops on the residual only; "
+                                "the energy-norm rule is the CPU's");
   if (checkEvery < 1)
     throw std::invalid_argument("GpuSystem::solve: checkEvery must be >= 1");
   const unsigned char *mask = nullptr;
@@ -349,9 +373,24 @@ PcgResult GpuSystem::solve(cu::DevicePtr x, const PcgOptions &options,
     state.download(&now, sizeof(now));
     return now;
   };
-  auto finish = [](const PcgState &now) {
-    return PcgResult{now.iterations, now.residual,
-                     now.stopped == kPcgConverged};
+  auto finish = [&](const PcgState &now) {
+    PcgResult out;
+    out.iterations = now.iterations;
+    out.relativeResidual = now.residual;
+    out.stop = now.stopped == kPcgConverged       ? PcgStop::Converged
+               : now.stopped == kPcgMaxIterations ? PcgStop::MaxIterations
+               : now.stopped == kPcgBreakdown     ? PcgStop::Breakdown
+                                                  : PcgStop::NonFinite;
+    if (std::isfinite(now.residual) && now.bNorm > 0.0) {
+      // Judged, as on the CPU, by the residual recomputed from x; the GPU
+      // solve does not restart from it, it reports.
+      out.relativeResidual = recomputedResidual(x, mask) / now.bNorm;
+      if (out.stop == PcgStop::Converged &&
+          !(out.relativeResidual <= options.relativeTolerance))
+        out.stop = PcgStop::RoundOff;
+    }
+    out.converged = out.stop == PcgStop::Converged;
+    return out;
   };
 
   // r = b (free DoFs), x = 0, ||b||; non-finite input stops at once.

@@ -4,6 +4,7 @@
 
 #include "yasps/Runtime/BlockInverse.h"
 #include "yasps/Runtime/BlockSparseMatrix.h"
+#include "yasps/Runtime/Lanczos.h"
 #include "yasps/Runtime/ThreadPool.h"
 
 #include <algorithm>
@@ -44,6 +45,7 @@ public:
       start_[r + 1] =
           start_[r] +
           static_cast<std::size_t>(layout_.blockSize(r) * layout_.blockSize(r));
+    measureDiagonal(fixed);
     pool.parallelFor(0, layout_.numBlocks(), kBlocksPerChunk,
                      [&](std::int64_t begin, std::int64_t end) {
                        std::vector<long long> freeDofs;
@@ -71,7 +73,31 @@ public:
                      });
   }
 
+  /// The largest over the smallest diagonal entry of H on the free DoFs
+  /// (inf if one is <= 0, NaN if there is none).
+  double diagonalRatio() const { return diagonalRatio_; }
+
 private:
+  /// Sets diagonalRatio_ from the diagonal blocks (before they are inverted).
+  void measureDiagonal(const std::uint8_t *fixed) {
+    double smallest = std::numeric_limits<double>::infinity(), largest = 0.0;
+    bool any = false;
+    for (std::int64_t b = 0; b < layout_.numBlocks(); ++b) {
+      std::int64_t s = layout_.blockSize(b), o = layout_.blockOffset[b];
+      for (std::int64_t i = 0; i < s; ++i) {
+        if (fixed && fixed[o + i])
+          continue;
+        double d = inverse_[start_[b] + static_cast<std::size_t>(i * s + i)];
+        any = true;
+        smallest = std::min(smallest, d);
+        largest = std::max(largest, d);
+      }
+    }
+    diagonalRatio_ = !any             ? std::numeric_limits<double>::quiet_NaN()
+                     : smallest > 0.0 ? largest / smallest
+                                      : std::numeric_limits<double>::infinity();
+  }
+
   /// Replaces diagonal block `r` (in inverse_) by its preconditioner.
   void invertBlock(std::int64_t r, const std::uint8_t *fixed,
                    std::vector<long long> &freeDofs, std::vector<double> &a,
@@ -88,6 +114,7 @@ private:
   const BlockLayout &layout_;
   std::vector<double> inverse_;
   std::vector<std::size_t> start_;
+  double diagonalRatio_ = std::numeric_limits<double>::quiet_NaN();
 };
 } // namespace
 
@@ -153,6 +180,10 @@ void yasps::runtime::checkPcgOptions(const PcgOptions &options,
   if (options.maxIterations < 0)
     throw std::invalid_argument("PCG needs maxIterations >= 0, got " +
                                 std::to_string(options.maxIterations));
+  if (options.stopping == PcgStopping::EnergyNorm && options.energyDelay < 1)
+    throw std::invalid_argument("PCG's energy-norm estimate needs a delay >= "
+                                "1 iteration, got " +
+                                std::to_string(options.energyDelay));
   if (!(options.relativeTolerance >= 0.0))
     throw std::invalid_argument("PCG needs a relative tolerance >= 0, got " +
                                 std::to_string(options.relativeTolerance));
@@ -162,6 +193,181 @@ PcgResult yasps::runtime::solvePcg(const BlockSparseMatrix &H, const double *b,
                                    double *x, const PcgOptions &options,
                                    ThreadPool &pool) {
   return solvePcg(HessianParts{&H}, b, x, options, pool);
+}
+
+const char *yasps::runtime::stopName(PcgStop stop) {
+  switch (stop) {
+  case PcgStop::Converged:
+    return "converged";
+  case PcgStop::MaxIterations:
+    return "max-iterations";
+  case PcgStop::Breakdown:
+    return "breakdown";
+  case PcgStop::NonFinite:
+    return "non-finite";
+  case PcgStop::RoundOff:
+    return "round-off";
+  }
+  return "unknown";
+}
+
+namespace {
+/// The state of one PCG solve: its vectors, the coefficients that the
+/// energy-norm estimate and the condition estimate read, and the stop.
+class PcgSolve {
+public:
+  PcgSolve(const HessianParts &parts, const double *b, double *x,
+           const PcgOptions &options, ThreadPool &pool)
+      : parts_(parts), b_(b), x_(x), options_(options), pool_(pool),
+        n_(parts.front()->size()),
+        fixed_(options.fixedDofs ? options.fixedDofs->data() : nullptr) {}
+
+  PcgResult run();
+
+private:
+  /// Zeroes the fixed DoFs of v.
+  void maskFixed(double *v) const {
+    if (fixed_)
+      for (std::int64_t i = 0; i < n_; ++i)
+        if (fixed_[i])
+          v[i] = 0.0;
+  }
+  double dot(const double *a, const double *c) {
+    return ::dot(a, c, n_, partial_, pool_);
+  }
+  /// r = b - H x on the free DoFs; returns ||r||.
+  double recomputeResidual(std::vector<double> &r) {
+    multiplySum(parts_, x_, r.data(), partProduct_, pool_);
+    for (std::int64_t i = 0; i < n_; ++i)
+      r[i] = b_[i] - r[i];
+    maskFixed(r.data());
+    return std::sqrt(dot(r.data(), r.data()));
+  }
+  /// Whether the energy-norm estimate meets the tolerance now (and records
+  /// it in the result).
+  bool energyConverged() {
+    const std::int64_t d = std::max<std::int64_t>(1, options_.energyDelay);
+    const std::int64_t k = static_cast<std::int64_t>(terms_.size());
+    if (k < d)
+      return false;
+    double ahead = 0.0;
+    for (std::int64_t j = k - d; j < k; ++j)
+      ahead += terms_[j];
+    // ||x_k||_H^2 = sum of the terms so far, in exact arithmetic.
+    double ratio = ahead / std::max(termSum_, 1e-300);
+    result_.energyError = std::sqrt(ratio);
+    return result_.energyError <= options_.relativeTolerance;
+  }
+  PcgResult finish(PcgStop stop, double relativeResidual) {
+    result_.stop = stop;
+    result_.converged = stop == PcgStop::Converged;
+    result_.relativeResidual = relativeResidual;
+    result_.conditionEstimate = ritzConditionNumber(alphas_, betas_);
+    return result_;
+  }
+
+  const HessianParts &parts_;
+  const double *b_;
+  double *x_;
+  const PcgOptions &options_;
+  ThreadPool &pool_;
+  const std::int64_t n_;
+  const std::uint8_t *fixed_;
+  std::vector<double> partial_, partProduct_;
+  /// alpha_j r_j.z_j per iteration: the energy-norm estimate's terms.
+  std::vector<double> terms_;
+  double termSum_ = 0.0;
+  /// CG's coefficients up to the first restart (the Lanczos matrix).
+  std::vector<double> alphas_, betas_;
+  bool restarted_ = false;
+  PcgResult result_;
+};
+} // namespace
+
+PcgResult PcgSolve::run() {
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  const std::size_t un = static_cast<std::size_t>(n_);
+  std::fill(x_, x_ + n_, 0.0);
+  std::vector<double> r(b_, b_ + n_);
+  maskFixed(r.data());
+  // Checked up front: a NaN in H might otherwise sit where the iterates are
+  // zero and go unnoticed, or be hidden by the preconditioner's fallback.
+  if (!allFinite(r.data(), un))
+    return finish(PcgStop::NonFinite, nan);
+  for (const BlockSparseMatrix *part : parts_)
+    if (!allFinite(part->values().data(), part->values().size()))
+      return finish(PcgStop::NonFinite, nan);
+
+  const double bNorm = std::sqrt(dot(r.data(), r.data()));
+  BlockJacobi preconditioner(parts_, fixed_, pool_);
+  result_.diagonalRatio = preconditioner.diagonalRatio();
+  if (bNorm == 0.0)
+    return finish(PcgStop::Converged, 0.0);
+
+  std::vector<double> z(un), p(un), q(un), trueResidual(un);
+  double rz = 0.0;
+  auto restart = [&] {
+    preconditioner.apply(r.data(), z.data(), pool_);
+    p = z;
+    rz = dot(r.data(), z.data());
+  };
+  restart();
+  double rNorm = bNorm;
+  double lastTrueNorm = std::numeric_limits<double>::infinity();
+  const double threshold = options_.relativeTolerance * bNorm;
+  const bool energyRule = options_.stopping == PcgStopping::EnergyNorm;
+  while (true) {
+    if (!std::isfinite(rNorm))
+      return finish(PcgStop::NonFinite, nan);
+    bool small = energyRule ? energyConverged() : rNorm <= threshold;
+    if (small || result_.iterations == options_.maxIterations) {
+      // The updated residual drifts from b - H x in round-off: judge the
+      // iterate by the recomputed one.
+      double trueNorm = recomputeResidual(trueResidual);
+      if (!std::isfinite(trueNorm))
+        return finish(PcgStop::NonFinite, nan);
+      if (!small)
+        return finish(PcgStop::MaxIterations, trueNorm / bNorm);
+      if (energyRule || trueNorm <= threshold)
+        return finish(PcgStop::Converged, trueNorm / bNorm);
+      // Restarting from the recomputed residual recovers the drift once;
+      // if it did not help, the tolerance is below round-off.
+      if (result_.residualReplacements >= 2 && trueNorm > 0.5 * lastTrueNorm)
+        return finish(PcgStop::RoundOff, trueNorm / bNorm);
+      lastTrueNorm = trueNorm;
+      ++result_.residualReplacements;
+      r = trueResidual;
+      rNorm = trueNorm;
+      restarted_ = true;
+      restart();
+      continue;
+    }
+
+    multiplySum(parts_, p.data(), q.data(), partProduct_, pool_);
+    maskFixed(q.data());
+    double pq = dot(p.data(), q.data());
+    // H is not positive definite along p (or rz vanished): CG cannot go on.
+    if (!(pq > 0.0) || !std::isfinite(pq) || !(rz > 0.0))
+      return finish(PcgStop::Breakdown,
+                    std::isfinite(pq) ? rNorm / bNorm : nan);
+    double alpha = rz / pq;
+    axpby(alpha, p.data(), 1.0, x_, n_, pool_);
+    axpby(-alpha, q.data(), 1.0, r.data(), n_, pool_);
+    ++result_.iterations;
+    terms_.push_back(alpha * rz);
+    termSum_ += alpha * rz;
+    if (!restarted_)
+      alphas_.push_back(alpha);
+    rNorm = std::sqrt(dot(r.data(), r.data()));
+
+    preconditioner.apply(r.data(), z.data(), pool_);
+    double rzNext = dot(r.data(), z.data());
+    double beta = rzNext / rz;
+    if (!restarted_)
+      betas_.push_back(beta);
+    axpby(1.0, z.data(), beta, p.data(), n_, pool_);
+    rz = rzNext;
+  }
 }
 
 PcgResult yasps::runtime::solvePcg(const HessianParts &parts, const double *b,
@@ -174,68 +380,6 @@ PcgResult yasps::runtime::solvePcg(const HessianParts &parts, const double *b,
     if (part->layout().blockOffset != H.layout().blockOffset)
       throw std::invalid_argument(
           "the parts of a PCG matrix must share one block layout");
-  const std::int64_t n = H.size();
-  const std::size_t un = static_cast<std::size_t>(n);
-  checkPcgOptions(options, n);
-  const std::uint8_t *fixed =
-      options.fixedDofs ? options.fixedDofs->data() : nullptr;
-
-  const double nan = std::numeric_limits<double>::quiet_NaN();
-  std::fill(x, x + n, 0.0);
-  std::vector<double> r(b, b + n);
-  if (fixed)
-    for (std::int64_t i = 0; i < n; ++i)
-      if (fixed[i])
-        r[i] = 0.0;
-  // Checked up front: a NaN in H might otherwise sit where the iterates are
-  // zero and go unnoticed, or be hidden by the preconditioner's fallback.
-  if (!allFinite(r.data(), un))
-    return {0, nan, false};
-  for (const BlockSparseMatrix *part : parts)
-    if (!allFinite(part->values().data(), part->values().size()))
-      return {0, nan, false};
-
-  std::vector<double> partial;
-  const double bNorm = std::sqrt(dot(r.data(), r.data(), n, partial, pool));
-  if (bNorm == 0.0)
-    return {0, 0.0, true};
-
-  BlockJacobi preconditioner(parts, fixed, pool);
-  std::vector<double> z(un), p(un), q(un), partProduct;
-  preconditioner.apply(r.data(), z.data(), pool);
-  p = z;
-  double rz = dot(r.data(), z.data(), n, partial, pool);
-  double rNorm = bNorm;
-  const double threshold = options.relativeTolerance * bNorm;
-  std::int64_t iterations = 0;
-  while (true) {
-    if (!std::isfinite(rNorm))
-      return {iterations, nan, false};
-    if (rNorm <= threshold)
-      return {iterations, rNorm / bNorm, true};
-    if (iterations == options.maxIterations)
-      return {iterations, rNorm / bNorm, false};
-
-    multiplySum(parts, p.data(), q.data(), partProduct, pool);
-    if (fixed)
-      for (std::int64_t i = 0; i < n; ++i)
-        if (fixed[i])
-          q[i] = 0.0;
-    double pq = dot(p.data(), q.data(), n, partial, pool);
-    // H is not positive definite along p (or rz vanished): CG cannot go on.
-    if (!(pq > 0.0) || !std::isfinite(pq) || !(rz > 0.0))
-      return {iterations, std::isfinite(pq) ? rNorm / bNorm : nan, false};
-    double alpha = rz / pq;
-    axpby(alpha, p.data(), 1.0, x, n, pool);
-    axpby(-alpha, q.data(), 1.0, r.data(), n, pool);
-    ++iterations;
-    rNorm = std::sqrt(dot(r.data(), r.data(), n, partial, pool));
-    if (rNorm <= threshold)
-      continue;
-
-    preconditioner.apply(r.data(), z.data(), pool);
-    double rzNext = dot(r.data(), z.data(), n, partial, pool);
-    axpby(1.0, z.data(), rzNext / rz, p.data(), n, pool);
-    rz = rzNext;
-  }
+  checkPcgOptions(options, H.size());
+  return PcgSolve(parts, b, x, options, pool).run();
 }

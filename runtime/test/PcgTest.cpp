@@ -3,6 +3,7 @@
 #include "yasps/Runtime/Pcg.h"
 
 #include "yasps/Runtime/BlockSparseMatrix.h"
+#include "yasps/Runtime/Lanczos.h"
 #include "yasps/Runtime/ThreadPool.h"
 
 #include <gtest/gtest.h>
@@ -20,6 +21,8 @@ using yasps::runtime::BlockSlot;
 using yasps::runtime::BlockSparseMatrix;
 using yasps::runtime::PcgOptions;
 using yasps::runtime::PcgResult;
+using yasps::runtime::PcgStop;
+using yasps::runtime::PcgStopping;
 using yasps::runtime::solvePcg;
 using yasps::runtime::ThreadPool;
 
@@ -277,4 +280,201 @@ TEST(Pcg, ZeroRightHandSideNeedsNoIteration) {
   EXPECT_EQ(result.iterations, 0);
   EXPECT_EQ(result.relativeResidual, 0.0);
   EXPECT_EQ(x, b);
+}
+
+namespace {
+/// The matrix of blocks `locals` at `coords` in `layout`.
+BlockSparseMatrix assembled(const BlockLayout &layout,
+                            const std::vector<Coord> &coords,
+                            const std::vector<std::vector<double>> &locals) {
+  std::vector<BlockSlot> slots;
+  BlockSparseMatrix m(layout, coords, &slots);
+  for (std::size_t k = 0; k < slots.size(); ++k)
+    m.addBlock(slots[k], locals[k].data());
+  return m;
+}
+
+/// A chain of `n` springs on a line, fixed to a wall before
+/// node 0, stiffness `ratio` and 1 alternating (node i hangs on spring i):
+/// tridiagonal, 1x1 blocks.
+BlockSparseMatrix springChain(std::int64_t n, double ratio) {
+  BlockLayout layout = BlockLayout::fromSizes(std::vector<std::int64_t>(n, 1));
+  std::vector<double> diagonal(static_cast<std::size_t>(n), 0.0);
+  std::vector<Coord> coords;
+  std::vector<std::vector<double>> locals;
+  auto k = [&](std::int64_t i) { return i % 2 == 0 ? ratio : 1.0; };
+  for (std::int64_t i = 0; i < n; ++i) {
+    diagonal[i] += k(i);
+    if (i > 0) {
+      diagonal[i - 1] += k(i);
+      coords.push_back({i, i - 1});
+      locals.push_back({-k(i)});
+    }
+  }
+  for (std::int64_t i = 0; i < n; ++i) {
+    coords.push_back({i, i});
+    locals.push_back({diagonal[i]});
+  }
+  return assembled(layout, coords, locals);
+}
+
+/// sqrt((x - ref)^T H (x - ref) / ref^T H ref).
+double relativeEnergyError(const BlockSparseMatrix &H,
+                           const std::vector<double> &x,
+                           const std::vector<double> &reference) {
+  std::int64_t n = H.size();
+  std::vector<double> a = H.toDense(), e(x.size());
+  for (std::size_t i = 0; i < x.size(); ++i)
+    e[i] = x[i] - reference[i];
+  auto norm2 = [&](const std::vector<double> &v) {
+    double s = 0.0;
+    for (std::int64_t i = 0; i < n; ++i)
+      for (std::int64_t j = 0; j < n; ++j)
+        s += v[i] * a[i * n + j] * v[j];
+    return s;
+  };
+  return std::sqrt(norm2(e) / norm2(reference));
+}
+
+/// A load on the stiff first spring and a small one at the chain's end:
+/// the residual's 2-norm sees the first and hardly the second.
+std::vector<double> stiffLoad(std::int64_t n, double ratio) {
+  std::vector<double> b(static_cast<std::size_t>(n), 0.0);
+  b.front() = ratio;
+  b.back() = 1.0;
+  return b;
+}
+} // namespace
+
+TEST(Pcg, ReportsTheResidualRecomputedFromTheSolution) {
+  std::mt19937 rng(11);
+  BlockSparseMatrix H = randomSpd(rng);
+  std::vector<double> b = randomVector(rng, H.size());
+  std::vector<double> x(b.size()), hx(b.size());
+  ThreadPool pool(2);
+  PcgOptions options;
+  options.relativeTolerance = 1e-8;
+  PcgResult result = solvePcg(H, b.data(), x.data(), options, pool);
+  ASSERT_TRUE(result.converged);
+  EXPECT_EQ(result.stop, PcgStop::Converged);
+  H.multiply(x.data(), hx.data(), pool);
+  double r = 0.0, bb = 0.0;
+  for (std::size_t i = 0; i < b.size(); ++i) {
+    r += (b[i] - hx[i]) * (b[i] - hx[i]);
+    bb += b[i] * b[i];
+  }
+  EXPECT_NEAR(result.relativeResidual, std::sqrt(r / bb), 1e-14);
+  EXPECT_LE(result.relativeResidual, 1e-8);
+}
+
+TEST(Pcg, ATolerancePastRoundOffIsNotConvergence) {
+  // The updated residual keeps falling far below what b - H x can reach;
+  // restarted from the recomputed one twice without gain, PCG says so.
+  std::mt19937 rng(12);
+  BlockSparseMatrix H = randomSpd(rng);
+  std::vector<double> b = randomVector(rng, H.size()), x(b.size());
+  ThreadPool pool(1);
+  PcgOptions options;
+  options.relativeTolerance = 1e-22;
+  options.maxIterations = 100000;
+  PcgResult result = solvePcg(H, b.data(), x.data(), options, pool);
+  EXPECT_FALSE(result.converged);
+  EXPECT_EQ(result.stop, PcgStop::RoundOff);
+  EXPECT_GE(result.residualReplacements, 2);
+  EXPECT_LT(result.iterations, options.maxIterations);
+  EXPECT_GT(result.relativeResidual, 1e-22);
+  EXPECT_LT(result.relativeResidual, 1e-12);
+}
+
+TEST(Pcg, ShowsWhenAConvergedResidualSaysLittle) {
+  // Stiffness ratio 1e8: one iteration meets the residual tolerance with
+  // the soft end hardly moved. The diagonal ratio shows it.
+  const std::int64_t n = 40;
+  BlockSparseMatrix H = springChain(n, 1e8);
+  std::vector<double> b = stiffLoad(n, 1e8), x(b.size());
+  ThreadPool pool(1);
+  PcgOptions options;
+  options.relativeTolerance = 1e-4;
+  PcgResult result = solvePcg(H, b.data(), x.data(), options, pool);
+  ASSERT_TRUE(result.converged);
+  EXPECT_EQ(result.iterations, 1);
+  EXPECT_GT(relativeError(x, denseSolve(H.toDense(), b)), 0.9);
+  EXPECT_GE(result.diagonalRatio, 1e7);
+  EXPECT_GT(result.diagonalRatio * result.relativeResidual, 1.0);
+  EXPECT_TRUE(std::isnan(result.conditionEstimate));
+}
+
+TEST(Pcg, EnergyNormStoppingMeasuresTheStep) {
+  const std::int64_t n = 40;
+  BlockSparseMatrix H = springChain(n, 1e4);
+  std::vector<double> b = stiffLoad(n, 1e4);
+  std::vector<double> reference = denseSolve(H.toDense(), b);
+  ThreadPool pool(1);
+  PcgOptions options;
+  options.relativeTolerance = 1e-4;
+  std::vector<double> byResidual(b.size()), byEnergy(b.size());
+  PcgResult residual = solvePcg(H, b.data(), byResidual.data(), options, pool);
+  options.stopping = PcgStopping::EnergyNorm;
+  PcgResult energy = solvePcg(H, b.data(), byEnergy.data(), options, pool);
+  ASSERT_TRUE(residual.converged);
+  ASSERT_TRUE(energy.converged);
+  // The residual rule stops with 4% left in the energy norm.
+  EXPECT_GT(relativeEnergyError(H, byResidual, reference), 1e-2);
+  EXPECT_LE(energy.energyError, 1e-4);
+  EXPECT_LE(relativeEnergyError(H, byEnergy, reference), 1e-4);
+  // CG's Ritz values see the conditioning the diagonal hides (1e4).
+  EXPECT_GT(residual.conditionEstimate, 1e5);
+}
+
+TEST(Pcg, RitzValuesFindTheConditionNumber) {
+  // The 1D Laplacian (2, -1): eigenvalues 2 - 2 cos(j pi / (n + 1)); the
+  // Jacobi preconditioner only halves them.
+  const std::int64_t n = 30;
+  BlockLayout layout = BlockLayout::fromSizes(std::vector<std::int64_t>(n, 1));
+  std::vector<Coord> coords;
+  std::vector<std::vector<double>> locals;
+  for (std::int64_t i = 0; i < n; ++i) {
+    coords.push_back({i, i});
+    locals.push_back({2.0});
+    if (i > 0) {
+      coords.push_back({i, i - 1});
+      locals.push_back({-1.0});
+    }
+  }
+  BlockSparseMatrix H = assembled(layout, coords, locals);
+  std::mt19937 rng(13);
+  std::vector<double> b = randomVector(rng, n), x(b.size());
+  ThreadPool pool(1);
+  PcgOptions options;
+  options.relativeTolerance = 1e-12;
+  PcgResult result = solvePcg(H, b.data(), x.data(), options, pool);
+  ASSERT_TRUE(result.converged);
+  const double pi = std::acos(-1.0);
+  double expected =
+      (1 - std::cos(n * pi / (n + 1))) / (1 - std::cos(pi / (n + 1)));
+  EXPECT_NEAR(result.conditionEstimate / expected, 1.0, 1e-6);
+}
+
+TEST(Pcg, TridiagonalEigenvaluesByBisection) {
+  // diag(1, 5, 3) with off-diagonals 0: exactly 1 and 5.
+  auto [lo, hi] =
+      yasps::runtime::tridiagonalExtremeEigenvalues({1, 5, 3}, {0, 0});
+  EXPECT_NEAR(lo, 1.0, 1e-12);
+  EXPECT_NEAR(hi, 5.0, 1e-12);
+  // [[2, 1], [1, 2]]: 1 and 3.
+  auto [a, c] = yasps::runtime::tridiagonalExtremeEigenvalues({2, 2}, {1});
+  EXPECT_NEAR(a, 1.0, 1e-12);
+  EXPECT_NEAR(c, 3.0, 1e-12);
+}
+
+TEST(Pcg, EnergyDelayMustBePositive) {
+  std::mt19937 rng(14);
+  BlockSparseMatrix H = randomSpd(rng);
+  std::vector<double> b(static_cast<std::size_t>(H.size()), 1.0), x(b.size());
+  ThreadPool pool(1);
+  PcgOptions options;
+  options.stopping = PcgStopping::EnergyNorm;
+  options.energyDelay = 0;
+  EXPECT_THROW(solvePcg(H, b.data(), x.data(), options, pool),
+               std::invalid_argument);
 }

@@ -343,20 +343,32 @@ class Scene(Entity):
 
     def minimizeEnergy(self, tolerance: float = 1e-6, maxIterations: int = 1000,
                        threads: Optional[int] = None,
-                       fixed: Optional[list] = None) -> list:
+                       fixed: Optional[list] = None,
+                       stopping: str = "residual") -> list:
         """Assembles the gradient g and PSD-projected Hessian H of all
-        energies and solves ``H dx = g`` with block-Jacobi PCG (relative
-        tolerance ``tolerance``). Returns one ``(N, rows, cols)`` array per
-        minimisation target, in the order given to ``addMinimizeTarget``;
-        the Newton step is ``-dx`` (paper 4.8). ``lastSolve`` holds the
-        iteration count, the residual and the seconds spent on derivatives,
-        indices, assembly and the solve (the paper's Fig. 20 breakdown).
-        ``fixed`` excludes DoFs from the solve (their ``dx`` is 0): one entry
-        per target, None or a boolean mask of its instances ``(N,)`` or
-        entries ``(N, rows, cols)``. Raises :class:`yasps.SolverError` if
-        PCG does not converge."""
+        energies and solves ``H dx = g`` with block-Jacobi PCG. Returns one
+        ``(N, rows, cols)`` array per minimisation target, in the order
+        given to ``addMinimizeTarget``; the Newton step is ``-dx`` (paper
+        4.8). ``fixed`` excludes DoFs from the solve (their ``dx`` is 0):
+        one entry per target, None or a boolean mask of its instances
+        ``(N,)`` or entries ``(N, rows, cols)``.
+
+        ``stopping="residual"`` (the default) stops once ``||g - H dx|| <=
+        tolerance ||g||``, on the residual recomputed from ``dx``;
+        ``"energy_norm"`` (CPU) once the estimated energy-norm error
+        ``||dx - dx*||_H`` is at most ``tolerance ||dx||_H``, which measures
+        the step itself where stiff parts make the residual say little.
+
+        ``lastSolve`` holds the iteration count, the recomputed residual,
+        why PCG stopped, CG's condition estimate, the Hessian's diagonal
+        ratio and the seconds spent on derivatives, indices, assembly and
+        the solve (the paper's Fig. 20 breakdown). Raises
+        :class:`yasps.SolverError` if PCG does not converge (naming the
+        energy and instance of a NaN), :class:`yasps.SceneError` if no
+        energy reads a target, and warns (``IllConditionedSolve``) when the
+        residual bounds the step's error by more than 1."""
         return services().minimize_energy(self, tolerance, maxIterations,
-                                          threads, fixed)
+                                          threads, fixed, stopping)
 
     # ------------------------------------------------------------------ IR
 

@@ -91,6 +91,9 @@ class Backend(Protocol):
 
     def solve(self, system: Any, x: np.ndarray, tolerance: float,
               max_iterations: int, threads: Optional[int],
-              fixed: Optional[np.ndarray]) -> Tuple[int, float, bool]:
-        """PCG on the assembled system into ``x``: (iterations, relative
-        residual, converged)."""
+              fixed: Optional[np.ndarray], stopping: str = "residual") -> Any:
+        """PCG on the assembled system into ``x``; ``stopping`` is
+        "residual" or "energy_norm" (see Scene.minimizeEnergy). Returns the
+        native PcgReport (iterations, relative_residual recomputed from x,
+        converged, stop, energy_error, condition_estimate, diagonal_ratio,
+        residual_replacements)."""

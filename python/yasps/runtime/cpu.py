@@ -3,7 +3,7 @@ the stored NumPy values; the Newton system is the runtime's GlobalSystem."""
 
 from __future__ import annotations
 
-from typing import Optional, Sequence, Tuple
+from typing import Optional, Sequence
 
 import numpy as np
 
@@ -13,6 +13,7 @@ from ..frontend.errors import SceneError
 from ..frontend.values import from_column_major
 from .base import LocalInputs, Shape
 from .inputs import host_input
+from .native import native
 
 
 def allocate_output(path: str, count: int, rows: int, cols: int) -> np.ndarray:
@@ -87,9 +88,10 @@ class CpuBackend:
 
     def solve(self, system, x: np.ndarray, tolerance: float,
               max_iterations: int, threads: Optional[int],
-              fixed: Optional[np.ndarray]) -> Tuple[int, float, bool]:
+              fixed: Optional[np.ndarray], stopping: str = "residual"):
         return system.solve(x, tolerance, max_iterations, _threads(threads),
-                            fixed)
+                            fixed, getattr(native().PcgStopping,
+                                           stopping))
 
 
 def add_host_arrays(system, energy_index: int, inputs: LocalInputs,

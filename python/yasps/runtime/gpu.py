@@ -243,6 +243,10 @@ class GpuBackend:
 
     def solve(self, system, x: np.ndarray, tolerance: float,
               max_iterations: int, threads: Optional[int],
-              fixed: Optional[np.ndarray]) -> Tuple[int, float, bool]:
+              fixed: Optional[np.ndarray], stopping: str = "residual"):
+        if stopping != "residual":
+            raise SceneError(f"minimizeEnergy: the GPU's PCG stops on the "
+                             f"residual only, not {stopping!r}; use the CPU "
+                             f"backend for the energy-norm rule")
         return system.solve(x, tolerance, max_iterations, fixed)
 

@@ -150,4 +150,7 @@ def assemble(scene: Scene, backend: Backend, threads: Optional[int] = None,
     if report is not None:
         report["staticStructureRebuilt"] = rebuilt
         report["energiesDifferentiatedOnGpu"] = off_host
+        # What minimizeEnergy checks when a solve fails or reads nothing.
+        report["contributions"] = [(energy, inputs, dofs)
+                                   for energy, (inputs, dofs) in static + dynamic]
     return system, layout

@@ -1,9 +1,11 @@
 """``Scene.minimizeEnergy``: the Newton direction from the assembled system,
-solved by block-Jacobi PCG on the backend (section 8)."""
+solved by block-Jacobi PCG on the backend (section 8), with what the solve
+says about itself (:mod:`.diagnosis`)."""
 
 from __future__ import annotations
 
 import time
+import warnings
 from typing import Dict, List, Optional
 
 import numpy as np
@@ -11,6 +13,9 @@ import numpy as np
 from ..frontend.errors import SceneError, YaspsError
 from ..runtime import Backend
 from .assembly import DofLayout, assemble
+from .diagnosis import (ERROR_BOUND_WARNING, IllConditionedSolve,
+                        describe_non_finite, non_finite_sources,
+                        residual_error_bound, unread_targets)
 
 
 class SolverError(YaspsError, RuntimeError):
@@ -66,30 +71,81 @@ def fixed_dof_mask(layout: DofLayout, fixed) -> Optional[np.ndarray]:
     return np.ascontiguousarray(np.concatenate(parts)) if parts else None
 
 
+#: minimizeEnergy's stopping rules (PCG's PcgStopping).
+STOPPING_RULES = ("residual", "energy_norm")
+
+#: Why a solve failed, for SolverError's message, by PcgStop name.
+_STOP_REASONS = {
+    "max_iterations": "stopped at its iteration limit",
+    "breakdown": "broke down (the projected Hessian is not positive "
+                 "definite on the free DoFs)",
+    "round_off": "cannot reach the tolerance: the residual recomputed from "
+                 "the step stays above it after restarting from it (the "
+                 "tolerance is below what round-off allows in this system)",
+}
+
+
 def minimize_energy(scene, backend: Backend, tolerance: float = 1e-6,
                     maxIterations: int = 1000, threads: Optional[int] = None,
-                    fixed: Optional[list] = None) -> List[np.ndarray]:
+                    fixed: Optional[list] = None,
+                    stopping: str = "residual") -> List[np.ndarray]:
     """Solves H dx = g for the assembled projected Hessian and gradient,
-    with dx = 0 at the ``fixed`` DoFs (see fixed_dof_mask), on ``backend``."""
+    with dx = 0 at the ``fixed`` DoFs (see fixed_dof_mask), on ``backend``;
+    ``stopping``: one of STOPPING_RULES."""
     if not (tolerance >= 0):
         raise ValueError(f"minimizeEnergy: tolerance must be >= 0, got {tolerance}")
+    if stopping not in STOPPING_RULES:
+        raise ValueError(f"minimizeEnergy: stopping must be one of "
+                         f"{', '.join(STOPPING_RULES)}, got {stopping!r}")
     timings: Dict[str, float] = {}
     report: Dict[str, object] = {}
     system, layout = assemble(scene, backend, threads, timings, report)
+    contributions = report.pop("contributions")
     mask = fixed_dof_mask(layout, fixed)
+    unread = unread_targets(layout, contributions, mask)
+    if unread:
+        raise SceneError(
+            f"minimizeEnergy: no energy reads {', '.join(unread)}: its Newton "
+            "step would be zero without meaning it. Register an energy that "
+            "depends on it (inertia, elasticity, ...), fix it, or leave it "
+            "out of addMinimizeTarget")
     x = np.zeros(system.size)
     start = time.perf_counter()
-    iterations, residual, converged = backend.solve(
-        system, x, float(tolerance), int(maxIterations), threads, mask)
+    pcg = backend.solve(system, x, float(tolerance), int(maxIterations),
+                        threads, mask, stopping)
     timings["solve"] = time.perf_counter() - start
-    info = {"iterations": int(iterations), "relativeResidual": float(residual),
-            "converged": bool(converged), "seconds": timings,
-            "backend": backend.name, **report}
+    stop = pcg.stop.name
+    bound = residual_error_bound(pcg)
+    info = {"iterations": int(pcg.iterations),
+            "relativeResidual": float(pcg.relative_residual),
+            "converged": bool(pcg.converged), "stop": stop,
+            "stopping": stopping,
+            "energyError": float(pcg.energy_error),
+            "conditionEstimate": float(pcg.condition_estimate),
+            "diagonalRatio": float(pcg.diagonal_ratio),
+            "errorBound": bound,
+            "residualReplacements": int(pcg.residual_replacements),
+            "seconds": timings, "backend": backend.name, **report}
     scene.lastSolve = info
     solution = layout.split(x)
-    if not converged:
+    if stop == "non_finite":
         raise SolverError(
-            f"minimizeEnergy: PCG stopped after {iterations} iterations at "
-            f"relative residual {residual:.3g} (tolerance {tolerance:g}); "
-            "the last iterate is in .solution", solution, info)
+            "minimizeEnergy: " + describe_non_finite(
+                non_finite_sources(contributions)) +
+            "; no step was computed", solution, info)
+    if not pcg.converged:
+        raise SolverError(
+            f"minimizeEnergy: PCG {_STOP_REASONS[stop]}, after "
+            f"{pcg.iterations} iterations at relative residual "
+            f"{pcg.relative_residual:.3g} (tolerance {tolerance:g}); the last "
+            "iterate is in .solution", solution, info)
+    if stopping == "residual" and bound > ERROR_BOUND_WARNING:
+        warnings.warn(
+            f"minimizeEnergy: PCG converged to relative residual "
+            f"{pcg.relative_residual:.3g}, but the Hessian's conditioning "
+            f"(diagonal ratio {pcg.diagonal_ratio:.3g}, CG's estimate "
+            f"{pcg.condition_estimate:.3g}) means the residual bounds the "
+            f"step's relative error only by {bound:.3g}; use "
+            "stopping='energy_norm' or a smaller tolerance",
+            IllConditionedSolve, stacklevel=3)
     return solution

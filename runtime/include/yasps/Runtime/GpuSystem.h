@@ -109,6 +109,8 @@ private:
                 bool columnMajorMaps);
   /// Launches the reduction-style kernels over `n` items: their grid.
   static std::int64_t reductionBlocks(std::int64_t n);
+  /// ||b - H x|| over the free DoFs (those `mask`, when set, leaves).
+  double recomputedResidual(cu::DevicePtr x, const unsigned char *mask);
 
   const CudaContext &ctx;
   std::unique_ptr<CudaModule> module;

@@ -11,6 +11,7 @@
 #define YASPS_RUNTIME_PCG_H
 
 #include <cstdint>
+#include <limits>
 #include <vector>
 
 namespace yasps::runtime {
@@ -18,11 +19,43 @@ namespace yasps::runtime {
 class BlockSparseMatrix;
 class ThreadPool;
 
+/// When PCG stops on success.
+enum class PcgStopping {
+  /// ||b - H x|| <= relativeTolerance * ||b||, checked on the residual
+  /// recomputed from x (not only the one CG updates as it goes).
+  Residual,
+  /// The estimated error in the energy norm, ||x* - x||_H, is at most
+  /// relativeTolerance * ||x||_H: the Hestenes-Stiefel estimate over
+  /// `energyDelay` iterations (Strakos and Tichy 2002), which measures the
+  /// step where a stiff part of H makes the residual's 2-norm say little.
+  EnergyNorm,
+};
+
+/// Why PCG stopped.
+enum class PcgStop {
+  Converged,
+  /// maxIterations reached before the tolerance.
+  MaxIterations,
+  /// p^T H p <= 0: H is not positive definite on the free DoFs.
+  Breakdown,
+  /// b, H or an iterate holds a NaN or infinity.
+  NonFinite,
+  /// The residual recomputed from x stays above the tolerance after being
+  /// restarted from it twice: the tolerance is below what round-off in this
+  /// system allows.
+  RoundOff,
+};
+
+/// The name of a stop reason ("converged", "max-iterations", ...).
+const char *stopName(PcgStop stop);
+
 struct PcgOptions {
-  /// Stop once ||r|| <= relativeTolerance * ||b|| (2-norms over the free
-  /// DoFs, r the residual that CG updates as it goes).
+  /// See `stopping`; 2-norms over the free DoFs.
   double relativeTolerance = 1e-6;
   std::int64_t maxIterations = 1000;
+  PcgStopping stopping = PcgStopping::Residual;
+  /// Iterations the energy-norm estimate looks ahead (EnergyNorm only).
+  std::int64_t energyDelay = 4;
   /// Optional mask of size H.size(): a nonzero entry fixes that DoF, whose
   /// solution is 0 and whose row and column of H are ignored (the solve runs
   /// on the free DoFs only). Not owned.
@@ -31,11 +64,27 @@ struct PcgOptions {
 
 struct PcgResult {
   /// Number of CG updates of x.
-  std::int64_t iterations;
-  /// ||r|| / ||b|| at the end (0 if b is 0 on the free DoFs); NaN if b or H
-  /// holds a NaN or infinity or the iteration broke down.
-  double relativeResidual;
-  bool converged;
+  std::int64_t iterations = 0;
+  /// ||b - H x|| / ||b||, recomputed from the returned x (0 if b is 0 on the
+  /// free DoFs); NaN if b or H holds a NaN or infinity or the iteration
+  /// broke down.
+  double relativeResidual = 0.0;
+  bool converged = false;
+  PcgStop stop = PcgStop::Converged;
+  /// The estimated relative energy-norm error ||x* - x||_H / ||x||_H of the
+  /// iterate `energyDelay` iterations before the last (an upper estimate for
+  /// the last); NaN before that many iterations.
+  double energyError = std::numeric_limits<double>::quiet_NaN();
+  /// The condition number of the preconditioned matrix M^-1 H that CG's own
+  /// coefficients show (the extreme Ritz values of its Lanczos matrix); a
+  /// lower estimate, NaN with fewer than two iterations.
+  double conditionEstimate = std::numeric_limits<double>::quiet_NaN();
+  /// The largest over the smallest diagonal entry of H on the free DoFs: a
+  /// lower bound of H's condition number, known before any iteration (inf
+  /// if a diagonal entry is <= 0).
+  double diagonalRatio = std::numeric_limits<double>::quiet_NaN();
+  /// Times the updated residual was replaced by the recomputed one.
+  std::int64_t residualReplacements = 0;
 };
 
 /// Throws std::invalid_argument if `options` do not fit a matrix of `size`
@@ -50,10 +99,13 @@ void checkPcgOptions(const PcgOptions &options, std::int64_t size);
 /// entries' magnitudes instead, and by 1 where an entry is 0.
 ///
 /// Never fails silently: stopping at maxIterations, a breakdown (p^T H p <=
-/// 0), or non-finite input is reported with converged = false, x holding the
-/// last iterate (0 for non-finite input). Throws std::invalid_argument if
-/// the fixed-DoF mask's size is not H.size(), maxIterations is negative or
-/// the tolerance is negative or NaN.
+/// 0), non-finite input or a tolerance below round-off is reported with
+/// converged = false and its PcgStop, x holding the last iterate (0 for
+/// non-finite input). Convergence is only reported once the residual
+/// recomputed from x meets the tolerance (Residual stopping); where CG's
+/// updated residual drifted from it, CG restarts from the recomputed one.
+/// Throws std::invalid_argument if the fixed-DoF mask's size is not H.size(),
+/// maxIterations is negative or the tolerance is negative or NaN.
 PcgResult solvePcg(const BlockSparseMatrix &H, const double *b, double *x,
                    const PcgOptions &options, ThreadPool &pool);
 

@@ -1,0 +1,97 @@
+"""What minimizeEnergy tells a user about a solve beyond "converged": a
+target no energy reads, the energy and instance behind a NaN, and a
+residual too weak to vouch for the step in an ill-conditioned system."""
+
+from __future__ import annotations
+
+from typing import List, Optional, Sequence, Tuple
+
+import numpy as np
+
+from .assembly import DofLayout
+
+#: The bound on the step's relative error that a converged residual gives,
+#: ||dx - dx*|| / ||dx*|| <= cond(H) ||r|| / ||g||, above which the solve
+#: warns: past 1 it does not vouch for a single correct digit.
+ERROR_BOUND_WARNING = 1.0
+
+
+class IllConditionedSolve(UserWarning):
+    """PCG converged, but the system's conditioning makes its residual say
+    little about the step (see :func:`residual_error_bound`)."""
+
+
+def residual_error_bound(pcg) -> float:
+    """An estimate from below of the residual bound on the step's relative
+    2-norm error, cond(H) ||r|| / ||g||, for this solve: the relative
+    residual recomputed from the step times the larger of H's diagonal
+    ratio (max / min diagonal entry, a lower bound of cond(H)) and the
+    condition number CG's Ritz values show (of the preconditioned H). Past
+    1 the residual does not vouch for one correct digit."""
+    estimates = [float(pcg.diagonal_ratio), float(pcg.condition_estimate)]
+    known = [e for e in estimates if not np.isnan(e)]
+    if not known:
+        return 0.0
+    return max(known) * float(pcg.relative_residual)
+
+
+def unread_targets(layout: DofLayout, contributions, mask: Optional[np.ndarray]
+                   ) -> List[str]:
+    """The targets (described) none of whose free DoFs any energy instance
+    of this assembly reads: their step would be zero without meaning it."""
+    read = np.zeros(layout.size, dtype=bool)
+    for _, _, dofs in contributions:
+        indices = np.asarray(dofs()).reshape(-1)
+        read[indices[indices >= 0]] = True
+    out = []
+    for target in layout.targets:
+        start = layout.offset[id(target)]
+        stop = start + target.owner.numInstances * target.rows * target.cols
+        free = slice(start, stop)
+        wanted = np.ones(stop - start, dtype=bool) if mask is None else \
+            mask[free] == 0
+        if wanted.any() and not read[free][wanted].any():
+            out.append(target.describe())
+    return out
+
+
+def _first_non_finite(array) -> Optional[int]:
+    """The first instance (leading index) of a host array with a NaN or
+    infinity, or None."""
+    values = np.asarray(array)
+    bad = ~np.isfinite(values.reshape(len(values), -1)).all(axis=1)
+    return int(np.argmax(bad)) if bad.any() else None
+
+
+def non_finite_sources(contributions) -> List[Tuple[str, str, int]]:
+    """(energy, which derivative, first instance) for every energy whose
+    local gradient or Hessian holds a NaN or infinity, as far as they are in
+    host memory; ("", "", -1) stands for those on a device."""
+    out = []
+    for energy, inputs, _ in contributions:
+        parts: Sequence[Tuple[str, object]] = [
+            ("gradient", inputs.gradient), ("Hessian", inputs.hessian),
+            ("inner Jacobian", inputs.inner_map),
+            ("inner Hessian", inputs.inner_hessian)]
+        for what, array in parts:
+            if array is None or inputs.count == 0:
+                continue
+            if not isinstance(array, np.ndarray):
+                out.append((energy.describe(), what, -1))
+                break
+            instance = _first_non_finite(array.reshape(inputs.count, -1))
+            if instance is not None:
+                out.append((energy.describe(), what, instance))
+                break
+    return out
+
+
+def describe_non_finite(sources: List[Tuple[str, str, int]]) -> str:
+    """The sentence naming where NaNs came from."""
+    if not sources:
+        return ("the assembled system holds a NaN or infinity that no local "
+                "derivative shows")
+    found = [f"the local {what} of {energy} at instance {i}" if i >= 0 else
+             f"{energy} (derivatives on the device: run on the CPU to find "
+             f"the instance)" for energy, what, i in sources]
+    return "NaN or infinity in " + "; ".join(found)
