@@ -52,6 +52,15 @@ class DofLayout:
         return out
 
 
+def read_dofs(size: int, dof_maps: List[np.ndarray]) -> np.ndarray:
+    """Which of ``size`` DoFs the DoF maps (-1: padding) mention."""
+    read = np.zeros(size, dtype=bool)
+    for dofs in dof_maps:
+        indices = np.asarray(dofs).reshape(-1)
+        read[indices[indices >= 0]] = True
+    return read
+
+
 def _static_structure_key(scene, ir: str, layout: DofLayout,
                           static_energies) -> tuple:
     """What the DoF maps of the static energies depend on: the scene's
@@ -129,12 +138,14 @@ def assemble(scene: Scene, backend: Backend, threads: Optional[int] = None,
     cached = _static_systems.get(scene)
     rebuilt = cached is None or cached[0] != key
     if rebuilt:
-        host_system = native().GlobalSystem(
-            layout.block_offsets, [dofs() for _, (_, dofs) in static])
-        _static_systems[scene] = (key, host_system)
+        static_dofs = [dofs() for _, (_, dofs) in static]
+        host_system = native().GlobalSystem(layout.block_offsets, static_dofs)
+        static_read = read_dofs(layout.size, static_dofs)
+        _static_systems[scene] = (key, host_system, static_read)
     else:
-        host_system = cached[1]
-    host_system.set_dynamic([dofs() for _, (_, dofs) in dynamic])
+        host_system, static_read = cached[1], cached[2]
+    dynamic_dofs = [dofs() for _, (_, dofs) in dynamic]
+    host_system.set_dynamic(dynamic_dofs)
     spent["indices"] += clock() - start
 
     start = clock()
@@ -150,7 +161,9 @@ def assemble(scene: Scene, backend: Backend, threads: Optional[int] = None,
     if report is not None:
         report["staticStructureRebuilt"] = rebuilt
         report["energiesDifferentiatedOnGpu"] = off_host
-        # What minimizeEnergy checks when a solve fails or reads nothing.
-        report["contributions"] = [(energy, inputs, dofs)
-                                   for energy, (inputs, dofs) in static + dynamic]
+        # What minimizeEnergy checks: the DoFs some energy instance reads,
+        # and the local derivatives behind a NaN.
+        report["readDofs"] = static_read | read_dofs(layout.size, dynamic_dofs)
+        report["contributions"] = [(energy, inputs)
+                                   for energy, (inputs, _) in static + dynamic]
     return system, layout

@@ -35,22 +35,18 @@ def residual_error_bound(pcg) -> float:
     return max(known) * float(pcg.relative_residual)
 
 
-def unread_targets(layout: DofLayout, contributions, mask: Optional[np.ndarray]
-                   ) -> List[str]:
+def unread_targets(layout: DofLayout, read: np.ndarray,
+                   mask: Optional[np.ndarray]) -> List[str]:
     """The targets (described) none of whose free DoFs any energy instance
-    of this assembly reads: their step would be zero without meaning it."""
-    read = np.zeros(layout.size, dtype=bool)
-    for _, _, dofs in contributions:
-        indices = np.asarray(dofs()).reshape(-1)
-        read[indices[indices >= 0]] = True
+    of this assembly reads (``read``: per DoF): their step would be zero
+    without meaning it."""
     out = []
     for target in layout.targets:
         start = layout.offset[id(target)]
         stop = start + target.owner.numInstances * target.rows * target.cols
-        free = slice(start, stop)
         wanted = np.ones(stop - start, dtype=bool) if mask is None else \
-            mask[free] == 0
-        if wanted.any() and not read[free][wanted].any():
+            mask[start:stop] == 0
+        if wanted.any() and not read[start:stop][wanted].any():
             out.append(target.describe())
     return out
 
@@ -68,7 +64,7 @@ def non_finite_sources(contributions) -> List[Tuple[str, str, int]]:
     local gradient or Hessian holds a NaN or infinity, as far as they are in
     host memory; ("", "", -1) stands for those on a device."""
     out = []
-    for energy, inputs, _ in contributions:
+    for energy, inputs in contributions:
         parts: Sequence[Tuple[str, object]] = [
             ("gradient", inputs.gradient), ("Hessian", inputs.hessian),
             ("inner Jacobian", inputs.inner_map),

@@ -102,7 +102,7 @@ def minimize_energy(scene, backend: Backend, tolerance: float = 1e-6,
     system, layout = assemble(scene, backend, threads, timings, report)
     contributions = report.pop("contributions")
     mask = fixed_dof_mask(layout, fixed)
-    unread = unread_targets(layout, contributions, mask)
+    unread = unread_targets(layout, report.pop("readDofs"), mask)
     if unread:
         raise SceneError(
             f"minimizeEnergy: no energy reads {', '.join(unread)}: its Newton "
