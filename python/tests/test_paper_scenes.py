@@ -15,6 +15,7 @@ REPO = Path(__file__).resolve().parents[2]
 DATA = REPO.parent / "shared" / "data"
 sys.path.insert(0, str(REPO / "examples" / "paper"))
 
+import yasps  # noqa: E402
 from yasps.sim import (cage_grid, hex8_gauss_points, hex_tets,  # noqa: E402
                        signed_tet_volumes)
 
@@ -55,11 +56,17 @@ def pinned_corners_stay(stepper, mask_index: int = 0):
 
 @needs_bunny
 def test_cloths_on_bunny():
-    """9.1: the bunny falls onto the pinned cloth, a cloth layer onto it."""
+    """9.1: the bunny falls onto the pinned cloth, a cloth layer onto it.
+    At the paper's CG tolerance (1e-4) the cloth's Hessian (diagonal ratio
+    2.4e4) makes the residual bound the step's error by about 2: minimizeEnergy
+    says so, once."""
     import cloths_on_bunny
     stepper, contact, bodies = cloths_on_bunny.build("small", 1)
     z0 = bodies["bunny"].now()[:, 2].mean()
-    step_and_check(stepper, bodies, 4, pinned_corners_stay(stepper))
+    with pytest.warns(yasps.IllConditionedSolve) as warned:
+        step_and_check(stepper, bodies, 4, pinned_corners_stay(stepper))
+    assert len([w for w in warned
+                if issubclass(w.category, yasps.IllConditionedSolve)]) == 1
     assert bodies["bunny"].now()[:, 2].mean() < z0
     assert sum(contact.update().values()) > 0  # the bunny is on the cloth
 

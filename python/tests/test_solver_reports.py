@@ -11,6 +11,7 @@ import pytest
 
 import yasps
 from yasps.runtime import cpu_backend
+from yasps.sim import newton
 from yasps.solve import assemble
 
 from test_minimize import soft_box, system_arrays
@@ -87,6 +88,21 @@ def test_a_converged_residual_that_says_little_warns():
     error = np.linalg.norm(dx.reshape(-1) - want) / np.linalg.norm(want)
     assert error > 0.9
     assert s.lastSolve["errorBound"] > 1
+    # Once per scene: a Newton loop is not flooded.
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        s.minimizeEnergy(tolerance=1e-4)
+    assert s.lastSolve["errorBound"] > 1
+
+
+def test_newton_takes_the_energy_norm_rule():
+    n = 40
+    s, x = spring_chain(n, 1e4, stiff_load(n, 1e4))
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        report = newton(s, x, tolerance=1e-12, max_iterations=3,
+                        cg_tolerance=1e-6, cg_stopping="energy_norm")
+    assert report.converged and s.lastSolve["stopping"] == "energy_norm"
 
 
 def test_energy_norm_stopping_measures_the_step():

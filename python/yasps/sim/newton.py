@@ -93,7 +93,8 @@ def newton(scene, x: Targets, tolerance: float,
            step_bound: Optional[Callable[[np.ndarray, np.ndarray], float]] = None,
            max_iterations: int = 20, cg_tolerance: float = 1e-4,
            fixed=None, contact=None,
-           cg_max_iterations: int = 1000) -> NewtonReport:
+           cg_max_iterations: int = 1000,
+           cg_stopping: str = "residual") -> NewtonReport:
     """Minimises the scene's energy over its targets ``x`` (one attribute,
     or the list of the scene's minimisation targets in order) by Newton's
     method: directions from ``minimizeEnergy``, the step limited by
@@ -106,7 +107,8 @@ def newton(scene, x: Targets, tolerance: float,
     Stops when the largest change of a world position (with contact) or of
     a target entry is below ``tolerance``. A direction whose PCG stops at
     ``cg_max_iterations`` before ``cg_tolerance`` is used as it is (counted
-    in ``inexactDirections``)."""
+    in ``inexactDirections``). ``cg_stopping``: minimizeEnergy's stopping
+    rule ("residual" or "energy_norm")."""
     targets = _as_list(x)
     _check_targets(scene, targets)
     if fixed is not None and isinstance(x, Attribute):
@@ -141,7 +143,8 @@ def newton(scene, x: Targets, tolerance: float,
         try:
             directions = scene.minimizeEnergy(tolerance=cg_tolerance,
                                               maxIterations=cg_max_iterations,
-                                              fixed=fixed)
+                                              fixed=fixed,
+                                              stopping=cg_stopping)
         except SolverError as error:
             # A CG iterate from zero on an SPD system is a descent
             # direction: take it, inexactly, and let the line search judge.
@@ -205,7 +208,8 @@ class ImplicitEuler:
     if given, until the largest displacement of a Newton step over ``dt`` is
     below ``velocity_tolerance`` (paper section 9.1); then
     ``v = (x_new - x_old) / dt``. ``fixed`` (as for :func:`newton`) keeps
-    DoFs where they are. Several targets may also be given as
+    DoFs where they are; ``cg_stopping`` is PCG's stopping rule (see
+    :func:`newton`). Several targets may also be given as
     ``targets=[x, A, t], predicted=[x_hat, A_hat, t_hat]``."""
 
     def __init__(self, scene, x: Optional[Targets] = None,
@@ -215,6 +219,7 @@ class ImplicitEuler:
                                                float]] = None,
                  fixed=None, max_iterations: int = 20, contact=None,
                  cg_tolerance: float = 1e-4, cg_max_iterations: int = 1000,
+                 cg_stopping: str = "residual",
                  *, targets: Optional[Sequence[Attribute]] = None,
                  predicted: Optional[Sequence[Attribute]] = None):
         # targets= and predicted= are the multi-target spelling of x, x_hat.
@@ -254,6 +259,7 @@ class ImplicitEuler:
         self.step_bound, self.contact = step_bound, contact
         self.max_iterations, self.cg_tolerance = max_iterations, cg_tolerance
         self.cg_max_iterations = cg_max_iterations
+        self.cg_stopping = cg_stopping
         self.velocities = [np.zeros_like(t.value) for t in self.targets]
 
     def run(self, frames: int, on_frame: Optional[Callable[[int, NewtonReport],
@@ -305,7 +311,8 @@ class ImplicitEuler:
                         max_iterations=self.max_iterations,
                         cg_tolerance=self.cg_tolerance, fixed=fixed,
                         contact=self.contact,
-                        cg_max_iterations=self.cg_max_iterations)
+                        cg_max_iterations=self.cg_max_iterations,
+                        cg_stopping=self.cg_stopping)
         report.seconds["collisions"] += lag_seconds
         self.velocities = [(t.value - p) / self.dt
                            for t, p in zip(self.targets, previous)]

@@ -4,6 +4,7 @@ residual too weak to vouch for the step in an ill-conditioned system."""
 
 from __future__ import annotations
 
+import weakref
 from typing import List, Optional, Sequence, Tuple
 
 import numpy as np
@@ -14,6 +15,19 @@ from .assembly import DofLayout
 #: ||dx - dx*|| / ||dx*|| <= cond(H) ||r|| / ||g||, above which the solve
 #: warns: past 1 it does not vouch for a single correct digit.
 ERROR_BOUND_WARNING = 1.0
+
+
+#: The scenes warned about their conditioning already: a Newton loop of a
+#: thousand solves warns once, not a thousand times.
+_warned: "weakref.WeakSet" = weakref.WeakSet()
+
+
+def first_warning_for(scene) -> bool:
+    """True the first time it is asked for ``scene``."""
+    if scene in _warned:
+        return False
+    _warned.add(scene)
+    return True
 
 
 class IllConditionedSolve(UserWarning):

@@ -14,7 +14,8 @@ from ..frontend.errors import SceneError, YaspsError
 from ..runtime import Backend
 from .assembly import DofLayout, assemble
 from .diagnosis import (ERROR_BOUND_WARNING, IllConditionedSolve,
-                        describe_non_finite, non_finite_sources,
+                        describe_non_finite, first_warning_for,
+                        non_finite_sources,
                         residual_error_bound, unread_targets)
 
 
@@ -139,13 +140,15 @@ def minimize_energy(scene, backend: Backend, tolerance: float = 1e-6,
             f"{pcg.iterations} iterations at relative residual "
             f"{pcg.relative_residual:.3g} (tolerance {tolerance:g}); the last "
             "iterate is in .solution", solution, info)
-    if stopping == "residual" and bound > ERROR_BOUND_WARNING:
+    if stopping == "residual" and bound > ERROR_BOUND_WARNING and \
+            first_warning_for(scene):
         warnings.warn(
             f"minimizeEnergy: PCG converged to relative residual "
             f"{pcg.relative_residual:.3g}, but the Hessian's conditioning "
             f"(diagonal ratio {pcg.diagonal_ratio:.3g}, CG's estimate "
             f"{pcg.condition_estimate:.3g}) means the residual bounds the "
             f"step's relative error only by {bound:.3g}; use "
-            "stopping='energy_norm' or a smaller tolerance",
-            IllConditionedSolve, stacklevel=3)
+            "stopping='energy_norm' or a smaller tolerance (warned once per "
+            "scene; lastSolve['errorBound'] has it for every solve)",
+            IllConditionedSolve, stacklevel=4)
     return solution
