@@ -465,3 +465,35 @@ def test_every_kernel_is_compiled_once(tmp_path):
                          capture_output=True, text=True).stdout.split()
     kernels, total, objects = map(int, out)
     assert kernels > 0 and total == kernels and objects == kernels
+
+
+def test_a_warm_newton_iteration_allocates_no_outputs(monkeypatch):
+    """The derivative kernels' outputs keep their memory from one
+    minimizeEnergy to the next (no fresh pages to fault in); outputs asked
+    for by energyDerivatives are the caller's own."""
+    import yasps.runtime.cpu as cpu
+    allocated = []
+    original = cpu.allocate_output
+
+    def counting(*args):
+        out = original(*args)
+        allocated.append(out)
+        return out
+
+    monkeypatch.setattr(cpu, "allocate_output", counting)
+    s = soft_box()
+    s.minimizeEnergy()
+    first = len(allocated)
+    assert first > 0
+    x = s.m.v["x"]
+    x.updateValue(x.value[:, :, 0] * 1.01)
+    (dx,) = s.minimizeEnergy()
+    assert len(allocated) == first
+    # The same direction as a cold solve of the same system.
+    fresh = soft_box()
+    fresh.m.v["x"].updateValue(x.value[:, :, 0])
+    (want,) = fresh.minimizeEnergy()
+    np.testing.assert_allclose(dx, want, rtol=1e-12, atol=1e-14)
+    d1 = s.energyDerivatives(s.energies[1])
+    d2 = s.energyDerivatives(s.energies[1])
+    assert not np.shares_memory(d1.hessian, d2.hessian)

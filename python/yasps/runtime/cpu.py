@@ -3,6 +3,7 @@ the stored NumPy values; the Newton system is the runtime's GlobalSystem."""
 
 from __future__ import annotations
 
+import weakref
 from typing import Optional, Sequence
 
 import numpy as np
@@ -38,6 +39,12 @@ class CpuBackend:
     name = "cpu"
     slot_factors = True
 
+    def __init__(self):
+        # Outputs run with ``reuse`` keep their memory from call to call,
+        # per scene: a warm Newton loop writes into pages it has touched
+        # already instead of faulting in fresh ones.
+        self._outputs: "weakref.WeakKeyDictionary" = weakref.WeakKeyDictionary()
+
     @property
     def host(self) -> "CpuBackend":
         return self
@@ -57,7 +64,16 @@ class CpuBackend:
         # the output is allocated.
         inputs = [None if a.kind == "out" else host_input(scene, a)
                   for a in kernel.arguments]
-        out = allocate_output(path, count, kernel.rows, kernel.cols)
+        size = count * kernel.rows * kernel.cols
+        out = None
+        if reuse is not None:
+            kept = self._outputs.setdefault(scene, {})
+            out = kept.get(reuse)
+            if out is None or out.size != size:
+                out = kept[reuse] = allocate_output(path, count, kernel.rows,
+                                                    kernel.cols)
+        else:
+            out = allocate_output(path, count, kernel.rows, kernel.cols)
         buffers = [out if a.kind == "out" else given
                    for a, given in zip(kernel.arguments, inputs)]
         kernels.launch(path, count, buffers, _threads(threads))
