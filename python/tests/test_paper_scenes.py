@@ -217,3 +217,60 @@ def test_mat_twist():
         angle = np.arctan2(dz, dy) * side
         assert 0.05 * twister.angle < angle < twister.angle
 
+
+
+def spherical_triangle_areas(P, faces):
+    """Solid angles of the triangles of unit points P (Van Oosterom and
+    Strackee), signed by orientation."""
+    a, b, c = (P[faces[:, k]] for k in range(3))
+    numerator = np.einsum("ij,ij->i", a, np.cross(b, c))
+    denominator = (1 + np.einsum("ij,ij->i", a, b) + np.einsum("ij,ij->i", b, c)
+                   + np.einsum("ij,ij->i", c, a))
+    return 2 * np.arctan2(numerator, denominator)
+
+
+@needs_bunny
+def test_repulsive_curve(tmp_path):
+    """9.5: the bunny's surface maps one-to-one onto the sphere (triangles
+    facing outwards whose solid angles cover it exactly once), the
+    relaxation lowers its energy at every step, sphere vertices map back
+    onto the bunny's; the curve stays on the sphere, grows, never touches
+    itself (ipctk on the test's own edge mesh), lowers its energy at every
+    accepted step, and maps onto the bunny's surface (ipctk's
+    point-triangle distances)."""
+    import warnings
+    from types import SimpleNamespace
+    import repulsive_curve as rc
+    with warnings.catch_warnings():
+        # The sphere map's barriers spread its Hessian's diagonal over ~7e6:
+        # minimizeEnergy warns that the residual bound is loose there.
+        warnings.simplefilter("ignore", yasps.IllConditionedSolve)
+        summary = rc.simulate_curve(SimpleNamespace(
+            frames=4, scale="small", output=tmp_path, no_video=True))
+    mapping, curve = summary.mapping, summary.curve
+    S = mapping.sphere
+    np.testing.assert_allclose(np.linalg.norm(S, axis=1), 1.0, atol=1e-12)
+    solid = spherical_triangle_areas(S, mapping.faces)
+    assert (solid > 0).all()
+    assert abs(solid.sum() - 4 * np.pi) < 1e-9
+    np.testing.assert_allclose(mapping.to_surface(S), mapping.surface,
+                               atol=1e-12)
+    assert (mapping.vertex_density() > 0).all()
+    r = summary.report
+    assert r.iterations > 0
+    assert all(after <= before for before, after in r.stepEnergies)
+    P = curve.points()
+    assert np.isfinite(P).all()
+    np.testing.assert_allclose(np.linalg.norm(P, axis=1), 1.0, atol=1e-12)
+    assert summary.lengths[-1] > 1.2 * summary.lengths[0]
+    mesh = ipctk.CollisionMesh(P, curve.edges.astype(np.int32),
+                               np.zeros((0, 3), np.int32))
+    collisions = ipctk.NormalCollisions()
+    collisions.build(mesh, P, 0.5)
+    assert collisions.compute_minimum_distance(mesh, P) > 0
+    assert not summary.intersections
+    on_bunny = mapping.to_surface(P)
+    T = mapping.surface[mapping.faces]
+    for point in on_bunny:
+        closest = min(ipctk.point_triangle_distance(point, *t) for t in T)
+        assert closest < 1e-20   # squared distance

@@ -9,7 +9,8 @@ from .bodies import (AffineBody, FreeVertices, add_affine_body,
 from .meshes import (HEX_CORNERS, Cage, box_tet_mesh, cage_grid,
                      cloth_corners, cloth_grid, hex_tets, hinges_of,
                      orient_tets, polyline_segments, read_tet_mesh,
-                     signed_tet_volumes, trilinear_weights, zigzag_spring)
+                     signed_tet_volumes, trilinear_weights, tube_mesh,
+                     zigzag_spring)
 from .newton import ImplicitEuler, NewtonReport, iteration_totals, newton
 from .output import (RecordedFrame, SurfaceRecorder, render_surfaces,
                      render_surfaces_array, write_video)
@@ -18,7 +19,7 @@ from .run import Body, RunSummary, simulate
 __all__ = ["AffineBody", "Body", "Cage", "FreeVertices", "HEX_CORNERS",
            "add_caged_surface", "add_free_vertices", "add_hex8_neo_hookean",
            "cage_grid", "hex8_gauss_points", "hex_tets", "lumped_masses",
-           "trilinear_weights", "polyline_segments", "zigzag_spring", "RunSummary", "simulate", "ImplicitEuler", "NewtonReport", "RecordedFrame",
+           "trilinear_weights", "tube_mesh", "polyline_segments", "zigzag_spring", "RunSummary", "simulate", "ImplicitEuler", "NewtonReport", "RecordedFrame",
            "SurfaceRecorder", "add_affine_body", "add_affine_inertia",
            "add_cloth", "add_elastic_tets",
            "box_tet_mesh", "cloth_corners", "cloth_grid", "hinges_of",

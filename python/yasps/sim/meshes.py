@@ -246,3 +246,40 @@ def polyline_segments(lengths) -> np.ndarray:
         start += count
     return np.asarray(out, dtype=np.int64).reshape(-1, 2)
 
+
+
+def tube_mesh(points: np.ndarray, radius: float, sides: int = 6,
+              closed: bool = True):
+    """A tube of ``radius`` around the polyline ``points`` (M, 3), closed by
+    default, for drawing curves with the triangle renderer: a ring of
+    ``sides`` vertices around each point, turned to its tangent; (vertices
+    (M * sides, 3), triangles (int64))."""
+    P = np.asarray(points, dtype=float).reshape(-1, 3)
+    m = len(P)
+    if m < 2 or sides < 3:
+        raise ValueError(f"tube_mesh: needs 2 points and 3 sides, got {m} "
+                         f"points and {sides} sides")
+    after = np.roll(P, -1, axis=0) if closed else np.r_[P[1:], P[-1:]]
+    before = np.roll(P, 1, axis=0) if closed else np.r_[P[:1], P[:-1]]
+    tangent = after - before
+    tangent /= np.maximum(np.linalg.norm(tangent, axis=1, keepdims=True),
+                          1e-300)
+    helper = np.where(np.abs(tangent[:, [2]]) < 0.9, [[0.0, 0.0, 1.0]],
+                      [[1.0, 0.0, 0.0]])
+    normal = np.cross(tangent, helper)
+    normal /= np.linalg.norm(normal, axis=1, keepdims=True)
+    binormal = np.cross(tangent, normal)
+    angle = 2 * np.pi * np.arange(sides) / sides
+    ring = (np.cos(angle)[None, :, None] * normal[:, None]
+            + np.sin(angle)[None, :, None] * binormal[:, None])
+    verts = (P[:, None] + radius * ring).reshape(-1, 3)
+    segments = m if closed else m - 1
+    i = np.arange(segments)[:, None]
+    j = np.arange(sides)[None, :]
+    a = i * sides + j
+    b = i * sides + (j + 1) % sides
+    c = ((i + 1) % m) * sides + j
+    d = ((i + 1) % m) * sides + (j + 1) % sides
+    faces = np.concatenate([np.stack([a, c, b], -1).reshape(-1, 3),
+                            np.stack([b, c, d], -1).reshape(-1, 3)])
+    return verts, faces.astype(np.int64)
