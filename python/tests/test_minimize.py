@@ -203,8 +203,11 @@ def test_factored_and_dense_reduced_hessians_agree(monkeypatch):
         np.testing.assert_allclose(a, b, rtol=0,
                                    atol=1e-12 * np.abs(b).max(), err_msg=name)
     got = s.minimizeEnergy(tolerance=1e-14)
+    # Each direction meets its residual tolerance 1e-14, which bounds their
+    # relative difference by about 2 cond(H) 1e-14 (cond ~ 640 here).
+    bound = 2e-14 * s.lastSolve["conditionEstimate"]
     for a, b in zip(got, want):
-        np.testing.assert_allclose(a, b, rtol=0, atol=1e-12 * np.abs(b).max())
+        np.testing.assert_allclose(a, b, rtol=0, atol=bound * np.abs(b).max())
 
 
 def test_generated_placement_indices_match_the_parameter_locations():
