@@ -10,7 +10,7 @@ each vertex the density of the surface over the sphere."""
 
 from __future__ import annotations
 
-from typing import Tuple
+from typing import Optional, Tuple
 
 import numpy as np
 
@@ -31,19 +31,23 @@ def triangle_areas(points: np.ndarray, faces: np.ndarray) -> np.ndarray:
 
 
 def smooth_to_sphere(verts: np.ndarray, faces: np.ndarray,
-                     max_iterations: int = 5000) -> np.ndarray:
+                     max_iterations: Optional[int] = None) -> np.ndarray:
     """Unit-sphere positions (N, 3) for the vertices of the closed, outward
     oriented genus-0 surface (``verts``, ``faces``): the vertices projected
     from their centroid onto the sphere, then smoothed (each moves half way
     to its neighbours' mean, back onto the sphere, the whole re-centred)
     until no triangle faces inwards, and as many iterations again to even
-    them out. Raises ValueError if ``max_iterations`` do not untangle it."""
+    them out. Raises ValueError if ``max_iterations`` (by default 20 per
+    vertex: smoothing spreads over the mesh in about as many iterations as
+    its diameter in edges squared) do not untangle it."""
     verts = np.asarray(verts, float)
     faces = np.asarray(faces, np.int64)
     edges = edges_of(faces).astype(np.int64)
     degree = np.bincount(edges.ravel(), minlength=len(verts))[:, None]
     X = verts - verts.mean(axis=0)
     X /= np.linalg.norm(X, axis=1, keepdims=True)
+    if max_iterations is None:
+        max_iterations = 20 * len(verts)
     untangled = None
     for iteration in range(max_iterations):
         neighbours = np.zeros_like(X)
