@@ -198,7 +198,8 @@ class Curve:
 def simulate_curve(args) -> SimpleNamespace:
     """Stages 1-4 for ``args.frames`` steps into ``args.output``: the
     summary (frames, report, seconds, min_distance, intersections, files,
-    lengths) that the gallery reads too."""
+    lengths, the curve's positions after each step) that the gallery reads
+    too."""
     output = args.output or REPO / "out" / "paper" / "repulsive_curve"
     output.mkdir(parents=True, exist_ok=True)
     start = time.perf_counter()
@@ -233,12 +234,13 @@ def simulate_curve(args) -> SimpleNamespace:
 
     recorder = SurfaceRecorder(output, {"curve": curve.edges,
                                         "on_bunny": curve.edges})
-    images, closest, files = [], np.inf, {}
+    images, closest, files, history = [], np.inf, {}, []
     stills = {max(1, round(args.frames * k / 4)) for k in range(1, 5)}
     bounds = ((-1.4, -1.4, -1.4), (3.9, 1.4, 1.4))
     for frame in range(1, args.frames + 1):
         total.add(curve.step())
         P = curve.points()
+        history.append(P)
         lengths.append(curve.length())
         closest = min(closest, curve.contact.minDistance())
         meshes, on_bunny = drawn(P)
@@ -256,7 +258,8 @@ def simulate_curve(args) -> SimpleNamespace:
                            min_distance=closest,
                            # The curve crosses itself only through distance 0.
                            intersections=not closest > 0, files=files,
-                           lengths=lengths, mapping=mapping, curve=curve)
+                           lengths=lengths, positions=history,
+                           mapping=mapping, curve=curve)
 
 
 def main() -> None:
