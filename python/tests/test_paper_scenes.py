@@ -236,9 +236,8 @@ def test_repulsive_curve(tmp_path):
     relaxation lowers its energy at every step, sphere vertices map back
     onto the bunny's; the curve stays on the sphere, grows, never touches
     itself in any frame (ipctk on the test's own edge mesh), lowers its
-    energy at every
-    accepted step, and maps onto the bunny's surface (ipctk's
-    point-triangle distances)."""
+    energy at every accepted step, and maps onto the bunny's surface
+    (ipctk's point-triangle distances)."""
     import warnings
     from types import SimpleNamespace
     import repulsive_curve as rc
