@@ -56,19 +56,25 @@ def relative(a, b) -> float:
     return float(np.abs(a - b).max() / max(np.abs(b).max(), 1e-300))
 
 
-@pytest.mark.parametrize("cells, angle, axis, gap, dhat, projection", [
-    (2, 0.0, [1, 2, 0.5], 0.02, 0.05, "none"),
-    (2, 0.3, [1, 2, 0.5], 0.02, 0.05, "none"),
+@pytest.mark.parametrize("cells, angle, axis, gap, dhat, projection, linear_maps", [
+    (2, 0.0, [1, 2, 0.5], 0.02, 0.05, "none", True),
+    (2, 0.3, [1, 2, 0.5], 0.02, 0.05, "none", True),
     # Points whose closest point on an edge lies at its end: ipctk keeps
     # them point-edge pairs (its known type), whose Hessian differs from the
     # point-point one there.
-    (4, 0.3, [0, 0, 1], 0.012, 0.02, "clamp"),
+    (4, 0.3, [0, 0, 1], 0.012, 0.02, "clamp", False),
+    (4, 0.3, [0, 0, 1], 0.012, 0.02, "clamp", True),
 ])
-def test_barrier_matches_ipctk(cells, angle, axis, gap, dhat, projection):
+def test_barrier_matches_ipctk(cells, angle, axis, gap, dhat, projection,
+                               linear_maps, monkeypatch):
     """Two soft boxes within dhat: axis-aligned (parallel edges: mollified
     edge-edge pairs, end-point types) and turned (generic pairs). Energy,
     gradient and Hessian (unprojected, or projected per pair) equal ipctk's
-    BarrierPotential on the same collision set."""
+    BarrierPotential on the same collision set. ipctk clamps each pair's
+    full Hessian, as yasps does without ``linear_map_projection``; with it
+    (the default), yasps clamps the Hessian in the pair's edge vectors
+    instead, whose result is PSD and lies above the unprojected Hessian."""
+    monkeypatch.setattr(yasps.config, "linear_map_projection", linear_maps)
     verts, tets = box_tet_mesh(cells, 0.5)
     faces = surface_of(tets)
     turned = (verts - 0.25) @ rotation(angle, axis).T + 0.25
@@ -93,7 +99,14 @@ def test_barrier_matches_ipctk(cells, angle, axis, gap, dhat, projection):
         ipctk.PSDProjectionMethod.CLAMP
     reference = potential.hessian(contact.collisions, contact.mesh, V,
                                   project_hessian_to_psd=method).toarray()
-    assert relative(H, reference) < 1e-10
+    if projection == "none" or not linear_maps:
+        assert relative(H, reference) < 1e-10
+        return
+    unprojected = potential.hessian(contact.collisions, contact.mesh, V).toarray()
+    scale = np.abs(reference).max()
+    assert np.linalg.eigvalsh(H).min() >= -1e-10 * scale
+    assert np.linalg.eigvalsh(H - unprojected).min() >= -1e-10 * scale
+    assert relative(H, reference) > 1e-6, "the pairs need indefinite Hessians"
 
 
 def soft_and_affine(scene, lift: float, kappa: float, projection="clamp",

@@ -210,8 +210,13 @@ GPU_DERIVATIVES = """
         counts.append(fake.fakeCudaAllocations())
     print(counts[2] - counts[1])
     # With compression, instances whose indices repeat a DoF (here: all of
-    # them) are differentiated on the CPU.
+    # them) are differentiated on the CPU, for energies projected in full:
+    # the inertia, and the elastic energy once it is not projected through
+    # F (compression applies before full projections only).
     yasps.config.compress_local_hessians = True
+    box.minimizeEnergy(fixed=fixed)
+    print(box.lastSolve["energiesDifferentiatedOnGpu"])
+    yasps.config.linear_map_projection = False
     box.minimizeEnergy(fixed=fixed)
     print(box.lastSolve["energiesDifferentiatedOnGpu"])
 """
@@ -246,7 +251,7 @@ def test_gpu_derivatives_feed_the_gpu_assembly():
     out = run_python(GPU_DERIVATIVES % (str(REPO / "python" / "tests"),
                                         str(FAKE_DRIVER)),
                      YASPS_CUDA_LIBRARY=str(FAKE_DRIVER))
-    assert out.split() == ["gpu", "2", "True", "0", "0.0", "0", "0"]
+    assert out.split() == ["gpu", "2", "True", "0", "0.0", "0", "1", "0"]
 
 
 # --- on a GPU: the same values as the CPU ------------------------------------

@@ -240,3 +240,83 @@ def test_pendulum_against_jax():
         x = jnp.array([jnp.sin(t[0]) + jnp.sin(t[1]), -(jnp.cos(t[0]) + jnp.cos(t[1]))])
         return 9.81 * x[1] + jnp.sum((x - jnp.array([0.3, -1.0])) ** 2)
     jax_check(s.energyDerivatives(energy), f, [TH])
+
+
+def _clamp(h, method):
+    w, V = np.linalg.eigh(h)
+    f = np.maximum(w, 0) if method == "clamp" else np.abs(w)
+    return (V * f) @ V.T
+
+
+@pytest.mark.parametrize("method", ["clamp", "abs"])
+def test_projection_through_linear_maps_against_jax(method):
+    """With ``linear_map_projection`` (the default) a tet's stable
+    Neo-Hookean Hessian is projected in F's 9 entries and a spring's in its
+    edge vector's 3: J^T P(d2E/du2) J with u = F or x1 - x0, J = du/dx,
+    every factor from JAX. The tets are compressed, so d2E/dF2 is
+    indefinite and the result differs from projecting the 12x12 Hessian."""
+    base = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]], float)
+    rest = base[None] + rng.normal(scale=0.05, size=(COUNT, 4, 3))
+    cur = 0.5 * rest + rng.normal(scale=0.05, size=rest.shape)
+    dm_inv = np.linalg.inv(np.stack([rest[:, k] - rest[:, 0] for k in (1, 2, 3)], axis=2))
+    mu, lam = 1.0, 20.0
+    s, e, x, c = elements(4, cur)
+    inv = e.addConstant("inv", rows=3, cols=3)
+    inv.updateValue(dm_inv)
+    s.addEnergy(e.addAttribute("energy", computed_attribute=E.stable_neo_hookean(
+        E.deformation_gradient(c, inv), mu, lam, 1.0)), projection=method)
+    s.addMinimizeTarget([x])
+    d = s.energyDerivatives(s.m.e["energy"])
+
+    def F_of(flat, dinv):
+        p = flat.reshape(4, 3)
+        return (jnp.stack([p[k] - p[0] for k in (1, 2, 3)], axis=1) @ dinv).reshape(-1)
+
+    def psi(f):
+        F = f.reshape(3, 3)
+        ic = jnp.sum(F * F)
+        alpha = 1 + 0.75 * mu / lam
+        return 0.5 * mu * (ic - 3) - 0.5 * mu * jnp.log(ic + 1) \
+            + 0.5 * lam * (jnp.linalg.det(F) - alpha) ** 2
+
+    indefinite = 0
+    for i in range(COUNT):
+        flat, dinv = jnp.array(cur[i].reshape(-1)), jnp.array(dm_inv[i])
+        J = np.array(jax.jacobian(F_of)(flat, dinv))
+        HF = np.array(jax.hessian(psi)(F_of(flat, dinv)))
+        indefinite += np.linalg.eigvalsh(HF).min() < 0
+        want = J.T @ _clamp(HF, method) @ J
+        assert_close(d.projectedHessian[i], want)
+        full = _clamp(np.array(jax.hessian(lambda q: psi(F_of(q, dinv)))(flat)), method)
+        if np.linalg.eigvalsh(HF).min() < 0:
+            assert np.abs(full - want).max() > 1e-3 * np.abs(want).max()
+    assert indefinite > 0, "the test needs indefinite Hessians in F"
+
+    ends = rng.normal(size=(COUNT, 2, 3))
+    s2, e2, x2, c2 = elements(2, ends)
+    s2.addEnergy(e2.addAttribute("energy", computed_attribute=E.mass_spring(
+        c2, 10.0, 5.0)), projection=method)
+    s2.addMinimizeTarget([x2])
+    d2 = s2.energyDerivatives(s2.m.e["energy"])
+    spring = lambda u: 2.5 * (jnp.linalg.norm(u) - 10.0) ** 2  # noqa: E731
+    for i in range(COUNT):
+        u = jnp.array(ends[i, 1] - ends[i, 0])
+        J = np.hstack([-np.eye(3), np.eye(3)])
+        want = J.T @ _clamp(np.array(jax.hessian(spring)(u)), method) @ J
+        assert_close(d2.projectedHessian[i], want)
+
+
+def test_projection_in_the_leaves_without_linear_maps(monkeypatch):
+    """``linear_map_projection = False`` projects a tet's full 12x12
+    Hessian, as before: the clamp of JAX's Hessian in the positions."""
+    monkeypatch.setattr(yasps.config, "linear_map_projection", False)
+    base = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]], float)
+    rest = base[None] + rng.normal(scale=0.05, size=(COUNT, 4, 3))
+    cur = 0.5 * rest + rng.normal(scale=0.05, size=rest.shape)
+    dm_inv = np.linalg.inv(np.stack([rest[:, k] - rest[:, 0] for k in (1, 2, 3)], axis=2))
+    s, e, x, c = elements(4, cur)
+    inv = e.addConstant("inv", rows=3, cols=3)
+    inv.updateValue(dm_inv)
+    d = derivatives(s, e, E.stable_neo_hookean(E.deformation_gradient(c, inv), 1.0, 20.0, 1.0))
+    for i in range(COUNT):
+        assert_close(d.projectedHessian[i], _clamp(d.hessian[i], "clamp"))

@@ -25,6 +25,13 @@
   ``None``, the default, decides per energy (factors when they hold at most
   half the values of the dense local Hessian); ``True`` or ``False`` forces
   it.
+- ``linear_map_projection``: where an energy reaches its parameters through
+  a linear map with fewer entries (a tet's deformation gradient F: 9
+  against 12 positions; a spring's edge vector: 3 against 6), project its
+  Hessian in the map's entries, J^T P(d2E/dF2) J (paper 10.4, found by the
+  compiler). PSD either way; where d2E/dF2 is indefinite the result
+  differs from projecting the full Hessian. On by default; ``False``
+  projects in the leaves' entries or the parameters, as before.
 - ``slot_jacobians``: with factored local Hessians on the CPU, take J slot by
   slot from Jacobian tables of the sources (each UNION member's ``X__jac``
   over its own instances, the identity for targets), computed once per
@@ -63,6 +70,7 @@ opt_level: int = 3
 backend: str = os.environ.get("YASPS_BACKEND", "auto").strip().lower() or "auto"
 simd_lanes: int = 0
 separate_reduced_hessians: Optional[bool] = None
+linear_map_projection: bool = True
 slot_jacobians: bool = True
 compress_local_hessians: bool = True
 gpu_derivatives: bool = True

@@ -17,6 +17,10 @@ _FACTORS = {None: "auto", True: "always", False: "never"}
 
 def differentiation_pipeline() -> str:
     """DIFFERENTIATION_PIPELINE with the options of ``config``: whether
-    reduced-space Hessians stay factored (``separate_reduced_hessians``)."""
+    reduced-space Hessians stay factored (``separate_reduced_hessians``)
+    and whether they are projected through linear maps
+    (``linear_map_projection``)."""
     factors = _FACTORS[config.separate_reduced_hessians]
-    return f"{DIFFERENTIATION_PIPELINE}{{hessian-factors={factors}}}"
+    linear = "true" if config.linear_map_projection else "false"
+    return (f"{DIFFERENTIATION_PIPELINE}{{hessian-factors={factors} "
+            f"linear-maps={linear}}}")

@@ -37,6 +37,7 @@ void DifferentiatePass::runOnOperation() {
         << hessianFactors << "'";
     return signalPassFailure();
   }
+  ProjectionOptions options{*factors, linearMaps};
   SymbolTableCollection tables;
   for (auto scene : getOperation().getOps<SceneOp>()) {
     auto minimize = scene.getBodyBlock().getOps<MinimizeOp>();
@@ -56,8 +57,7 @@ void DifferentiatePass::runOnOperation() {
                                 "differentiate";
         return signalPassFailure();
       }
-      if (failed(
-              differentiateEnergy(diff, energy, attr, *factors)))
+      if (failed(differentiateEnergy(diff, energy, attr, options)))
         return signalPassFailure();
     }
   }

@@ -9,7 +9,8 @@
 using namespace mlir;
 
 void mlir::yasps::buildDifferentiatePipeline(OpPassManager &pm,
-                                             StringRef hessianFactors) {
+                                             StringRef hessianFactors,
+                                             bool linearMaps) {
   // yasps-differentiate needs one expression per energy; canonicalize and
   // cse shrink it (and merge the inlined copies) before it is
   // differentiated once per parameter.
@@ -18,6 +19,7 @@ void mlir::yasps::buildDifferentiatePipeline(OpPassManager &pm,
   pm.addPass(createCSEPass());
   YaspsDifferentiateOptions differentiate;
   differentiate.hessianFactors = hessianFactors.str();
+  differentiate.linearMaps = linearMaps;
   pm.addPass(createYaspsDifferentiate(differentiate));
   pm.addPass(createYaspsGenerateIndices());
 }
@@ -31,6 +33,11 @@ struct DifferentiatePipelineOptions
                      "@E__hess_inner_proj and @E__hess_inner apart: never, "
                      "always or auto (see yasps-differentiate)"),
       llvm::cl::init("never")};
+  Option<bool> linearMaps{
+      *this, "linear-maps",
+      llvm::cl::desc("Project Hessians in the entries of a smaller linear "
+                     "cut of the energy (see yasps-differentiate)"),
+      llvm::cl::init(true)};
 };
 } // namespace
 
@@ -39,6 +46,7 @@ void mlir::yasps::registerDifferentiatePipeline() {
       "yasps-differentiate-pipeline",
       "Local gradients, Hessians and placement indices of every energy",
       [](OpPassManager &pm, const DifferentiatePipelineOptions &options) {
-        buildDifferentiatePipeline(pm, options.hessianFactors);
+        buildDifferentiatePipeline(pm, options.hessianFactors,
+                                   options.linearMaps);
       });
 }

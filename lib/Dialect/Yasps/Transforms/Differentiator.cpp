@@ -23,6 +23,7 @@
 //===----------------------------------------------------------------------===//
 
 #include "Differentiator.h"
+#include "Direction.h"
 
 #include "mlir/IR/IRMapping.h"
 
@@ -31,41 +32,6 @@ using namespace mlir::yasps;
 using namespace mlir::yasps::differentiation;
 
 namespace {
-
-/// Tangents of one region's values in one direction.
-class Direction {
-public:
-  using SeedFn = function_ref<FailureOr<Value>(Operation *leaf)>;
-  Direction(OpBuilder &b, SeedFn seedFn) : b(b), seedFn(seedFn) {}
-
-  FailureOr<Value> tangent(Value value) {
-    if (auto it = cache.find(value); it != cache.end())
-      return it->second;
-    Operation *op = value.getDefiningOp();
-    FailureOr<Value> result = Value();
-    if (isa<ReadOp, JoinOp, UnionOp>(op)) {
-      result = seedFn(op);
-    } else {
-      SmallVector<Value> operandTangents;
-      for (Value operand : op->getOperands()) {
-        FailureOr<Value> t = tangent(operand);
-        if (failed(t))
-          return failure();
-        operandTangents.push_back(*t);
-      }
-      result =
-          cast<DifferentiableOpInterface>(op).emitTangent(b, operandTangents);
-    }
-    if (succeeded(result))
-      cache[value] = *result;
-    return result;
-  }
-
-private:
-  OpBuilder &b;
-  SeedFn seedFn;
-  DenseMap<Value, Value> cache;
-};
 
 /// A k x c matrix that is `row` in row `at` and zero elsewhere.
 Value embedRow(OpBuilder &b, Location loc, Value row, int64_t at, int64_t k) {
@@ -226,7 +192,7 @@ ArrayAttr Differentiator::describe(ArrayRef<ParamGroup> groups) {
 }
 
 LogicalResult differentiation::checkSize(Operation *at, StringRef name,
-                                        MatrixType type) {
+                                         MatrixType type) {
   // Rows and columns are checked first: the product cannot overflow.
   if (type.getRows() <= MatrixType::kMaxEntries &&
       type.getCols() <= MatrixType::kMaxEntries &&

@@ -56,6 +56,17 @@ public:
   /// the inner groups.
   FailureOr<AttrOp> innerMap(AttrOp energy);
 
+  /// E's linear cut (linearCut over the leaves of its parameter groups).
+  FailureOr<SmallVector<Value>> innerCut(AttrOp energy);
+
+  /// `E__ij` for a cut of E's region: d(cut entries)/d(parameters), k x n,
+  /// the values' entries column-major in the cut's order.
+  FailureOr<AttrOp> cutMap(AttrOp energy, ArrayRef<Value> cut);
+
+  /// `E__ihess`: E's Hessian with respect to the entries of a cut of its
+  /// region (k x k), or null when it is structurally zero.
+  FailureOr<AttrOp> cutHessian(AttrOp energy, ArrayRef<Value> cut);
+
   /// yasps.params of an attribute: one entry per slot.
   ArrayAttr describe(ArrayRef<ParamGroup> groups);
 
@@ -99,6 +110,15 @@ private:
   DenseSet<Operation *> zeroUnionJacobians;
 };
 
+/// The values of `body` through which its `leaves` reach the yielded value:
+/// affine in the leaves (their Hessian is structurally zero), and together
+/// a cut (every path from a leaf to the yield crosses one), none of them
+/// computed from the others alone. Empty when no leaf reaches the yield.
+SmallVector<Value> linearCut(Block &body, const DenseSet<Operation *> &leaves);
+
+/// The number of entries of a cut's values together.
+int64_t cutEntries(ArrayRef<Value> cut);
+
 /// A constant matrix of `type` from its entries in row-major order.
 Value constantMatrix(OpBuilder &b, Location loc, MatrixType type,
                      ArrayRef<double> rowMajor);
@@ -117,20 +137,33 @@ enum class HessianFactors { never, always, automatic };
 /// The option's value from its spelling (never, always, auto).
 std::optional<HessianFactors> parseHessianFactors(StringRef spelling);
 
+/// How yasps-differentiate projects local Hessians.
+struct ProjectionOptions {
+  HessianFactors factors = HessianFactors::never;
+  /// Project in the entries of a linear cut (linearCut) where it has fewer
+  /// entries than the leaves or the parameters (yasps-differentiate's
+  /// linear-maps option).
+  bool linearMaps = true;
+};
+
 /// Adds `@E__grad`, `@E__hess` and the projected Hessian of `energy`'s
 /// computed attribute `attr`; false when it depends on no target.
 FailureOr<bool> differentiateEnergy(Differentiator &diff, EnergyOp energy,
-                                    AttrOp attr, HessianFactors factors);
+                                    AttrOp attr,
+                                    const ProjectionOptions &options);
 
 /// Adds the PSD projection of E's local Hessian `hessAttr`, by E's method:
 /// in reduced space (paper 5.4) where the parameterisations behind E's
-/// leaves are linear and the leaves have fewer entries than there are
-/// parameters, else of the full Hessian. `@E__hess_proj` records which
-/// (yasps.projection); as `factors` says, the reduced factors stay apart
-/// (`@E__ij`, `@E__hess_inner_proj`, `@E__hess_inner`).
+/// leaves are linear and the inner variables are fewer than the
+/// parameters, else of the full Hessian. The inner variables are the
+/// leaves' entries or, with `options.linearMaps` and where it is smaller,
+/// a linear cut of E's region (paper 10.4: the 9 entries of F rather than
+/// a tet's 12 positions). `@E__hess_proj` records which
+/// (yasps.projection); as `options.factors` says, reduced factors in the
+/// leaves stay apart (`@E__ij`, `@E__hess_inner_proj`, `@E__hess_inner`).
 LogicalResult addProjectedHessian(Differentiator &diff, EnergyOp energy,
                                   AttrOp attr, AttrOp jac, AttrOp hessAttr,
-                                  HessianFactors factors);
+                                  const ProjectionOptions &options);
 
 } // namespace mlir::yasps::differentiation
 

@@ -15,7 +15,8 @@ using namespace mlir::yasps::differentiation;
 
 FailureOr<bool>
 differentiation::differentiateEnergy(Differentiator &diff, EnergyOp energy,
-                                     AttrOp attr, HessianFactors factors) {
+                                     AttrOp attr,
+                                     const ProjectionOptions &options) {
   // Gradient = Jacobian of E (1 x d), transposed; Hessian = Jacobian of
   // the gradient's row.
   FailureOr<AttrOp> jac = diff.jacobian(attr);
@@ -64,8 +65,7 @@ differentiation::differentiateEnergy(Differentiator &diff, EnergyOp energy,
   if (failed(hessAttr) ||
       failed(alias("__grad", DerivativeRole::grad, *jac, row.withShape(d, 1),
                    true)) ||
-      failed(addProjectedHessian(diff, energy, attr, *jac, *hessAttr,
-                                 factors)))
+      failed(addProjectedHessian(diff, energy, attr, *jac, *hessAttr, options)))
     return failure();
   return true;
 }

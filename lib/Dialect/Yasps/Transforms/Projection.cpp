@@ -145,7 +145,7 @@ static bool keepFactors(HessianFactors factors, int64_t m, int64_t d) {
 LogicalResult
 differentiation::addProjectedHessian(Differentiator &diff, EnergyOp energy,
                                      AttrOp attr, AttrOp jac, AttrOp hessAttr,
-                                     HessianFactors factors) {
+                                     const ProjectionOptions &options) {
   MatrixType row = jac.getMatrixType();
   int64_t d = row.getCols();
   MatrixType square = row.withShape(d, d);
@@ -162,7 +162,21 @@ differentiation::addProjectedHessian(Differentiator &diff, EnergyOp energy,
   for (const ParamGroup &g : *groups)
     m += g.leafEntries;
   bool reduced = *reducible && m < d;
-  bool separate = reduced && keepFactors(factors, m, d);
+  bool separate = reduced && keepFactors(options.factors, m, d);
+  // Smaller still, a linear cut of the region (paper 10.4): J^T P(H_cut) J
+  // with H_cut the Hessian in the cut's entries. Factors stay in the
+  // leaves, whose Jacobians the runtime takes slot by slot.
+  SmallVector<Value> cut;
+  if (*reducible && !separate && options.linearMaps) {
+    FailureOr<SmallVector<Value>> found = diff.innerCut(attr);
+    if (failed(found))
+      return failure();
+    if (!found->empty() && cutEntries(*found) < (reduced ? m : d)) {
+      cut = std::move(*found);
+      m = cutEntries(cut);
+      reduced = true;
+    }
+  }
   FailureOr<AttrOp> created = diff.createAttr(
       jac,
       (attr.getSymName() + (separate ? "__hess_inner_proj" : "__hess_proj"))
@@ -186,13 +200,19 @@ differentiation::addProjectedHessian(Differentiator &diff, EnergyOp energy,
     YieldOp::create(pb, loc, p);
     return success();
   }
-  FailureOr<AttrOp> innerGrad = diff.jacobian(attr, /*inner=*/true);
-  FailureOr<AttrOp> innerHess =
-      succeeded(innerGrad) && *innerGrad
-          ? diff.jacobian(*innerGrad, /*inner=*/true, /*symmetric=*/true)
-          : FailureOr<AttrOp>(AttrOp());
-  FailureOr<AttrOp> map = diff.innerMap(attr);
-  if (failed(innerGrad) || failed(innerHess) || failed(map))
+  FailureOr<AttrOp> innerHess, map;
+  if (!cut.empty()) {
+    innerHess = diff.cutHessian(attr, cut);
+    map = diff.cutMap(attr, cut);
+  } else {
+    FailureOr<AttrOp> innerGrad = diff.jacobian(attr, /*inner=*/true);
+    innerHess =
+        succeeded(innerGrad) && *innerGrad
+            ? diff.jacobian(*innerGrad, /*inner=*/true, /*symmetric=*/true)
+            : FailureOr<AttrOp>(AttrOp());
+    map = diff.innerMap(attr);
+  }
+  if (failed(innerHess) || failed(map))
     return failure();
   MatrixType innerType = row.withShape(m, m);
   Value hi = *innerHess
@@ -213,10 +233,10 @@ differentiation::addProjectedHessian(Differentiator &diff, EnergyOp energy,
     if (failed(inner))
       return failure();
     OpBuilder ib = OpBuilder::atBlockEnd(&inner->getBodyBlock());
-    Value h = *innerHess ? ReadOp::create(ib, loc, innerType,
-                                          getScenePath(*innerHess))
-                               .getResult()
-                         : zeros(ib, loc, innerType);
+    Value h = *innerHess
+                  ? ReadOp::create(ib, loc, innerType, getScenePath(*innerHess))
+                        .getResult()
+                  : zeros(ib, loc, innerType);
     YieldOp::create(ib, loc, h);
     return success();
   }

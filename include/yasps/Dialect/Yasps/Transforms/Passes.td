@@ -62,6 +62,11 @@ def YaspsDifferentiate : Pass<"yasps-differentiate", "::mlir::ModuleOp"> {
     for a computed source, that source's own parameters; a UNION gives the
     parameters of the member the instance belongs to, padded to the widest
     member (`#yasps.param<union @name of @union, width w>`, paper 5.2).
+    Where the energy reaches its leaves through a linear cut with fewer
+    entries still (values affine in the leaves that every path from a leaf
+    crosses, such as a tet's deformation gradient), the projection is taken
+    in the cut's entries instead (paper 10.4, done by the compiler; option
+    `linear-maps`).
     Every attribute it adds records what it is, e.g.
     `yasps.derivative = #yasps.derivative<grad of @m::@t::@E>`, and
     projected Hessians how they are projected
@@ -88,7 +93,14 @@ def YaspsDifferentiate : Pass<"yasps-differentiate", "::mlir::ModuleOp"> {
            "@E__hess_proj = J^T P(H_inner) J, so that the runtime forms the "
            "product while it assembles (paper 7.2, 10.9): never, always, or "
            "auto (when the factors hold at most half the values of the "
-           "n x n Hessian: 2 m (n + m) <= n^2)">
+           "n x n Hessian: 2 m (n + m) <= n^2)">,
+    Option<"linearMaps", "linear-maps", "bool", /*default=*/"true",
+           "Where the leaves reach the energy through a linear cut with "
+           "fewer entries (the deformation gradient F of a tet: 9 against "
+           "12 positions), project the Hessian in the cut's entries: "
+           "@E__hess_proj = J^T P(H_cut) J with @E__ij = d(cut)/d(params) "
+           "and @E__ihess the k x k Hessian in the cut (paper 10.4, "
+           "automatically)">
   ];
   let dependentDialects = ["::mlir::yasps::YaspsDialect"];
 }

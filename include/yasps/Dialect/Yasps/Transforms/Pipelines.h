@@ -15,9 +15,10 @@ namespace mlir::yasps {
 /// Adds the passes that give every energy its local derivatives and their
 /// placement indices: yasps-inline-reads, canonicalize, cse,
 /// yasps-differentiate (with its `hessian-factors` option: never, always
-/// or auto) and yasps-generate-indices.
+/// or auto, and `linear-maps`) and yasps-generate-indices.
 void buildDifferentiatePipeline(OpPassManager &pm,
-                                StringRef hessianFactors = "never");
+                                StringRef hessianFactors = "never",
+                                bool linearMaps = true);
 
 /// Registers the `yasps-differentiate-pipeline` pass pipeline, so that it
 /// can be named in textual pipelines.
