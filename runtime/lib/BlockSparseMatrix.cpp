@@ -4,6 +4,8 @@
 
 #include "yasps/Runtime/ThreadPool.h"
 
+#include "VertexBlockSpmv.h"
+
 #include <algorithm>
 #include <map>
 #include <stdexcept>
@@ -296,6 +298,10 @@ void BlockSparseMatrix::multiply3x3InStorageOrder(std::size_t begin,
   // written once per row. The terms are added in the order of addProduct.
   const std::vector<std::int64_t> &offset = layout_.blockOffset;
   const double *data = blockData(begin);
+  if (detail::hasVertexBlockSimd())
+    return detail::multiplyVertexBlocksAvx2(data, blockRow_.data() + begin,
+                                            blockCol_.data() + begin,
+                                            offset.data(), end - begin, x, y);
   std::size_t b = begin;
   while (b < end) {
     const std::int64_t r = blockRow_[b];

@@ -1,0 +1,87 @@
+//===- VertexBlockSpmv.cpp - SIMD product of 3x3 blocks -------------------===//
+//
+// Vertex blocks dominate IPC Hessians, and their scalar product is bound by
+// instruction count, not memory. Here one AVX2 vector holds a block's row
+// (for B^T x_r, a sum of rows times broadcast entries of x_r) or, after an
+// in-register transpose, its column (for B x_c). Multiplications and
+// additions stay separate (no FMA) and in the scalar loop's order, so the
+// threaded path, which uses the scalar products, gives the same bits.
+//
+//===----------------------------------------------------------------------===//
+
+#include "VertexBlockSpmv.h"
+
+#if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__))
+#include <immintrin.h>
+#define YASPS_VERTEX_SIMD 1
+#endif
+
+using namespace yasps::runtime;
+
+#ifdef YASPS_VERTEX_SIMD
+
+bool detail::hasVertexBlockSimd() {
+  static const bool has = __builtin_cpu_supports("avx2");
+  return has;
+}
+
+__attribute__((target("avx2"))) void detail::multiplyVertexBlocksAvx2(
+    const double *data, const std::int64_t *row, const std::int64_t *col,
+    const std::int64_t *offset, std::size_t count, const double *x, double *y) {
+  const __m256i three = _mm256_setr_epi64x(-1, -1, -1, 0);
+  const __m256d zero = _mm256_setzero_pd();
+  std::size_t b = 0;
+  while (b < count) {
+    const std::int64_t r = row[b];
+    double *yr = y + offset[r];
+    const double *xr = x + offset[r];
+    const __m256d xr0 = _mm256_broadcast_sd(xr),
+                  xr1 = _mm256_broadcast_sd(xr + 1),
+                  xr2 = _mm256_broadcast_sd(xr + 2);
+    __m256d acc = _mm256_maskload_pd(yr, three);
+    for (; b < count && row[b] == r; ++b, data += 9) {
+      const std::int64_t c = col[b];
+      const double *xc = x + offset[c];
+      // The fourth lanes of r0 and r1 read the next row's first entry,
+      // within the block; no result takes them. r2's would read past it.
+      const __m256d r0 = _mm256_loadu_pd(data);
+      const __m256d r1 = _mm256_loadu_pd(data + 3);
+      const __m256d r2 = _mm256_maskload_pd(data + 6, three);
+      // Columns of B: a 4x4 transpose with a zero fourth row.
+      const __m256d lo01 = _mm256_unpacklo_pd(r0, r1);
+      const __m256d hi01 = _mm256_unpackhi_pd(r0, r1);
+      const __m256d lo2 = _mm256_unpacklo_pd(r2, zero);
+      const __m256d hi2 = _mm256_unpackhi_pd(r2, zero);
+      const __m256d c0 = _mm256_permute2f128_pd(lo01, lo2, 0x20);
+      const __m256d c1 = _mm256_permute2f128_pd(hi01, hi2, 0x20);
+      const __m256d c2 = _mm256_permute2f128_pd(lo01, lo2, 0x31);
+      // y_r[i] += (B_i0 x0 + B_i1 x1) + B_i2 x2.
+      const __m256d s = _mm256_add_pd(
+          _mm256_add_pd(_mm256_mul_pd(c0, _mm256_broadcast_sd(xc)),
+                        _mm256_mul_pd(c1, _mm256_broadcast_sd(xc + 1))),
+          _mm256_mul_pd(c2, _mm256_broadcast_sd(xc + 2)));
+      acc = _mm256_add_pd(acc, s);
+      if (c != r) {
+        // y_c[j] += B_0j xr0, then B_1j xr1, then B_2j xr2.
+        double *yc = y + offset[c];
+        __m256d t = _mm256_maskload_pd(yc, three);
+        t = _mm256_add_pd(t, _mm256_mul_pd(r0, xr0));
+        t = _mm256_add_pd(t, _mm256_mul_pd(r1, xr1));
+        t = _mm256_add_pd(t, _mm256_mul_pd(r2, xr2));
+        _mm256_maskstore_pd(yc, three, t);
+      }
+    }
+    _mm256_maskstore_pd(yr, three, acc);
+  }
+}
+
+#else
+
+bool detail::hasVertexBlockSimd() { return false; }
+
+void detail::multiplyVertexBlocksAvx2(const double *, const std::int64_t *,
+                                      const std::int64_t *,
+                                      const std::int64_t *, std::size_t,
+                                      const double *, double *) {}
+
+#endif

@@ -1,0 +1,31 @@
+//===- VertexBlockSpmv.h - SIMD product of 3x3 blocks -----------*- C++ -*-===//
+//
+// Private to BlockSparseMatrix.cpp: the single-thread, storage-order SpMV
+// of a run of 3x3 upper blocks with AVX2 where the CPU has it.
+//
+//===----------------------------------------------------------------------===//
+
+#ifndef YASPS_RUNTIME_LIB_VERTEXBLOCKSPMV_H
+#define YASPS_RUNTIME_LIB_VERTEXBLOCKSPMV_H
+
+#include <cstddef>
+#include <cstdint>
+
+namespace yasps::runtime::detail {
+
+/// Whether this CPU runs multiplyVertexBlocksAvx2.
+bool hasVertexBlockSimd();
+
+/// y_r += B x_c and, off the diagonal, y_c += B^T x_r for the `count` 3x3
+/// row-major blocks at `data` (rows consecutive), block b at (row[b],
+/// col[b]) with DoF offsets `offset`. Adds the same terms in the same
+/// order as the scalar loop, one vector lane per row or column of a block,
+/// so the results are identical to the last bit.
+void multiplyVertexBlocksAvx2(const double *data, const std::int64_t *row,
+                              const std::int64_t *col,
+                              const std::int64_t *offset, std::size_t count,
+                              const double *x, double *y);
+
+} // namespace yasps::runtime::detail
+
+#endif // YASPS_RUNTIME_LIB_VERTEXBLOCKSPMV_H
