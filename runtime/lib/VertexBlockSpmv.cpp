@@ -75,9 +75,57 @@ __attribute__((target("avx2"))) void detail::multiplyVertexBlocksAvx2(
   }
 }
 
+__attribute__((target("avx2"))) void detail::multiplyVertexRowAvx2(
+    const double *values, std::size_t first, const std::size_t *transposed,
+    std::size_t numTransposed, std::size_t own, std::size_t numOwn,
+    const std::int64_t *row, const std::int64_t *col,
+    const std::int64_t *offset, const double *x, double *yr) {
+  const __m256i three = _mm256_setr_epi64x(-1, -1, -1, 0);
+  const __m256d zero = _mm256_setzero_pd();
+  __m256d acc = _mm256_maskload_pd(yr, three);
+  for (std::size_t k = 0; k < numTransposed; ++k) {
+    const std::size_t b = transposed[k];
+    const double *data = values + 9 * (b - first);
+    const double *xq = x + offset[row[b]];
+    acc = _mm256_add_pd(
+        acc, _mm256_mul_pd(_mm256_loadu_pd(data), _mm256_broadcast_sd(xq)));
+    acc = _mm256_add_pd(acc, _mm256_mul_pd(_mm256_loadu_pd(data + 3),
+                                           _mm256_broadcast_sd(xq + 1)));
+    acc = _mm256_add_pd(acc, _mm256_mul_pd(_mm256_maskload_pd(data + 6, three),
+                                           _mm256_broadcast_sd(xq + 2)));
+  }
+  const double *data = values + 9 * (own - first);
+  for (std::size_t k = 0; k < numOwn; ++k, data += 9) {
+    const double *xc = x + offset[col[own + k]];
+    const __m256d r0 = _mm256_loadu_pd(data);
+    const __m256d r1 = _mm256_loadu_pd(data + 3);
+    const __m256d r2 = _mm256_maskload_pd(data + 6, three);
+    const __m256d lo01 = _mm256_unpacklo_pd(r0, r1);
+    const __m256d hi01 = _mm256_unpackhi_pd(r0, r1);
+    const __m256d lo2 = _mm256_unpacklo_pd(r2, zero);
+    const __m256d hi2 = _mm256_unpackhi_pd(r2, zero);
+    const __m256d s = _mm256_add_pd(
+        _mm256_add_pd(_mm256_mul_pd(_mm256_permute2f128_pd(lo01, lo2, 0x20),
+                                    _mm256_broadcast_sd(xc)),
+                      _mm256_mul_pd(_mm256_permute2f128_pd(hi01, hi2, 0x20),
+                                    _mm256_broadcast_sd(xc + 1))),
+        _mm256_mul_pd(_mm256_permute2f128_pd(lo01, lo2, 0x31),
+                      _mm256_broadcast_sd(xc + 2)));
+    acc = _mm256_add_pd(acc, s);
+  }
+  _mm256_maskstore_pd(yr, three, acc);
+}
+
 #else
 
 bool detail::hasVertexBlockSimd() { return false; }
+
+void detail::multiplyVertexRowAvx2(const double *, std::size_t,
+                                   const std::size_t *, std::size_t,
+                                   std::size_t, std::size_t,
+                                   const std::int64_t *, const std::int64_t *,
+                                   const std::int64_t *, const double *,
+                                   double *) {}
 
 void detail::multiplyVertexBlocksAvx2(const double *, const std::int64_t *,
                                       const std::int64_t *,

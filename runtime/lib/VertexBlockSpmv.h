@@ -26,6 +26,19 @@ void multiplyVertexBlocksAvx2(const double *data, const std::int64_t *row,
                               const std::int64_t *offset, std::size_t count,
                               const double *x, double *y);
 
+/// Row r of the threaded product, 3x3 blocks: y_r += B^T x_q for the
+/// `numTransposed` blocks `transposed` (indices of off-diagonal blocks (q,
+/// r), in order) and then y_r += B x_c for the `numOwn` consecutive blocks
+/// of row r starting at `own`. `values` holds block b at values + 9 b
+/// relative to `first`, the group's first block. Same order as the scalar
+/// products.
+void multiplyVertexRowAvx2(const double *values, std::size_t first,
+                           const std::size_t *transposed,
+                           std::size_t numTransposed, std::size_t own,
+                           std::size_t numOwn, const std::int64_t *row,
+                           const std::int64_t *col, const std::int64_t *offset,
+                           const double *x, double *yr);
+
 } // namespace yasps::runtime::detail
 
 #endif // YASPS_RUNTIME_LIB_VERTEXBLOCKSPMV_H
