@@ -8,7 +8,7 @@ second call, which reuses the static structure), the PCG
 iterations, and the block-sparse SpMV of the runtime against SciPy's CSR
 SpMV on the same matrix (one thread each; SciPy's is single-threaded).
 
-    python3 bench/newton_system.py [--repeat 20]
+    python3 bench/newton_system.py [--repeat 20] [--threads 1]
 """
 
 from __future__ import annotations
@@ -64,8 +64,11 @@ def build():
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--repeat", type=int, default=20)
+    parser.add_argument("--threads", type=int, default=1,
+                        help="threads for the Newton iteration (the SpMV "
+                        "comparison stays on one)")
     args = parser.parse_args()
-    yasps.config.num_threads = 1
+    yasps.config.num_threads = args.threads
     s = build()
     s.minimizeEnergy(tolerance=1e-4)          # compiles the kernels
     first_indices = s.lastSolve["seconds"]["indices"]
@@ -74,7 +77,7 @@ def main() -> None:
     seconds = info["seconds"]
     total = sum(seconds.values())
     print("one Newton iteration, bunny-19k (19,193 vertices, 79,935 tets), "
-          "stable Neo-Hookean + inertia, one thread")
+          f"stable Neo-Hookean + inertia, {args.threads} thread(s)")
     for stage in ("derivatives", "indices", "assembly", "solve"):
         print(f"  {stage:12s}{seconds[stage] * 1e3:9.1f} ms  "
               f"{100 * seconds[stage] / total:5.1f}%")
