@@ -217,8 +217,9 @@ TEST(BlockSparseMatrix, MultipliesLikeTheDenseMatrix) {
 }
 
 TEST(BlockSparseMatrix, VertexBlocksGiveTheSameBitsOnEveryThreadCount) {
-  // Only 3x3 blocks: one thread takes the SIMD path where the CPU has one,
-  // more threads the scalar products; both add in the same order.
+  // Only 3x3 blocks: one thread takes the single storage-order pass, three
+  // the threaded one (SIMD row kernels where the CPU has them, else
+  // scalar products); both add in the same order.
   std::mt19937 rng(5);
   BlockLayout layout =
       BlockLayout::fromSizes(std::vector<std::int64_t>(300, 3));
@@ -259,9 +260,9 @@ TEST(BlockSparseMatrix, VertexBlocksGiveTheSameBitsOnEveryThreadCount) {
       expected[i] += dense[i * n + j] * x[j];
   std::vector<double> one(static_cast<std::size_t>(n), 7.0),
       two(static_cast<std::size_t>(n), -7.0);
-  ThreadPool single(1), pair(2);
+  ThreadPool single(1), three(3);
   m.multiply(x.data(), one.data(), single);
-  m.multiply(x.data(), two.data(), pair);
+  m.multiply(x.data(), two.data(), three);
   double scale = 0.0;
   for (double e : expected)
     scale = std::max(scale, std::abs(e));
