@@ -14,8 +14,11 @@
 - ``simd_lanes``: CPU kernels evaluate this many instances at once, one per
   SIMD lane: their arithmetic runs on vectors, and a PSD projection's
   eigensolver works on that many matrices in lockstep. 0, the default, uses
-  the host's vector width in doubles (8 with AVX-512, else 4); 1 evaluates
-  one instance at a time.
+  the host's vector width in doubles (8 with AVX-512, else 4), and twice
+  that for kernels that PSD-project a matrix of at most 12x12 (two vectors
+  of eigensolvers overlap their chains of square roots and divisions:
+  17% faster on stable Neo-Hookean's 9x9); 1 evaluates one instance at a
+  time. A width set here applies to every kernel.
 - ``separate_reduced_hessians``: where the reduced-space projection applies
   (paper 5.4), keep each local Hessian as its factors, the inner map J and
   the projected inner Hessian P, and form J^T P J only while assembling

@@ -42,7 +42,14 @@ def YaspsLowerToLoops : Pass<"yasps-lower-to-loops", "::mlir::ModuleOp"> {
     Option<"lanes", "lanes", "int64_t", /*default=*/"1",
            "Instances evaluated together in SIMD lanes: the arithmetic on "
            "vector<lanes x f64> values (1: one instance at a time, as GPU "
-           "threads do; CPU kernels use the host's vector width)">
+           "threads do; CPU kernels use the host's vector width)">,
+    Option<"projectionLanes", "projection-lanes", "int64_t",
+           /*default=*/"0",
+           "Lanes of kernels that PSD-project a matrix of at most 12x12 "
+           "(0: `lanes`). The eigensolver is a chain of dependent square "
+           "roots and divisions; two vectors of problems per step overlap "
+           "two chains (the CPU compiler's default: twice the host's "
+           "width)">
   ];
   let dependentDialects = [
     "::mlir::arith::ArithDialect", "::mlir::func::FuncDialect",

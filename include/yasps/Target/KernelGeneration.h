@@ -82,11 +82,14 @@ runPasses(ModuleOp module, const std::string &what,
 /// paths; empty: every energy). `prePipeline` (a yasps-opt pipeline string,
 /// e.g. "yasps-inline-reads,cse,yasps-differentiate") runs first, for
 /// attributes that passes create. `lanes` > 1 evaluates that many
-/// instances at once in SIMD lanes (CPU kernels). A requested attribute that
-/// does not exist after `prePipeline` is a MissingAttributeError.
+/// instances at once in SIMD lanes (CPU kernels); `projectionLanes` (0:
+/// `lanes`) is the width of kernels that PSD-project a small matrix (see
+/// yasps-lower-to-loops). A requested attribute that does not exist after
+/// `prePipeline` is a MissingAttributeError.
 llvm::Expected<OwningOpRef<ModuleOp>>
 generateLoopKernels(ModuleOp module, const std::vector<std::string> &attributes,
-                    llvm::StringRef prePipeline, int64_t lanes = 1);
+                    llvm::StringRef prePipeline, int64_t lanes = 1,
+                    int64_t projectionLanes = 0);
 
 /// The kernels' descriptions, read from the functions of
 /// generateLoopKernels.

@@ -345,7 +345,11 @@ mlir::yasps::compileCpuKernels(ModuleOp module,
 
   // 1. Kernel functions in upstream dialects.
   int64_t lanes = options.lanes > 0 ? options.lanes : hostDoubleLanes();
-  auto generated = generateLoopKernels(module, attributes, prePipeline, lanes);
+  // By default projections of small matrices run two vectors of problems
+  // at a time; a width the user chose applies to every kernel.
+  int64_t projectionLanes = options.lanes > 0 ? options.lanes : 2 * lanes;
+  auto generated = generateLoopKernels(module, attributes, prePipeline, lanes,
+                                       projectionLanes);
   if (!generated)
     return generated.takeError();
   OwningOpRef<ModuleOp> kernels = std::move(*generated);

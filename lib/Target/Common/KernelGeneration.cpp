@@ -99,10 +99,9 @@ checkAttributesExist(ModuleOp module,
   return llvm::Error::success();
 }
 
-llvm::Expected<OwningOpRef<ModuleOp>>
-mlir::yasps::generateLoopKernels(ModuleOp module,
-                                 const std::vector<std::string> &attributes,
-                                 StringRef prePipeline, int64_t lanes) {
+llvm::Expected<OwningOpRef<ModuleOp>> mlir::yasps::generateLoopKernels(
+    ModuleOp module, const std::vector<std::string> &attributes,
+    StringRef prePipeline, int64_t lanes, int64_t projectionLanes) {
   OwningOpRef<ModuleOp> kernels(cast<ModuleOp>(module->clone()));
   if (!prePipeline.empty())
     if (llvm::Error err = runPasses(*kernels, "kernel generation failed",
@@ -118,6 +117,7 @@ mlir::yasps::generateLoopKernels(ModuleOp module,
             lowerOptions.attributes.assign(attributes.begin(),
                                            attributes.end());
             lowerOptions.lanes = lanes;
+            lowerOptions.projectionLanes = projectionLanes;
             pm.addPass(createYaspsLowerToLoops(lowerOptions));
             pm.addPass(createYaspsStripScenes());
             // Bottom-up: on the straight-line code of a large projection
