@@ -333,7 +333,9 @@ void BlockSparseMatrix::multiply(const double *x, double *y,
   // The threaded path reads every off-diagonal block twice (once for its
   // row, once through its column's list), the storage-order pass once: on
   // two threads the single pass is faster (bunny-19k: 0.75 against 0.95
-  // ms), from three on the threads win. Both give the same bits.
+  // ms). Three or more threads split the rows; that they win there is
+  // expected (half the reads per thread from three on), not yet measured:
+  // the development machine has two cores. Both give the same bits.
   if (pool.size() < kMinThreadsForThreadedProduct)
     return multiplyInStorageOrder(x, y);
   const std::vector<std::int64_t> &offset = layout_.blockOffset;

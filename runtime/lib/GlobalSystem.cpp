@@ -113,7 +113,9 @@ void GlobalSystem::setZero() {
 static constexpr std::int64_t kInstancesPerChunk = 256;
 // Threads from which assembly is split between them. Shared, the matrix
 // takes atomic additions, which cost more than a second thread gains:
-// bunny-19k assembles in 25 ms on one thread and 36 ms on two.
+// bunny-19k assembles in 25 ms on one thread and 36 ms on two. From three
+// threads on they split it (where that wins is not measured yet: the
+// development machine has two cores).
 static constexpr unsigned kMinThreadsForAtomics = 3;
 
 /// target += value, atomically with respect to other atomicAdds.
