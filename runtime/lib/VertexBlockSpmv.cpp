@@ -25,11 +25,29 @@ bool detail::hasVertexBlockSimd() {
   return has;
 }
 
+/// B x_c for the 3x3 block with rows r0, r1, r2 (fourth lanes ignored):
+/// the columns by a 4x4 transpose with a zero fourth row, then lane i is
+/// (B_i0 x0 + B_i1 x1) + B_i2 x2, the scalar loop's order.
+__attribute__((target("avx2"), always_inline)) static inline __m256d
+timesColumns(__m256d r0, __m256d r1, __m256d r2, const double *xc) {
+  const __m256d zero = _mm256_setzero_pd();
+  const __m256d lo01 = _mm256_unpacklo_pd(r0, r1);
+  const __m256d hi01 = _mm256_unpackhi_pd(r0, r1);
+  const __m256d lo2 = _mm256_unpacklo_pd(r2, zero);
+  const __m256d hi2 = _mm256_unpackhi_pd(r2, zero);
+  const __m256d c0 = _mm256_permute2f128_pd(lo01, lo2, 0x20);
+  const __m256d c1 = _mm256_permute2f128_pd(hi01, hi2, 0x20);
+  const __m256d c2 = _mm256_permute2f128_pd(lo01, lo2, 0x31);
+  return _mm256_add_pd(
+      _mm256_add_pd(_mm256_mul_pd(c0, _mm256_broadcast_sd(xc)),
+                    _mm256_mul_pd(c1, _mm256_broadcast_sd(xc + 1))),
+      _mm256_mul_pd(c2, _mm256_broadcast_sd(xc + 2)));
+}
+
 __attribute__((target("avx2"))) void detail::multiplyVertexBlocksAvx2(
     const double *data, const std::int64_t *row, const std::int64_t *col,
     const std::int64_t *offset, std::size_t count, const double *x, double *y) {
   const __m256i three = _mm256_setr_epi64x(-1, -1, -1, 0);
-  const __m256d zero = _mm256_setzero_pd();
   std::size_t b = 0;
   while (b < count) {
     const std::int64_t r = row[b];
@@ -47,20 +65,7 @@ __attribute__((target("avx2"))) void detail::multiplyVertexBlocksAvx2(
       const __m256d r0 = _mm256_loadu_pd(data);
       const __m256d r1 = _mm256_loadu_pd(data + 3);
       const __m256d r2 = _mm256_maskload_pd(data + 6, three);
-      // Columns of B: a 4x4 transpose with a zero fourth row.
-      const __m256d lo01 = _mm256_unpacklo_pd(r0, r1);
-      const __m256d hi01 = _mm256_unpackhi_pd(r0, r1);
-      const __m256d lo2 = _mm256_unpacklo_pd(r2, zero);
-      const __m256d hi2 = _mm256_unpackhi_pd(r2, zero);
-      const __m256d c0 = _mm256_permute2f128_pd(lo01, lo2, 0x20);
-      const __m256d c1 = _mm256_permute2f128_pd(hi01, hi2, 0x20);
-      const __m256d c2 = _mm256_permute2f128_pd(lo01, lo2, 0x31);
-      // y_r[i] += (B_i0 x0 + B_i1 x1) + B_i2 x2.
-      const __m256d s = _mm256_add_pd(
-          _mm256_add_pd(_mm256_mul_pd(c0, _mm256_broadcast_sd(xc)),
-                        _mm256_mul_pd(c1, _mm256_broadcast_sd(xc + 1))),
-          _mm256_mul_pd(c2, _mm256_broadcast_sd(xc + 2)));
-      acc = _mm256_add_pd(acc, s);
+      acc = _mm256_add_pd(acc, timesColumns(r0, r1, r2, xc));
       if (c != r) {
         // y_c[j] += B_0j xr0, then B_1j xr1, then B_2j xr2.
         double *yc = y + offset[c];
@@ -81,7 +86,6 @@ __attribute__((target("avx2"))) void detail::multiplyVertexRowAvx2(
     const std::int64_t *row, const std::int64_t *col,
     const std::int64_t *offset, const double *x, double *yr) {
   const __m256i three = _mm256_setr_epi64x(-1, -1, -1, 0);
-  const __m256d zero = _mm256_setzero_pd();
   __m256d acc = _mm256_maskload_pd(yr, three);
   for (std::size_t k = 0; k < numTransposed; ++k) {
     const std::size_t b = transposed[k];
@@ -100,18 +104,7 @@ __attribute__((target("avx2"))) void detail::multiplyVertexRowAvx2(
     const __m256d r0 = _mm256_loadu_pd(data);
     const __m256d r1 = _mm256_loadu_pd(data + 3);
     const __m256d r2 = _mm256_maskload_pd(data + 6, three);
-    const __m256d lo01 = _mm256_unpacklo_pd(r0, r1);
-    const __m256d hi01 = _mm256_unpackhi_pd(r0, r1);
-    const __m256d lo2 = _mm256_unpacklo_pd(r2, zero);
-    const __m256d hi2 = _mm256_unpackhi_pd(r2, zero);
-    const __m256d s = _mm256_add_pd(
-        _mm256_add_pd(_mm256_mul_pd(_mm256_permute2f128_pd(lo01, lo2, 0x20),
-                                    _mm256_broadcast_sd(xc)),
-                      _mm256_mul_pd(_mm256_permute2f128_pd(hi01, hi2, 0x20),
-                                    _mm256_broadcast_sd(xc + 1))),
-        _mm256_mul_pd(_mm256_permute2f128_pd(lo01, lo2, 0x31),
-                      _mm256_broadcast_sd(xc + 2)));
-    acc = _mm256_add_pd(acc, s);
+    acc = _mm256_add_pd(acc, timesColumns(r0, r1, r2, xc));
   }
   _mm256_maskstore_pd(yr, three, acc);
 }

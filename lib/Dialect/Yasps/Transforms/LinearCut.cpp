@@ -135,16 +135,11 @@ FailureOr<SmallVector<Value>> Differentiator::innerCut(AttrOp energy) {
   return linearCut(energy.getBodyBlock(), leaves);
 }
 
-/// The number of entries of `values` together.
-static int64_t entriesOf(ArrayRef<Value> values) {
+int64_t differentiation::cutEntries(ArrayRef<Value> values) {
   int64_t k = 0;
   for (Value v : values)
     k += cast<MatrixType>(v.getType()).getNumElements();
   return k;
-}
-
-int64_t differentiation::cutEntries(ArrayRef<Value> cut) {
-  return entriesOf(cut);
 }
 
 /// A copy of `from`'s computation at the end of `into`: the copy of its
@@ -173,20 +168,11 @@ static std::pair<size_t, int64_t> locate(ArrayRef<Value> cut, int64_t index) {
   llvm_unreachable("entry beyond the cut");
 }
 
-/// The unit matrix of `v`'s shape at column-major entry `local`.
-static Value unitOf(OpBuilder &b, Value v, int64_t local) {
-  auto type = cast<MatrixType>(v.getType());
-  SmallVector<double> rowMajor(type.getNumElements(), 0.0);
-  rowMajor[(local % type.getRows()) * type.getCols() + local / type.getRows()] =
-      1.0;
-  return constantMatrix(b, v.getLoc(), type, rowMajor);
-}
-
 FailureOr<AttrOp> Differentiator::cutMap(AttrOp energy, ArrayRef<Value> cut) {
   FailureOr<SmallVector<ParamGroup>> groups = groupsOf(energy);
   if (failed(groups))
     return failure();
-  int64_t k = entriesOf(cut);
+  int64_t k = cutEntries(cut);
   int64_t d =
       groups->empty() ? 0 : groups->back().offset + groups->back().size();
   MatrixType scalar = energy.getMatrixType();
@@ -246,7 +232,7 @@ FailureOr<AttrOp> Differentiator::cutMap(AttrOp energy, ArrayRef<Value> cut) {
 
 FailureOr<AttrOp> Differentiator::cutHessian(AttrOp energy,
                                              ArrayRef<Value> cut) {
-  int64_t k = entriesOf(cut);
+  int64_t k = cutEntries(cut);
   MatrixType scalar = energy.getMatrixType();
   FailureOr<AttrOp> created =
       createAttr(energy, (energy.getSymName() + "__ihess").str(),
@@ -262,7 +248,8 @@ FailureOr<AttrOp> Differentiator::cutHessian(AttrOp energy,
   auto seedAt = [&](int64_t entry) {
     return [&, entry](size_t index) -> Value {
       auto [at, local] = locate(clonedCut, entry);
-      return at == index ? unitOf(b, clonedCut[at], local) : Value();
+      return at == index ? unitSeed(b, clonedCut[at].getDefiningOp(), local)
+                         : Value();
     };
   };
   // Forward over forward with the cut as the variables: the gradient's
