@@ -46,6 +46,18 @@
   in assembly, merge the rows and columns of parameters that share a DoF
   and drop UNION padding, then project the k x k matrix with a kernel
   compiled for that size (paper 7.2). On by default.
+- ``precision``: the float type derivative kernels compute in, ``"f64"``
+  (the default) or ``"f32"``; a scene's own ``precision``
+  (``yasps.scene(name, precision=...)``) overrides it. In f32 the local
+  gradients, Hessians, PSD projections and placement indices of the
+  Newton system are computed in single precision, with twice the SIMD
+  lanes on the CPU. Values stay f64: ``compute()``, ``evaluateEnergy`` (the
+  line search compares energies whose decrease near convergence is below
+  f32's round-off) and the world positions collision detection reads. The
+  buffers the runtime keeps (attributes, local derivatives, the global
+  system) and the solve are f64, so the Newton update and its dot
+  products are f64. ``docs/accuracy.md`` says what f32 costs in accuracy
+  and where it breaks.
 - ``gpu_derivatives``: on the GPU backend, ``minimizeEnergy`` computes the
   energies' local derivatives on the device, where assembly reads them
   (``yasps.gpu_derivatives``). Off, they are computed on the CPU and
@@ -77,3 +89,16 @@ linear_map_projection: bool = True
 slot_jacobians: bool = True
 compress_local_hessians: bool = True
 gpu_derivatives: bool = True
+precision: str = "f64"
+
+#: The values ``precision`` (and a scene's) may take.
+PRECISIONS = ("f64", "f32")
+
+
+def resolve_precision(scene_precision: Optional[str]) -> str:
+    """The precision a scene computes in: its own, else ``precision``.
+    Raises ValueError for anything but "f64" or "f32"."""
+    value = scene_precision if scene_precision is not None else precision
+    if value not in PRECISIONS:
+        raise ValueError(f"precision must be one of {PRECISIONS}, got {value!r}")
+    return value

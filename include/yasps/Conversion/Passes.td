@@ -32,6 +32,10 @@ def YaspsLowerToLoops : Pass<"yasps-lower-to-loops", "::mlir::ModuleOp"> {
     binds buffers by it. `yasps.kernel_shape` is the [rows, cols] of
     each instance's value in `out`. Instance counts are not compiled in: a
     dynamic primitive changes size without a new kernel.
+
+    Kernels compute in the element type of the IR (`f64` or `f32`); with
+    `storage=`, float buffers hold that type instead, converted at every
+    load and store (f32 arithmetic on f64 data).
   }];
   let options = [
     ListOption<"attributes", "attributes", "std::string",
@@ -49,7 +53,13 @@ def YaspsLowerToLoops : Pass<"yasps-lower-to-loops", "::mlir::ModuleOp"> {
            "(0: `lanes`). The eigensolver is a chain of dependent square "
            "roots and divisions; two vectors of problems per step overlap "
            "two chains (the CPU compiler's default: twice the host's "
-           "width)">
+           "width)">,
+    Option<"storage", "storage", "std::string", /*default=*/"\"\"",
+           "Float type of the attribute and output buffers: empty (each "
+           "buffer has its attribute's element type), `f32` or `f64`. Where "
+           "it differs from the attribute's type, loads extend or truncate "
+           "to the type the IR computes in and stores convert back: the "
+           "runtime keeps f64 buffers while kernels compute in f32">
   ];
   let dependentDialects = [
     "::mlir::arith::ArithDialect", "::mlir::func::FuncDialect",

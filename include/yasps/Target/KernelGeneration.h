@@ -84,12 +84,19 @@ runPasses(ModuleOp module, const std::string &what,
 /// attributes that passes create. `lanes` > 1 evaluates that many
 /// instances at once in SIMD lanes (CPU kernels); `projectionLanes` (0:
 /// `lanes`) is the width of kernels that PSD-project a small matrix (see
-/// yasps-lower-to-loops). A requested attribute that does not exist after
-/// `prePipeline` is a MissingAttributeError.
+/// yasps-lower-to-loops). Float buffers are f64 whatever the IR computes
+/// in: the runtime holds attributes, derivatives and indices in f64. A
+/// requested attribute that does not exist after `prePipeline` is a
+/// MissingAttributeError.
 llvm::Expected<OwningOpRef<ModuleOp>>
 generateLoopKernels(ModuleOp module, const std::vector<std::string> &attributes,
                     llvm::StringRef prePipeline, int64_t lanes = 1,
                     int64_t projectionLanes = 0);
+
+/// The widest float type the attributes of `module`'s scenes compute in, in
+/// bits: 32 for a scene written in f32 throughout, else 64. CPU kernels fit
+/// twice the lanes in a vector register at 32.
+unsigned computeFloatBits(ModuleOp module);
 
 /// The kernels' descriptions, read from the functions of
 /// generateLoopKernels.

@@ -31,6 +31,8 @@
 #include "mlir/IR/Builders.h"
 #include "mlir/Interfaces/FunctionInterfaces.h"
 
+#include <cmath>
+
 namespace mlir::yasps {
 
 struct ImperativeBuilder {
@@ -301,9 +303,16 @@ struct ImperativeBuilder {
   /// sqrt(x^2 + y^2) without overflow or underflow in the squares.
   Value hypot(Value x, Value y) {
     Value sq = add(mul(x, x), mul(y, y));
-    // The squares are representable between these bounds (with margin).
-    Value safe = both(fcmp(arith::CmpFPredicate::OLT, sq, cst(1e300)),
-                      fcmp(arith::CmpFPredicate::OGT, sq, cst(1e-300)));
+    // The squares are representable and normal between these bounds, with
+    // a margin of 2^26 (about 1e-300..1e300 in f64, 1e-30..1e30 in f32).
+    const llvm::fltSemantics &semantics = type.getFloatSemantics();
+    double margin = std::ldexp(1.0, 26);
+    double largest = APFloat::getLargest(semantics).convertToDouble();
+    double smallest =
+        APFloat::getSmallestNormalized(semantics).convertToDouble();
+    Value safe =
+        both(fcmp(arith::CmpFPredicate::OLT, sq, cst(largest / margin)),
+             fcmp(arith::CmpFPredicate::OGT, sq, cst(smallest * margin)));
     auto scaled = [&] {
       Value big = max(abs(x), abs(y));
       Value nonzero = gt(big, cst(0.0));

@@ -26,18 +26,24 @@ namespace mlir::yasps {
 /// the evaluation meets stored attributes, connectivities and unions.
 class KernelEmitter {
 public:
+  /// `storageType`, when set, is the float type of every attribute and
+  /// output buffer, whatever the IR computes in (yasps-lower-to-loops'
+  /// `storage` option).
   KernelEmitter(SceneOp scene, SymbolTableCollection &tables, func::FuncOp func,
-                bool symbolicZeros)
-      : scene(scene), tables(tables), func(func), symbolicZeros(symbolicZeros) {
-  }
+                bool symbolicZeros, FloatType storageType = {})
+      : scene(scene), tables(tables), func(func), symbolicZeros(symbolicZeros),
+        storageType(storageType) {}
 
   /// The buffer argument holding `symbol`'s data, created on first use.
+  /// Float buffers hold the storage type where one is set.
   Value buffer(KernelArgKind kind, Operation *symbol, Type elementType) {
     auto key = std::make_pair(kind, symbol);
     auto it = buffers.find(key);
     if (it != buffers.end())
       return it->second;
     Block &entry = func.getBody().front();
+    if (storageType && isa<FloatType>(elementType))
+      elementType = storageType;
     Type type = MemRefType::get({ShapedType::kDynamic}, elementType);
     Value arg = entry.addArgument(type, symbol->getLoc());
     buffers[key] = arg;
@@ -69,8 +75,24 @@ public:
   void store(OpBuilder &b, Value out, const ScalarMatrix &value, Value index) {
     Location loc = func.getLoc();
     Value base = offset(b, index, value.values.size());
+    Type stored = cast<MemRefType>(out.getType()).getElementType();
     for (auto [i, scalar] : llvm::enumerate(value.values))
-      memref::StoreOp::create(b, loc, scalar, out, ValueRange{add(b, base, i)});
+      memref::StoreOp::create(b, loc, convertFloat(b, loc, scalar, stored), out,
+                              ValueRange{add(b, base, i)});
+  }
+
+  /// `value` (a float or a vector of floats) as element type `to`: extended
+  /// or truncated (to nearest) where the widths differ.
+  static Value convertFloat(OpBuilder &b, Location loc, Value value, Type to) {
+    Type from = getElementTypeOrSelf(value.getType());
+    if (from == to)
+      return value;
+    Type target = to;
+    if (auto vector = dyn_cast<VectorType>(value.getType()))
+      target = vector.clone(to);
+    if (cast<FloatType>(to).getWidth() > cast<FloatType>(from).getWidth())
+      return arith::ExtFOp::create(b, loc, target, value);
+    return arith::TruncFOp::create(b, loc, target, value);
   }
 
   ArrayAttr getRoles() { return ArrayAttr::get(func.getContext(), roles); }
@@ -180,8 +202,11 @@ private:
     Value base = offset(b, index, type.getNumElements());
     ScalarMatrix out{type.getRows(), type.getCols(), {}};
     for (int64_t i = 0; i < type.getNumElements(); ++i)
-      out.values.push_back(memref::LoadOp::create(b, decl->getLoc(), data,
-                                                  ValueRange{add(b, base, i)}));
+      out.values.push_back(
+          convertFloat(b, decl->getLoc(),
+                       memref::LoadOp::create(b, decl->getLoc(), data,
+                                              ValueRange{add(b, base, i)}),
+                       type.getElementType()));
     return out;
   }
 
@@ -328,6 +353,7 @@ private:
   SymbolTableCollection &tables;
   func::FuncOp func;
   bool symbolicZeros;
+  FloatType storageType;
   /// Scalar operations emitted so far (charge).
   int64_t spent = 0;
   std::map<std::pair<KernelArgKind, Operation *>, Value> buffers;

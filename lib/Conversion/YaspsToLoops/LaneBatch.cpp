@@ -230,6 +230,7 @@ void LaneBatch::storeTransposed(OpBuilder &b, ArrayRef<Value> rows, Value out,
   Location loc = decl.getLoc();
   // out[(tile + lane) * entries + k] = rows[k][lane].
   Value base = arith::MulIOp::create(b, loc, tile, index(b, entries));
+  Type stored = cast<MemRefType>(out.getType()).getElementType();
   auto at = [&](int64_t lane, int64_t k) -> Value {
     return arith::AddIOp::create(b, loc, base, index(b, lane * entries + k));
   };
@@ -253,12 +254,16 @@ void LaneBatch::storeTransposed(OpBuilder &b, ArrayRef<Value> rows, Value out,
         r[i + stride] = vector::ShuffleOp::create(b, loc, a, c, high);
       }
     for (int64_t lane = 0; lane < lanes; ++lane)
-      vector::StoreOp::create(b, loc, r[lane], out, ValueRange{at(lane, k)});
+      vector::StoreOp::create(
+          b, loc, KernelEmitter::convertFloat(b, loc, r[lane], stored), out,
+          ValueRange{at(lane, k)});
   }
   // The remaining entries one by one.
   for (; k < entries; ++k)
     for (int64_t lane = 0; lane < lanes; ++lane)
-      memref::StoreOp::create(b, loc,
-                              vector::ExtractOp::create(b, loc, rows[k], lane),
-                              out, ValueRange{at(lane, k)});
+      memref::StoreOp::create(
+          b, loc,
+          KernelEmitter::convertFloat(
+              b, loc, vector::ExtractOp::create(b, loc, rows[k], lane), stored),
+          out, ValueRange{at(lane, k)});
 }

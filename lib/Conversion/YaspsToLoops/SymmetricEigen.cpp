@@ -24,6 +24,8 @@
 
 #include "SymmetricEigen.h"
 
+#include <cmath>
+
 using namespace mlir;
 using namespace mlir::yasps;
 
@@ -167,7 +169,10 @@ void EigenEmitter::diagonalise() {
   Value iter = b.variable(b.b.getIndexType());
   b.set(f, b.cst(0.0));
   b.set(tst1, b.cst(0.0));
-  const double eps = 0x1p-52;
+  // The unit round-off of the type computed in: 2^-52 in f64, 2^-23 in f32
+  // (a tolerance below it would never be met in f32).
+  const double eps = std::ldexp(
+      1.0, 1 - int(APFloat::semanticsPrecision(b.type.getFloatSemantics())));
 
   for (int64_t l = 0; l < n; ++l) {
     Value at = idx(l);

@@ -61,6 +61,9 @@ struct LowerToLoopsPass
   }
   LogicalResult lowerAttribute(SceneOp scene, SymbolTableCollection &tables,
                                SymbolRefAttr path);
+  /// The float type of buffers (the `storage` option); null: each buffer
+  /// has its attribute's type.
+  FloatType storageType;
 };
 
 } // namespace
@@ -89,7 +92,8 @@ LogicalResult LowerToLoopsPass::lowerAttribute(SceneOp scene,
 
   // Derivative attributes (from yasps-differentiate) get symbolic zeros.
   KernelEmitter emitter(scene, tables, func,
-                        /*symbolicZeros=*/decl->hasAttr("yasps.params"));
+                        /*symbolicZeros=*/decl->hasAttr("yasps.params"),
+                        storageType);
   Value out = emitter.buffer(KernelArgKind::out, decl, type.getElementType());
   Value one = arith::ConstantIndexOp::create(b, loc, 1);
   auto ret = func::ReturnOp::create(b, loc);
@@ -159,6 +163,16 @@ void LowerToLoopsPass::runOnOperation() {
                                ? "the module must hold exactly one scene "
                                  "(or name one with scene=)"
                                : "no scene @" + sceneName);
+    return signalPassFailure();
+  }
+
+  if (storage == "f32")
+    storageType = Float32Type::get(&getContext());
+  else if (storage == "f64")
+    storageType = Float64Type::get(&getContext());
+  else if (!storage.empty()) {
+    module.emitError() << "yasps-lower-to-loops: storage='" << storage
+                       << "' is not f32 or f64";
     return signalPassFailure();
   }
 

@@ -344,7 +344,11 @@ mlir::yasps::compileCpuKernels(ModuleOp module,
   Clock::time_point start = Clock::now();
 
   // 1. Kernel functions in upstream dialects.
-  int64_t lanes = options.lanes > 0 ? options.lanes : hostDoubleLanes();
+  // The host's vector width in the type the scene computes in: twice the
+  // lanes in f32.
+  int64_t lanes = options.lanes > 0
+                      ? options.lanes
+                      : hostDoubleLanes() * (64 / computeFloatBits(module));
   // By default projections of small matrices run two vectors of problems
   // at a time; a width the user chose applies to every kernel.
   int64_t projectionLanes = options.lanes > 0 ? options.lanes : 2 * lanes;

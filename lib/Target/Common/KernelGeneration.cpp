@@ -118,6 +118,7 @@ llvm::Expected<OwningOpRef<ModuleOp>> mlir::yasps::generateLoopKernels(
                                            attributes.end());
             lowerOptions.lanes = lanes;
             lowerOptions.projectionLanes = projectionLanes;
+            lowerOptions.storage = "f64";
             pm.addPass(createYaspsLowerToLoops(lowerOptions));
             pm.addPass(createYaspsStripScenes());
             // Bottom-up: on the straight-line code of a large projection
@@ -133,6 +134,16 @@ llvm::Expected<OwningOpRef<ModuleOp>> mlir::yasps::generateLoopKernels(
           }))
     return std::move(err);
   return kernels;
+}
+
+unsigned mlir::yasps::computeFloatBits(ModuleOp module) {
+  unsigned bits = 0;
+  module.walk([&](Operation *op) {
+    if (isAttributeDecl(op))
+      bits = std::max(
+          bits, getAttributeType(op).getElementType().getIntOrFloatBitWidth());
+  });
+  return bits ? bits : 64;
 }
 
 std::vector<KernelDescription> mlir::yasps::describeKernels(ModuleOp kernels) {

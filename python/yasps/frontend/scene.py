@@ -21,6 +21,7 @@ from typing import Any, Dict, List, Optional, Sequence, Union
 
 import numpy as np
 
+from .. import config
 from . import values as _values
 from .values import MAX_MATRIX_ENTRIES, as_count
 from .attribute import PROJECTION_METHODS, Attribute
@@ -216,8 +217,14 @@ class Scene(Entity):
 
     kind = "scene"
 
-    def __init__(self, name: str):
+    def __init__(self, name: str, precision: Optional[str] = None):
         super().__init__(_check_name(name, "scene"), None)
+        if precision is not None and precision not in config.PRECISIONS:
+            raise ValueError(f"scene '{name}': precision must be one of "
+                             f"{config.PRECISIONS}, got {precision!r}")
+        #: The float type this scene's kernels compute in; None follows
+        #: ``yasps.config.precision``.
+        self.precision: Optional[str] = precision
         self._meshes: Dict[str, Mesh] = {}
         self._energies: List[tuple] = []  # (attribute, dynamic, projection)
         self._targets: List[Attribute] = []
@@ -659,6 +666,8 @@ class Connectivity:
         self._version = next(_connectivity_versions)
 
 
-def scene(name: str) -> Scene:
-    """Creates an empty scene (the paper's ``scene(sid)``)."""
-    return Scene(name)
+def scene(name: str, precision: Optional[str] = None) -> Scene:
+    """Creates an empty scene (the paper's ``scene(sid)``). ``precision``
+    ("f64" or "f32") is the float type its kernels compute in; None follows
+    ``yasps.config.precision``."""
+    return Scene(name, precision)

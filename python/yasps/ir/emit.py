@@ -11,6 +11,7 @@ from typing import Dict, List, Optional, Tuple
 
 import numpy as np
 
+from .. import config
 from ..frontend.attribute import Attribute
 from ..frontend.scene import (Connectivity, Entity, Mesh, Primitive,
                               PrimitiveUnion, Scene)
@@ -25,8 +26,12 @@ _BINARY_SAME = {"add", "sub", "elementwise_mul", "atan2", "min", "max", "cross"}
 _TO_SCALAR = {"det", "trace", "norm", "squared_norm", "sum"}
 
 
-def mat_type(attr: Attribute) -> str:
-    return f"!yasps.mat<{attr.rows}x{attr.cols}xf64>"
+# The largest finite f32: a literal beyond it does not exist in an f32 scene.
+_F32_MAX = float(np.finfo(np.float32).max)
+
+
+def mat_type(attr: Attribute, element: str = "f64") -> str:
+    return f"!yasps.mat<{attr.rows}x{attr.cols}x{element}>"
 
 
 def _float(value: float) -> str:
@@ -35,14 +40,20 @@ def _float(value: float) -> str:
     return text if "." in text else f"{value:.17e}"
 
 
-def dense_literal(array: np.ndarray) -> str:
+def dense_literal(array: np.ndarray, element: str = "f64") -> str:
     rows, cols = array.shape
+    if element == "f32":
+        finite = array[np.isfinite(array)]
+        if finite.size and np.abs(finite).max() > _F32_MAX:
+            raise ValueError(
+                f"the constant {np.abs(finite).max():g} is beyond the f32 "
+                f"range (|x| <= {_F32_MAX:g}): compute this scene in f64")
     if np.all(array == array.flat[0]):
         body = _float(array.flat[0])
     else:
         body = "[" + ", ".join(
             "[" + ", ".join(_float(v) for v in row) + "]" for row in array) + "]"
-    return f"dense<{body}> : tensor<{rows}x{cols}xf64>"
+    return f"dense<{body}> : tensor<{rows}x{cols}x{element}>"
 
 
 def _loc(attr: Attribute, locations: bool) -> str:
@@ -56,8 +67,9 @@ def _loc(attr: Attribute, locations: bool) -> str:
 class _RegionPrinter:
     """Prints one computed attribute's region, numbering SSA values."""
 
-    def __init__(self, locations: bool):
+    def __init__(self, locations: bool, element: str):
         self.locations = locations
+        self.element = element
         self.names: Dict[int, str] = {}
         self.lines: List[str] = []
 
@@ -86,14 +98,15 @@ class _RegionPrinter:
         return name
 
     def _op_text(self, node: Attribute) -> str:
-        t = mat_type(node)
+        t = mat_type(node, self.element)
         if node.isNamed:
             return f"yasps.read {symbol_path(node)} : {t}"
         if node.kind == "literal":
-            return f"yasps.constant {dense_literal(node._params['value'])}"
+            return (f"yasps.constant "
+                    f"{dense_literal(node._params['value'], self.element)}")
         op, p = node._op, node._params
         ops = [self.names[id(o)] for o in node._operands]
-        types = [mat_type(o) for o in node._operands]
+        types = [mat_type(o, self.element) for o in node._operands]
         if op in _UNARY_SAME:
             return f"yasps.{op} {ops[0]} : {t}"
         if op in _BINARY_SAME:
@@ -128,14 +141,15 @@ class _RegionPrinter:
         raise AssertionError(f"no IR spelling for op {op!r}")
 
 
-def _emit_attribute(attr: Attribute, depth: int, locations: bool) -> List[str]:
+def _emit_attribute(attr: Attribute, depth: int, locations: bool,
+                    element: str) -> List[str]:
     pad = _INDENT * depth
-    t = mat_type(attr)
+    t = mat_type(attr, element)
     loc = _loc(attr, locations)
     decl = {"data": "yasps.data_attr", "constant": "yasps.const_attr"}
     if attr.kind in decl:
         return [f"{pad}{decl[attr.kind]} @{attr.name} : {t}{loc}"]
-    region = _RegionPrinter(locations)
+    region = _RegionPrinter(locations, element)
     if attr.kind == "join":
         conn: Connectivity = attr._params["connectivity"]
         source = attr._operands[0]
@@ -154,7 +168,7 @@ def _emit_attribute(attr: Attribute, depth: int, locations: bool) -> List[str]:
 
 def _emit_members(entity: Entity, depth: int, locations: bool,
                   extra: Dict[Entity, List[Tuple[str, Attribute]]],
-                  dynamic_counts: bool = True) -> List[str]:
+                  dynamic_counts: bool, element: str) -> List[str]:
     lines: List[str] = []
     pad = _INDENT * depth
     symbols = list(entity._symbols.values())
@@ -164,14 +178,14 @@ def _emit_members(entity: Entity, depth: int, locations: bool,
                                  operands=(expr,), name=name))
     for symbol in symbols:
         if isinstance(symbol, Attribute):
-            lines += _emit_attribute(symbol, depth, locations)
+            lines += _emit_attribute(symbol, depth, locations, element)
         elif isinstance(symbol, Connectivity):
             lines.append(f"{pad}yasps.connectivity @{symbol.name} -> "
                          f"{entity_path(symbol.target)} arity {symbol.arity}")
         elif isinstance(symbol, Mesh):
             lines.append(f"{pad}yasps.mesh @{symbol.name} {{")
             lines += _emit_members(symbol, depth + 1, locations, extra,
-                                   dynamic_counts)
+                                   dynamic_counts, element)
             lines.append(f"{pad}}}")
         elif isinstance(symbol, Primitive):
             dynamic = " dynamic" if symbol.isDynamic else ""
@@ -181,27 +195,33 @@ def _emit_members(entity: Entity, depth: int, locations: bool,
             lines.append(f"{pad}yasps.primitive @{symbol.name}"
                          f"({count}){dynamic} {{")
             lines += _emit_members(symbol, depth + 1, locations, extra,
-                                   dynamic_counts)
+                                   dynamic_counts, element)
             lines.append(f"{pad}}}")
         elif isinstance(symbol, PrimitiveUnion):
             members = ", ".join(entity_path(m) for m in symbol.members)
             lines.append(f"{pad}yasps.primitive_union @{symbol.name} "
                          f"[{members}] {{")
             lines += _emit_members(symbol, depth + 1, locations, extra,
-                                   dynamic_counts)
+                                   dynamic_counts, element)
             lines.append(f"{pad}}}")
     return lines
 
 
 def emit_scene(scene: Scene, locations: bool = False,
                extra: Optional[Dict[Entity, List[Tuple[str, Attribute]]]] = None,
-               dynamic_counts: bool = True) -> str:
+               dynamic_counts: bool = True,
+               precision: Optional[str] = None) -> str:
     """The scene as IR text (one `yasps.scene` op). ``extra`` adds computed
     attributes (name, expression) to entities without changing the scene.
     ``dynamic_counts=False`` writes 0 instances for dynamic primitives: the
-    text then describes what does not change from step to step."""
+    text then describes what does not change from step to step. Matrices
+    have the element type ``precision``, else the scene's
+    (``config.precision`` unless the scene sets its own)."""
+    element = config.resolve_precision(
+        precision if precision is not None else scene.precision)
     lines = [f"yasps.scene @{scene.name} {{"]
-    lines += _emit_members(scene, 1, locations, extra or {}, dynamic_counts)
+    lines += _emit_members(scene, 1, locations, extra or {}, dynamic_counts,
+                           element)
     for attr, dynamic, projection in scene._energies:
         flag = " dynamic_instances" if dynamic else ""
         if projection != "clamp":
@@ -215,12 +235,13 @@ def emit_scene(scene: Scene, locations: bool = False,
 
 
 def kernel_ir(scene: Scene,
-              extra: Optional[Dict[Entity, List[Tuple[str, Attribute]]]] = None
-              ) -> str:
+              extra: Optional[Dict[Entity, List[Tuple[str, Attribute]]]] = None,
+              precision: Optional[str] = None) -> str:
     """The IR that kernels are compiled from: the scene with source
     locations, and without what changes between Newton iterations. Kernels
     take instance counts at launch and read connectivities, union offsets
     and values from buffers, so dynamic primitives are written with 0
     instances: a new number of collision pairs gives the same text, which
     the compiled libraries are cached by."""
-    return emit_scene(scene, locations=True, extra=extra, dynamic_counts=False)
+    return emit_scene(scene, locations=True, extra=extra, dynamic_counts=False,
+                      precision=precision)

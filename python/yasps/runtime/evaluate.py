@@ -67,7 +67,8 @@ class ComputedValue:
 
 def compute(attr: Attribute, backend: Backend,
             threads: Optional[int] = None) -> ComputedValue:
-    """Evaluates ``attr`` on every instance of its owner on ``backend``."""
+    """Evaluates ``attr`` on every instance of its owner on ``backend``, in
+    f64 (``config.precision`` applies to derivatives only)."""
     owner = attr.owner
     if owner is None:
         raise SceneError(f"{attr.describe()} belongs to no entity; add it to "
@@ -79,7 +80,11 @@ def compute(attr: Attribute, backend: Backend,
         path = "::".join("@" + n for n in owner.path + [_TEMPORARY])
     else:
         path = "::".join("@" + n for n in owner.path + [attr.name])
-    ir = kernel_ir(scene, extra)
+    # Values are f64 whatever the scene's precision: the line search
+    # compares energies whose decrease near convergence is below f32's
+    # round-off of them, and collision detection reads world positions.
+    # Only the derivatives (the Newton system) are computed in f32.
+    ir = kernel_ir(scene, extra, precision="f64")
     count = owner.numInstances
     kernels = backend.compile(ir, [path], scene.name)
     output = backend.run(kernels, scene, path, count, threads)

@@ -15,7 +15,7 @@ from ..ir import emit_scene
 from ..runtime import cpu_backend
 from ..runtime.native import native
 
-_projectors: Dict[Tuple[int, str], tuple] = {}
+_projectors: Dict[Tuple[int, str, str], tuple] = {}
 
 
 def compressed_sizes(dofs: np.ndarray) -> np.ndarray:
@@ -24,12 +24,13 @@ def compressed_sizes(dofs: np.ndarray) -> np.ndarray:
                                                           dtype=np.int64))
 
 
-def _projector(k: int, method: str):
-    """A kernel projecting k x k symmetric matrices by ``method``, compiled
-    the first time this size is met (paper 7.2) and cached."""
-    key = (k, method)
+def _projector(k: int, method: str, precision: str):
+    """A kernel projecting k x k symmetric matrices by ``method`` in
+    ``precision``, compiled the first time this size is met (paper 7.2) and
+    cached."""
+    key = (k, method, precision)
     if key not in _projectors:
-        s = Scene(f"yasps_project_{k}_{method}")
+        s = Scene(f"yasps_project_{k}_{method}", precision)
         p = s.addMesh("m").addPrimitive("p", numInstances=1)
         h = p.addAttribute("h", rows=k, cols=k)
         p.addAttribute("proj", computed_attribute=h.project(method))
@@ -39,10 +40,11 @@ def _projector(k: int, method: str):
 
 
 def project_compressed(dofs: np.ndarray, hess: np.ndarray, method: str,
-                       threads: int) -> np.ndarray:
+                       threads: int, precision: str = "f64") -> np.ndarray:
     """Projected local Hessians, each projected as the k x k matrix it adds
     to the global system (repeated DoFs merged, padding dropped) and written
-    back at the first parameter of each DoF."""
+    back at the first parameter of each DoF. ``precision``: the float type
+    the projection computes in (the energy's scene's)."""
     runtime = native()
     count, n = dofs.shape
     out = np.zeros((count, n, n))
@@ -50,7 +52,7 @@ def project_compressed(dofs: np.ndarray, hess: np.ndarray, method: str,
     for k, instances, matrices in runtime.compress_local_hessians(dofs, hess):
         if k == 0:
             continue
-        kernels, path = _projector(int(k), method)
+        kernels, path = _projector(int(k), method, precision)
         projected = np.empty(matrices.size)
         # Symmetric matrices: row- and column-major storage agree.
         given = {"out": projected,

@@ -193,8 +193,9 @@ class _Outputs:
         method = next(m for e, _, m in self.scene._energies
                       if e is self.energy)
         threads = config.num_threads if self.threads is None else self.threads
-        projected = project_compressed(self.dofs(), self.host("hess"), method,
-                                       threads)
+        projected = project_compressed(
+            self.dofs(), self.host("hess"), method, threads,
+            config.resolve_precision(self.scene.precision))
         return LocalInputs(self.backend, self.count, self.shape("grad")[1],
                            self.run("grad"), projected)
 

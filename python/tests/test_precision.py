@@ -1,0 +1,199 @@
+"""Derivative kernels computed in f32 (``yasps.config.precision``, a
+scene's own ``precision``): the IR carries the type, the derivatives agree
+with f64 to the bound f32's round-off allows, values stay f64, the Newton
+direction and a contact simulation stay close to f64's, and misuse is a
+clear error.
+
+The runtime keeps its buffers in f64: an f32 kernel rounds what it loads to
+f32, computes in f32 and stores f64, so the bounds below are those of f32
+arithmetic on f32-rounded inputs."""
+
+import ipctk
+import numpy as np
+import pytest
+
+import yasps
+from yasps import energies as E
+from yasps.contact import Contact, surface_of
+from yasps.ir import emit_scene
+from yasps.sim import (ImplicitEuler, add_elastic_tets, add_free_vertices,
+                       box_tet_mesh)
+
+EPS32 = float(np.finfo(np.float32).eps)
+EPS64 = float(np.finfo(np.float64).eps)
+
+
+@pytest.fixture
+def f64_default():
+    """Restores the process-wide precision after a test that sets it."""
+    yield
+    yasps.config.precision = "f64"
+
+
+def relative(got, want) -> float:
+    """Largest error relative to the largest reference entry."""
+    return float(np.abs(np.asarray(got) - want).max() / np.abs(want).max())
+
+
+def tet_scene(precision, seed=0, count=64, offset=0.0):
+    """``count`` unit tets, each with vertices of its own (overlapping near
+    ``offset``: no contact here), mildly deformed, with stable Neo-Hookean
+    through F and inertia, positions the target."""
+    rng = np.random.default_rng(seed)
+    rest = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]], float)
+    verts = np.concatenate([rest - 0.25 + offset] * count)
+    x0 = verts + 0.05 * rng.standard_normal(verts.shape)
+    tets = np.arange(4 * count).reshape(count, 4)
+    Dm = (rest[1:] - rest[0]).T
+    s = yasps.scene("tets", precision=precision)
+    m = s.addMesh("m")
+    v = m.addPrimitive("v", numInstances=len(verts))
+    x = v.addAttribute("x", rows=3)
+    x.updateValue(x0)
+    hat = v.addConstant("x_hat", rows=3)
+    hat.updateValue(verts)
+    t = m.addPrimitive("t", numInstances=count)
+    t.addConstant("inv", rows=3, cols=3).updateValue(
+        np.repeat(np.linalg.inv(Dm)[None], count, axis=0))
+    corners = t.addAttribute("c", through=t.addConnectivity("t2v", v, tets, 4),
+                             source=x)
+    F = E.deformation_gradient(corners, t["inv"])
+    s.addEnergy(t.addAttribute("snh", computed_attribute=E.stable_neo_hookean(
+        F, 1.0, 10.0, 1.0)))
+    s.addEnergy(v.addAttribute("inertia",
+                               computed_attribute=E.inertia(x, hat, 2.0)))
+    s.addMinimizeTarget(x)
+    return s
+
+
+def test_precision_sets_the_ir_element_type(f64_default):
+    s = tet_scene("f32", count=1)
+    text = emit_scene(s)
+    assert "xf32>" in text and "xf64" not in text
+    # A scene without its own precision follows the config.
+    s = tet_scene(None, count=1)
+    assert "xf64>" in emit_scene(s)
+    yasps.config.precision = "f32"
+    assert "xf64" not in emit_scene(s)
+
+
+def test_bad_precisions_are_errors(f64_default):
+    with pytest.raises(ValueError, match="precision must be one of"):
+        yasps.scene("s", precision="f16")
+    yasps.config.precision = "double"
+    with pytest.raises(ValueError, match="precision must be one of"):
+        emit_scene(tet_scene(None, count=1))
+
+
+def test_an_f32_constant_out_of_range_is_an_error():
+    s = yasps.scene("big", precision="f32")
+    p = s.addMesh("m").addPrimitive("p", numInstances=1)
+    x = p.addAttribute("x", rows=1)
+    s.addEnergy(p.addAttribute("e", computed_attribute=1e300 * x * x))
+    with pytest.raises(ValueError, match="beyond the f32 range"):
+        emit_scene(s)
+
+
+@pytest.mark.parametrize("energy", ["snh", "inertia"])
+def test_f32_derivatives_agree_with_f64(energy):
+    """Value, gradient and Hessian of each instance within 64 eps32 of the
+    largest f64 entry: sums of products of well-scaled entries (moderate
+    deformations) lose a few eps of the largest term in either precision.
+    They also differ by more than f64's round-off: the kernel really
+    computes in f32."""
+    def derivatives(precision):
+        s = tet_scene(precision)
+        return s.energyDerivatives(s.m.t["snh"] if energy == "snh"
+                                   else s.m.v["inertia"])
+
+    d64, d32 = derivatives("f64"), derivatives("f32")
+    for got, want in ((d32.value, d64.value), (d32.gradient, d64.gradient),
+                      (d32.hessian, d64.hessian)):
+        assert relative(got, want) <= 64 * EPS32
+    assert relative(d32.gradient, d64.gradient) > 16 * EPS64
+
+
+def test_f32_loses_digits_far_from_the_origin():
+    """f32 rounds each coordinate to eps32 |x|, so edge vectors of length h
+    carry an error eps32 |x| / h: 1000 units from the origin a unit tet's
+    F, and its energy's derivatives, have about three fewer correct digits.
+    The bound is 64 eps32 |x| / h; the error is past the near-origin bound
+    (docs/accuracy.md: keep scenes near the origin, or use f64)."""
+    def derivatives(precision):
+        s = tet_scene(precision, offset=1e3)
+        return s.energyDerivatives(s.m.t["snh"])
+
+    d64, d32 = derivatives("f64"), derivatives("f32")
+    error = relative(d32.gradient, d64.gradient)
+    assert 64 * EPS32 < error <= 64 * EPS32 * 1e3
+
+
+def test_values_stay_f64_in_an_f32_scene():
+    """evaluateEnergy (the line search's comparison) and compute() are f64
+    whatever the scene's precision: to 1e-14 of the f64 scene's."""
+    want = tet_scene("f64").evaluateEnergy()
+    got = tet_scene("f32").evaluateEnergy()
+    assert abs(got - want) <= 1e-14 * abs(want)
+
+
+def test_f32_newton_direction_agrees_with_f64():
+    """The Newton direction from f32 local derivatives (PSD-projected in
+    f32) and the f64 solve: within 1e-5 relative of f64's, about 100 eps32
+    for a system of condition ~10, solved to 1e-10 in both."""
+    p64 = tet_scene("f64").minimizeEnergy(tolerance=1e-10)[0]
+    p32 = tet_scene("f32").minimizeEnergy(tolerance=1e-10)[0]
+    assert relative(p32, p64) <= 1e-5
+    assert relative(p32, p64) > 1e3 * EPS64
+
+
+def soft_boxes(precision):
+    """Two soft boxes, one falling onto the other on the ground, with IPC
+    contact (dhat 1 mm) between them and against the ground."""
+    verts, tets = box_tet_mesh(2, 0.2)
+    faces = surface_of(tets).astype(np.int32)
+    s = yasps.scene("soft_boxes", precision=precision)
+    xs, hats, prims = [], [], []
+    for name, lift in (("low", 5e-4), ("high", 0.205)):
+        mesh = s.addMesh(name)
+        start = verts + [0.03 if name == "high" else 0.0, 0.02, lift]
+        free = add_free_vertices(mesh, start, 0.1)
+        add_elastic_tets(mesh, free.x, start, tets, 2e4, 2e4, scale=0.01 ** 2)
+        xs.append(free.x)
+        hats.append(free.x_hat)
+        prims.append(free.primitive)
+    union = s.addMesh("all").addPrimitiveUnion("v", prims)
+    union.addAttribute("position")
+    both = np.concatenate([faces, faces + len(verts)])
+    contact = Contact(s, union, faces=both, dhat=1e-3, average_mass=0.1,
+                      halfspaces=[((0, 0, 0), (0, 0, 1))])
+    s.addMinimizeTarget(xs)
+    # Newton and CG converged far past f32's effect on the step, so that
+    # the two precisions' trajectories differ by f32, not by where each
+    # Newton loop stopped.
+    stepper = ImplicitEuler(s, xs, hats, 0.01, gravity=[(0, 0, -9.81)] * 2,
+                            contact=contact, velocity_tolerance=1e-5,
+                            cg_tolerance=1e-9)
+    return stepper, xs, both
+
+
+def test_contact_in_f32_stays_apart_and_near_f64():
+    """Eight frames of the boxes in contact in f32: every frame free of
+    intersections by ipctk, every accepted step lowering the energy, and
+    the trajectory within 1e-6 m of f64's (boxes 20 cm wide: 5e-6 of their
+    size; measured 3e-8). The line search's energies and the positions
+    given to ipctk are f64 in both runs: with f32 energies the Newton loops
+    took other paths and ended 3e-4 m apart."""
+    runs = {}
+    for precision in ("f64", "f32"):
+        stepper, xs, faces = soft_boxes(precision)
+        for _ in range(8):
+            report = stepper.step()
+            V = np.concatenate([x.value[:, :, 0] for x in xs])
+            assert np.isfinite(V).all()
+            assert all(b <= a for a, b in report.stepEnergies)
+            mesh = ipctk.CollisionMesh(V, ipctk.edges(faces), faces)
+            assert not ipctk.has_intersections(mesh, V)
+            assert V[:, 2].min() > 0.0
+        runs[precision] = V
+    gap = np.abs(runs["f32"] - runs["f64"]).max()
+    assert 0 < gap <= 1e-6
