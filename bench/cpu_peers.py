@@ -196,7 +196,7 @@ def yasps_results(work: Work, repeat: int) -> Results:
     launches = []
     for path in paths:
         kernel = kernels.kernel(path)
-        out = np.empty(count * kernel.rows * kernel.cols)
+        out = np.empty(count * kernel.rows * kernel.cols, dtype=kernel.out_dtype)
         buffers = [out if a.kind == "out" else host_input(s, a) for a in kernel.arguments]
         launches.append(lambda p=path, b=buffers: kernels.launch(p, count, b, 1))
     grad_k, hess_k, proj_k = launches

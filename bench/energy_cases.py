@@ -503,7 +503,8 @@ class YaspsEnergy:
         launches = []
         for path in paths:
             kernel = kernels.kernel(path)
-            out = np.empty(self.count * kernel.rows * kernel.cols)
+            out = np.empty(self.count * kernel.rows * kernel.cols,
+                           dtype=kernel.out_dtype)
             buffers = [out if a.kind == "out" else host_input(self.scene, a)
                        for a in kernel.arguments]
             launches.append(partial(kernels.launch, path, self.count, buffers, 1))

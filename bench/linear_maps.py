@@ -52,7 +52,8 @@ def run(energy: cases.YaspsEnergy, linear_maps: bool, repeat: int):
     times, outputs = [], []
     for path in paths:
         kernel = kernels.kernel(path)
-        out = np.empty(energy.count * kernel.rows * kernel.cols)
+        out = np.empty(energy.count * kernel.rows * kernel.cols,
+                       dtype=kernel.out_dtype)
         buffers = [out if a.kind == "out" else host_input(energy.scene, a)
                    for a in kernel.arguments]
         launch = partial(kernels.launch, path, energy.count, buffers, 1)

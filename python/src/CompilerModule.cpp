@@ -271,10 +271,11 @@ void launchCpu(const CpuLibrary &self, const std::string &attribute,
   std::vector<::yasps::runtime::KernelBuffer> args;
   for (size_t i = 0; i < buffers.size(); ++i) {
     const std::string &kind = kernel->arguments[i].kind;
-    nb::dlpack::dtype expected = kind == "conn" ? nb::dtype<int32_t>()
-                                 : kind == "offsets" || kind == "dof_offsets"
-                                     ? nb::dtype<int64_t>()
-                                     : nb::dtype<double>();
+    nb::dlpack::dtype expected =
+        kind == "conn"                               ? nb::dtype<int32_t>()
+        : kind == "offsets" || kind == "dof_offsets" ? nb::dtype<int64_t>()
+        : kind == "out" && kernel->outType == "f32"  ? nb::dtype<float>()
+                                                     : nb::dtype<double>();
     if (buffers[i].dtype() != expected || buffers[i].ndim() != 1)
       throw std::invalid_argument("buffer " + std::to_string(i) + " (" + kind +
                                   " " + kernel->arguments[i].path +
@@ -387,6 +388,14 @@ NB_MODULE(_yasps_compiler, m) {
           nb::arg("attribute"),
           "How a projected Hessian's kernel projects: 'full', 'reduced', "
           "'separate', or '' for other kernels")
+      .def(
+          "out_type",
+          [](const CpuLibrary &self, const std::string &attribute) {
+            return self.kernel(attribute).outType;
+          },
+          nb::arg("attribute"),
+          "The float type of a kernel's output buffer: 'f64' or 'f32' (the "
+          "local derivatives of an f32 scene)")
       .def(
           "op_counts",
           [](const CpuLibrary &self, const std::string &attribute) {

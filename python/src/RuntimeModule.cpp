@@ -34,6 +34,7 @@ class PySystem {
 public:
   using Int64Array = nb::ndarray<int64_t, nb::c_contig, nb::device::cpu>;
   using DoubleArray = nb::ndarray<double, nb::c_contig, nb::device::cpu>;
+  using FloatArray = nb::ndarray<float, nb::c_contig, nb::device::cpu>;
 
   /// The runtime reads the DoF maps in place, from the caller's arrays
   /// (converted once by nanobind only if they are not C-ordered int64),
@@ -60,9 +61,14 @@ public:
            system->dynamicHessian().numStoredBlocks();
   }
   void setZero() { system->setZero(); }
+  void finishAssembly() { system->finishAssembly(); }
+  bool singleProduct() const { return system->singleProduct(); }
+  void setSingleProduct(bool on) { system->setSingleProduct(on); }
 
-  void add(size_t energy, DoubleArray gradients, DoubleArray hessians,
-           unsigned threads) {
+  /// add() of f64 or f32 local derivatives (Array: DoubleArray or
+  /// FloatArray).
+  template <typename Array>
+  void add(size_t energy, Array gradients, Array hessians, unsigned threads) {
     if (energy >= system->numEnergies())
       throw std::invalid_argument("no energy " + std::to_string(energy));
     auto [count, n] = shape(energy);
@@ -351,10 +357,21 @@ NB_MODULE(_yasps_runtime, m) {
            "maps J (count, m, n) and projected inner Hessians P (count, m, "
            "m)")
       .def("set_zero", &PySystem::setZero)
-      .def("add", &PySystem::add, nb::arg("energy"), nb::arg("gradients"),
-           nb::arg("hessians"), nb::arg("threads") = 0,
-           "Adds an energy's local gradients and Hessians; with more than "
-           "one thread, instances are split across threads (atomic adds)")
+      .def("finish_assembly", &PySystem::finishAssembly,
+           "Ends an assembly: with single_product, takes the Hessian "
+           "blocks' f32 copies that products then read")
+      .def_prop_rw("single_product", &PySystem::singleProduct,
+                   &PySystem::setSingleProduct,
+                   "Whether multiply and solve read the Hessian's blocks "
+                   "rounded to f32 (f64 vectors and arithmetic), from the "
+                   "next finish_assembly on")
+      .def("add", &PySystem::add<PySystem::DoubleArray>, nb::arg("energy"),
+           nb::arg("gradients"), nb::arg("hessians"), nb::arg("threads") = 0,
+           "Adds an energy's local gradients and Hessians (both f64, or "
+           "both f32); with more than one thread, instances are split "
+           "across threads (atomic adds)")
+      .def("add", &PySystem::add<PySystem::FloatArray>, nb::arg("energy"),
+           nb::arg("gradients"), nb::arg("hessians"), nb::arg("threads") = 0)
       .def("gradient", &PySystem::gradient, nb::arg("out"))
       .def("dense", &PySystem::dense, nb::arg("out"))
       .def_prop_ro("non_zeros", &PySystem::nonZeros)

@@ -25,9 +25,11 @@ EPS64 = float(np.finfo(np.float64).eps)
 
 @pytest.fixture
 def f64_default():
-    """Restores the process-wide precision after a test that sets it."""
+    """Restores the process-wide precision and Hessian storage after a test
+    that sets them."""
     yield
     yasps.config.precision = "f64"
+    yasps.config.hessian_storage = "f64"
 
 
 def relative(got, want) -> float:
@@ -197,3 +199,37 @@ def test_contact_in_f32_stays_apart_and_near_f64():
         runs[precision] = V
     gap = np.abs(runs["f32"] - runs["f64"]).max()
     assert 0 < gap <= 1e-6
+
+
+def test_f32_kernels_store_f32_local_derivatives():
+    """An f32 scene's derivative kernels store what they compute, f32 (half
+    the bytes), and assembly sums them in f64."""
+    s = tet_scene("f32", count=4)
+    d = s.energyDerivatives(s.m.t["snh"])
+    assert d.gradient.dtype == np.float32 and d.hessian.dtype == np.float32
+    assert d.value.dtype == np.float64   # values are f64: compute()
+
+
+def test_f32_hessian_storage_solves_near_the_f64_system(f64_default):
+    """hessian_storage="f32": PCG's products read the blocks rounded to f32
+    (f64 vectors). The direction is within 1e-5 relative of the f64 one
+    (f32's round-off of H times the condition, ~10), and not equal to it:
+    the products do read the rounded blocks."""
+    p64 = tet_scene("f64").minimizeEnergy(tolerance=1e-10)[0]
+    yasps.config.hessian_storage = "f32"
+    p32 = tet_scene("f64").minimizeEnergy(tolerance=1e-10)[0]
+    assert 0 < relative(p32, p64) <= 1e-5
+    yasps.config.hessian_storage = "f16"
+    with pytest.raises(ValueError, match="hessian_storage must be one of"):
+        tet_scene("f64").minimizeEnergy()
+
+
+def test_too_many_dofs_for_f32_indices_is_an_error(monkeypatch):
+    """f32 kernels compute placement indices (DoF + 1) exactly only below
+    2^24 DoFs: a larger f32 scene is refused with a clear error (the limit
+    is lowered here to a small scene's 256 DoFs)."""
+    import yasps.solve.assembly as assembly
+    monkeypatch.setattr(assembly, "_F32_EXACT_INTEGERS", 100)
+    with pytest.raises(yasps.SceneError, match="compute this scene in f64"):
+        tet_scene("f32", count=16).minimizeEnergy()
+    tet_scene("f64", count=16).minimizeEnergy()

@@ -58,6 +58,13 @@
   system) and the solve are f64, so the Newton update and its dot
   products are f64. ``docs/accuracy.md`` says what f32 costs in accuracy
   and where it breaks.
+- ``hessian_storage``: the float type the CPU solve's products read the
+  global Hessian's blocks in, ``"f64"`` (the default) or ``"f32"``. PCG's
+  matrix-vector product is bound by reading the blocks; in f32 it reads
+  half the bytes, while vectors, dot products, the preconditioner and the
+  Newton update stay f64 (mixed precision). The solve is then of a matrix
+  within f32's round-off of the assembled one, entry by entry. The GPU
+  solve keeps f64 blocks (and warns once).
 - ``gpu_derivatives``: on the GPU backend, ``minimizeEnergy`` computes the
   energies' local derivatives on the device, where assembly reads them
   (``yasps.gpu_derivatives``). Off, they are computed on the CPU and
@@ -93,6 +100,17 @@ precision: str = "f64"
 
 #: The values ``precision`` (and a scene's) may take.
 PRECISIONS = ("f64", "f32")
+
+
+hessian_storage: str = "f64"
+
+
+def resolve_hessian_storage() -> str:
+    """``hessian_storage``, checked: "f64" or "f32", else ValueError."""
+    if hessian_storage not in PRECISIONS:
+        raise ValueError(f"hessian_storage must be one of {PRECISIONS}, got "
+                         f"{hessian_storage!r}")
+    return hessian_storage
 
 
 def resolve_precision(scene_precision: Optional[str]) -> str:

@@ -181,6 +181,13 @@ BlockSparseMatrix::BlockSparseMatrix(
 
 void BlockSparseMatrix::setZero() {
   std::fill(values_.begin(), values_.end(), 0.0);
+  dropSingleValues();
+}
+
+void BlockSparseMatrix::roundValuesForProduct() {
+  singleValues_.resize(values_.size());
+  std::transform(values_.begin(), values_.end(), singleValues_.begin(),
+                 [](double v) { return static_cast<float>(v); });
 }
 
 void BlockSparseMatrix::addBlock(BlockSlot slot, const double *local) {
@@ -210,8 +217,8 @@ void BlockSparseMatrix::addBlockConcurrent(BlockSlot slot,
 
 // Fixed-size block products: vertex blocks (3x3) dominate the Hessians of
 // IPC scenes, and the compiler fully unrolls these (paper appendix C).
-template <int R, int C>
-static inline void timesBlock(const double *data, const double *x, double *y) {
+template <int R, int C, typename T>
+static inline void timesBlock(const T *data, const double *x, double *y) {
   for (int i = 0; i < R; ++i) {
     double sum = 0.0;
     for (int j = 0; j < C; ++j)
@@ -220,8 +227,8 @@ static inline void timesBlock(const double *data, const double *x, double *y) {
   }
 }
 
-template <int R, int C>
-static inline void timesTransposedBlock(const double *data, const double *x,
+template <int R, int C, typename T>
+static inline void timesTransposedBlock(const T *data, const double *x,
                                         double *y) {
   for (int i = 0; i < R; ++i)
     for (int j = 0; j < C; ++j)
@@ -235,7 +242,8 @@ static inline void timesTransposedBlock(const double *data, const double *x,
   CASE(3, 3) CASE(3, 12) CASE(12, 3) CASE(12, 12)
 
 // y_r += B x_c for a stored block B (rows x cols).
-static inline void addProduct(const double *data, std::int64_t rows,
+template <typename T>
+static inline void addProduct(const T *data, std::int64_t rows,
                               std::int64_t cols, const double *x, double *y) {
 #define YASPS_PRODUCT_CASE(R, C)                                               \
   if (rows == R && cols == C)                                                  \
@@ -251,7 +259,8 @@ static inline void addProduct(const double *data, std::int64_t rows,
 }
 
 // y_c += B^T x_r for a stored block B (rows x cols).
-static inline void addTransposedProduct(const double *data, std::int64_t rows,
+template <typename T>
+static inline void addTransposedProduct(const T *data, std::int64_t rows,
                                         std::int64_t cols, const double *x,
                                         double *y) {
 #define YASPS_TRANSPOSED_CASE(R, C)                                            \
@@ -269,7 +278,8 @@ static inline void addTransposedProduct(const double *data, std::int64_t rows,
 // increasing q, then the blocks (r, c) of the row by increasing c. So the
 // result does not depend on the number of threads.
 
-void BlockSparseMatrix::multiplyInStorageOrder(const double *x,
+template <typename T>
+void BlockSparseMatrix::multiplyInStorageOrder(const T *values, const double *x,
                                                double *y) const {
   // One pass over the values, each block read once for both of its
   // products: half the memory traffic of a full (CSR) matrix.
@@ -278,9 +288,9 @@ void BlockSparseMatrix::multiplyInStorageOrder(const double *x,
   for (const BlockGroup &group : groups_) {
     const std::int64_t rows = group.rows, cols = group.cols;
     const std::size_t end = group.firstBlock + group.size();
-    const double *data = blockData(group.firstBlock);
+    const T *data = values + valueOffset_[group.firstBlock];
     if (rows == 3 && cols == 3) {
-      multiply3x3InStorageOrder(group.firstBlock, end, x, y);
+      multiply3x3InStorageOrder(values, group.firstBlock, end, x, y);
       continue;
     }
     for (std::size_t b = group.firstBlock; b < end; ++b, data += rows * cols) {
@@ -292,7 +302,9 @@ void BlockSparseMatrix::multiplyInStorageOrder(const double *x,
   }
 }
 
-void BlockSparseMatrix::multiply3x3InStorageOrder(std::size_t begin,
+template <typename T>
+void BlockSparseMatrix::multiply3x3InStorageOrder(const T *values,
+                                                  std::size_t begin,
                                                   std::size_t end,
                                                   const double *x,
                                                   double *y) const {
@@ -300,7 +312,7 @@ void BlockSparseMatrix::multiply3x3InStorageOrder(std::size_t begin,
   // blocks of a row stream by (rows are consecutive in storage); y_r is
   // written once per row. The terms are added in the order of addProduct.
   const std::vector<std::int64_t> &offset = layout_.blockOffset;
-  const double *data = blockData(begin);
+  const T *data = values + valueOffset_[begin];
   if (detail::hasVertexBlockSimd())
     return detail::multiplyVertexBlocksAvx2(data, blockRow_.data() + begin,
                                             blockCol_.data() + begin,
@@ -319,7 +331,7 @@ void BlockSparseMatrix::multiply3x3InStorageOrder(std::size_t begin,
       y2 += data[6] * xc[0] + data[7] * xc[1] + data[8] * xc[2];
       if (c != r) {
         double *yc = y + offset[c];
-        timesTransposedBlock<3, 3>(data, xr, yc);
+        timesTransposedBlock<3, 3, T>(data, xr, yc);
       }
     }
     yr[0] = y0;
@@ -336,9 +348,21 @@ void BlockSparseMatrix::multiply(const double *x, double *y,
   // ms). Three or more threads split the rows; that they win there is
   // expected (half the reads per thread from three on), not yet measured:
   // the development machine has two cores. Both give the same bits.
+  if (hasSingleValues()) {
+    if (pool.size() < kMinThreadsForThreadedProduct)
+      return multiplyInStorageOrder(singleValues_.data(), x, y);
+    return multiplyByRows(singleValues_.data(), x, y, pool);
+  }
   if (pool.size() < kMinThreadsForThreadedProduct)
-    return multiplyInStorageOrder(x, y);
+    return multiplyInStorageOrder(values_.data(), x, y);
+  multiplyByRows(values_.data(), x, y, pool);
+}
+
+template <typename T>
+void BlockSparseMatrix::multiplyByRows(const T *values, const double *x,
+                                       double *y, ThreadPool &pool) const {
   const std::vector<std::int64_t> &offset = layout_.blockOffset;
+  auto blockAt = [&](std::size_t b) { return values + valueOffset_[b]; };
   const std::size_t stride = static_cast<std::size_t>(numBlocks()) + 1;
   const bool simd = detail::hasVertexBlockSimd();
   // Each thread writes only the block rows of its chunk, so no two threads
@@ -354,7 +378,7 @@ void BlockSparseMatrix::multiply(const double *x, double *y,
             const std::size_t *rows = &rowStart_[g * stride];
             if (group.rows == 3 && group.cols == 3 && simd) {
               detail::multiplyVertexRowAvx2(
-                  blockData(group.firstBlock), group.firstBlock,
+                  blockAt(group.firstBlock), group.firstBlock,
                   colBlocks_.data() + cols[r], cols[r + 1] - cols[r], rows[r],
                   rows[r + 1] - rows[r], blockRow_.data(), blockCol_.data(),
                   offset.data(), x, yr);
@@ -362,11 +386,11 @@ void BlockSparseMatrix::multiply(const double *x, double *y,
             }
             for (std::size_t k = cols[r]; k < cols[r + 1]; ++k) {
               std::size_t b = colBlocks_[k];
-              addTransposedProduct(blockData(b), group.rows, group.cols,
+              addTransposedProduct(blockAt(b), group.rows, group.cols,
                                    x + offset[blockRow_[b]], yr);
             }
             for (std::size_t b = rows[r]; b < rows[r + 1]; ++b)
-              addProduct(blockData(b), group.rows, group.cols,
+              addProduct(blockAt(b), group.rows, group.cols,
                          x + offset[blockCol_[b]], yr);
           }
         }

@@ -102,6 +102,13 @@ void GlobalSystem::setDynamic(const std::vector<DofMap> &dynamicEnergies) {
                           numStaticEnergies());
 }
 
+void GlobalSystem::finishAssembly() {
+  if (!singleProduct_)
+    return;
+  staticPart.matrix.roundValuesForProduct();
+  dynamicPart.matrix.roundValuesForProduct();
+}
+
 void GlobalSystem::setZero() {
   staticPart.matrix.setZero();
   dynamicPart.matrix.setZero();
@@ -172,10 +179,23 @@ static void forInstances(ThreadPool *pool, std::int64_t count, Body body) {
 
 void GlobalSystem::add(std::size_t energy, const double *gradients,
                        const double *hessians, ThreadPool *pool) {
+  addLocal(energy, gradients, hessians, pool);
+}
+
+void GlobalSystem::add(std::size_t energy, const float *gradients,
+                       const float *hessians, ThreadPool *pool) {
+  addLocal(energy, gradients, hessians, pool);
+}
+
+template <typename T>
+void GlobalSystem::addLocal(std::size_t energy, const T *gradients,
+                            const T *hessians, ThreadPool *pool) {
   // Named, not structured bindings: lambdas capture them (C++17).
   Part *part;
   const EnergyMap *map;
   std::tie(part, map) = energyMap(energy);
+  // New values: until finishAssembly, products read the f64 ones.
+  part->matrix.dropSingleValues();
   const std::int64_t n = map->numParams;
   forInstances(pool, map->count,
                [&](auto atomic, std::int64_t begin, std::int64_t end) {
@@ -193,6 +213,8 @@ void GlobalSystem::addFactored(std::size_t energy, const double *gradients,
   Part *part;
   const EnergyMap *map;
   std::tie(part, map) = energyMap(energy);
+  // New values: until finishAssembly, products read the f64 ones.
+  part->matrix.dropSingleValues();
   const std::int64_t n = map->numParams;
   forInstances(
       pool, map->count, [&](auto atomic, std::int64_t begin, std::int64_t end) {
@@ -258,6 +280,8 @@ void GlobalSystem::addSlotFactored(std::size_t energy,
   Part *part;
   const EnergyMap *map;
   std::tie(part, map) = energyMap(energy);
+  // New values: until finishAssembly, products read the f64 ones.
+  part->matrix.dropSingleValues();
   const std::int64_t n = map->numParams, m = factors.numInner;
   factors.check(map->count, n);
   requireCovered(*map, factors);
@@ -292,10 +316,10 @@ static constexpr std::int64_t kMaxMergedParams = 64;
 /// block's shape per entry: nine times the work, most of an assembly. The
 /// same single addition reaches each matrix entry, so the sums are the
 /// same. False (nothing added) when the instance is not of that shape.
-template <bool Atomic>
+template <bool Atomic, typename T>
 static bool addVertexBlocks(BlockSparseMatrix &matrix,
                             const GlobalSystem::EnergyMap &map, std::int64_t i,
-                            const double *g, const double *h,
+                            const T *g, const T *h,
                             std::vector<double> &gradient) {
   const BlockLayout &layout = matrix.layout();
   const std::int64_t n = map.numParams, m = map.maxBlocks;
@@ -325,7 +349,7 @@ static bool addVertexBlocks(BlockSparseMatrix &matrix,
         continue;
       BlockSlot slot = map.pairSlot[(i * m + p) * m + q];
       double *data = matrix.blockData(slot.block);
-      const double *rows = h + 3 * p * n + 3 * q;
+      const T *rows = h + 3 * p * n + 3 * q;
       for (std::int64_t r = 0; r < 3; ++r)
         for (std::int64_t c = 0; c < 3; ++c)
           accumulate<Atomic>(&data[r * 3 + c], rows[r * n + c]);
@@ -334,9 +358,9 @@ static bool addVertexBlocks(BlockSparseMatrix &matrix,
   return true;
 }
 
-template <bool Atomic>
+template <bool Atomic, typename T>
 void GlobalSystem::addInstance(Part &part, const EnergyMap &map, std::int64_t i,
-                               const double *g, const double *h,
+                               const T *g, const T *h,
                                std::vector<double> &gradient) {
   BlockSparseMatrix &matrix = part.matrix;
   if (addVertexBlocks<Atomic>(matrix, map, i, g, h, gradient))

@@ -25,6 +25,28 @@ bool detail::hasVertexBlockSimd() {
   return has;
 }
 
+/// Four entries of a block from `p` as doubles: the first two rows' loads,
+/// whose fourth lane (the next row's first entry, within the block) no
+/// result takes.
+__attribute__((target("avx2"), always_inline)) static inline __m256d
+loadRow(const double *p) {
+  return _mm256_loadu_pd(p);
+}
+__attribute__((target("avx2"), always_inline)) static inline __m256d
+loadRow(const float *p) {
+  return _mm256_cvtps_pd(_mm_loadu_ps(p));
+}
+
+/// The last row's three entries (a fourth would read past the block).
+__attribute__((target("avx2"), always_inline)) static inline __m256d
+loadLastRow(const double *p) {
+  return _mm256_maskload_pd(p, _mm256_setr_epi64x(-1, -1, -1, 0));
+}
+__attribute__((target("avx2"), always_inline)) static inline __m256d
+loadLastRow(const float *p) {
+  return _mm256_cvtps_pd(_mm_maskload_ps(p, _mm_setr_epi32(-1, -1, -1, 0)));
+}
+
 /// B x_c for the 3x3 block with rows r0, r1, r2 (fourth lanes ignored):
 /// the columns by a 4x4 transpose with a zero fourth row, then lane i is
 /// (B_i0 x0 + B_i1 x1) + B_i2 x2, the scalar loop's order.
@@ -44,9 +66,11 @@ timesColumns(__m256d r0, __m256d r1, __m256d r2, const double *xc) {
       _mm256_mul_pd(c2, _mm256_broadcast_sd(xc + 2)));
 }
 
-__attribute__((target("avx2"))) void detail::multiplyVertexBlocksAvx2(
-    const double *data, const std::int64_t *row, const std::int64_t *col,
-    const std::int64_t *offset, std::size_t count, const double *x, double *y) {
+template <typename T>
+__attribute__((target("avx2"), always_inline)) static inline void
+vertexBlocks(const T *data, const std::int64_t *row, const std::int64_t *col,
+             const std::int64_t *offset, std::size_t count, const double *x,
+             double *y) {
   const __m256i three = _mm256_setr_epi64x(-1, -1, -1, 0);
   std::size_t b = 0;
   while (b < count) {
@@ -60,11 +84,9 @@ __attribute__((target("avx2"))) void detail::multiplyVertexBlocksAvx2(
     for (; b < count && row[b] == r; ++b, data += 9) {
       const std::int64_t c = col[b];
       const double *xc = x + offset[c];
-      // The fourth lanes of r0 and r1 read the next row's first entry,
-      // within the block; no result takes them. r2's would read past it.
-      const __m256d r0 = _mm256_loadu_pd(data);
-      const __m256d r1 = _mm256_loadu_pd(data + 3);
-      const __m256d r2 = _mm256_maskload_pd(data + 6, three);
+      const __m256d r0 = loadRow(data);
+      const __m256d r1 = loadRow(data + 3);
+      const __m256d r2 = loadLastRow(data + 6);
       acc = _mm256_add_pd(acc, timesColumns(r0, r1, r2, xc));
       if (c != r) {
         // y_c[j] += B_0j xr0, then B_1j xr1, then B_2j xr2.
@@ -80,49 +102,91 @@ __attribute__((target("avx2"))) void detail::multiplyVertexBlocksAvx2(
   }
 }
 
+template <typename T>
+__attribute__((target("avx2"), always_inline)) static inline void
+vertexRow(const T *values, std::size_t first, const std::size_t *transposed,
+          std::size_t numTransposed, std::size_t own, std::size_t numOwn,
+          const std::int64_t *row, const std::int64_t *col,
+          const std::int64_t *offset, const double *x, double *yr) {
+  const __m256i three = _mm256_setr_epi64x(-1, -1, -1, 0);
+  __m256d acc = _mm256_maskload_pd(yr, three);
+  for (std::size_t k = 0; k < numTransposed; ++k) {
+    const std::size_t b = transposed[k];
+    const T *data = values + 9 * (b - first);
+    const double *xq = x + offset[row[b]];
+    acc = _mm256_add_pd(acc,
+                        _mm256_mul_pd(loadRow(data), _mm256_broadcast_sd(xq)));
+    acc = _mm256_add_pd(
+        acc, _mm256_mul_pd(loadRow(data + 3), _mm256_broadcast_sd(xq + 1)));
+    acc = _mm256_add_pd(
+        acc, _mm256_mul_pd(loadLastRow(data + 6), _mm256_broadcast_sd(xq + 2)));
+  }
+  const T *data = values + 9 * (own - first);
+  for (std::size_t k = 0; k < numOwn; ++k, data += 9) {
+    const double *xc = x + offset[col[own + k]];
+    const __m256d r0 = loadRow(data);
+    const __m256d r1 = loadRow(data + 3);
+    const __m256d r2 = loadLastRow(data + 6);
+    acc = _mm256_add_pd(acc, timesColumns(r0, r1, r2, xc));
+  }
+  _mm256_maskstore_pd(yr, three, acc);
+}
+
+// One body per product for both block types.
+__attribute__((target("avx2"))) void detail::multiplyVertexBlocksAvx2(
+    const double *data, const std::int64_t *row, const std::int64_t *col,
+    const std::int64_t *offset, std::size_t count, const double *x, double *y) {
+  vertexBlocks(data, row, col, offset, count, x, y);
+}
+
+__attribute__((target("avx2"))) void detail::multiplyVertexBlocksAvx2(
+    const float *data, const std::int64_t *row, const std::int64_t *col,
+    const std::int64_t *offset, std::size_t count, const double *x, double *y) {
+  vertexBlocks(data, row, col, offset, count, x, y);
+}
+
 __attribute__((target("avx2"))) void detail::multiplyVertexRowAvx2(
     const double *values, std::size_t first, const std::size_t *transposed,
     std::size_t numTransposed, std::size_t own, std::size_t numOwn,
     const std::int64_t *row, const std::int64_t *col,
     const std::int64_t *offset, const double *x, double *yr) {
-  const __m256i three = _mm256_setr_epi64x(-1, -1, -1, 0);
-  __m256d acc = _mm256_maskload_pd(yr, three);
-  for (std::size_t k = 0; k < numTransposed; ++k) {
-    const std::size_t b = transposed[k];
-    const double *data = values + 9 * (b - first);
-    const double *xq = x + offset[row[b]];
-    acc = _mm256_add_pd(
-        acc, _mm256_mul_pd(_mm256_loadu_pd(data), _mm256_broadcast_sd(xq)));
-    acc = _mm256_add_pd(acc, _mm256_mul_pd(_mm256_loadu_pd(data + 3),
-                                           _mm256_broadcast_sd(xq + 1)));
-    acc = _mm256_add_pd(acc, _mm256_mul_pd(_mm256_maskload_pd(data + 6, three),
-                                           _mm256_broadcast_sd(xq + 2)));
-  }
-  const double *data = values + 9 * (own - first);
-  for (std::size_t k = 0; k < numOwn; ++k, data += 9) {
-    const double *xc = x + offset[col[own + k]];
-    const __m256d r0 = _mm256_loadu_pd(data);
-    const __m256d r1 = _mm256_loadu_pd(data + 3);
-    const __m256d r2 = _mm256_maskload_pd(data + 6, three);
-    acc = _mm256_add_pd(acc, timesColumns(r0, r1, r2, xc));
-  }
-  _mm256_maskstore_pd(yr, three, acc);
+  vertexRow(values, first, transposed, numTransposed, own, numOwn, row, col,
+            offset, x, yr);
+}
+
+__attribute__((target("avx2"))) void detail::multiplyVertexRowAvx2(
+    const float *values, std::size_t first, const std::size_t *transposed,
+    std::size_t numTransposed, std::size_t own, std::size_t numOwn,
+    const std::int64_t *row, const std::int64_t *col,
+    const std::int64_t *offset, const double *x, double *yr) {
+  vertexRow(values, first, transposed, numTransposed, own, numOwn, row, col,
+            offset, x, yr);
 }
 
 #else
 
 bool detail::hasVertexBlockSimd() { return false; }
 
+// Never called: hasVertexBlockSimd() is false.
+void detail::multiplyVertexBlocksAvx2(const double *, const std::int64_t *,
+                                      const std::int64_t *,
+                                      const std::int64_t *, std::size_t,
+                                      const double *, double *) {}
+void detail::multiplyVertexBlocksAvx2(const float *, const std::int64_t *,
+                                      const std::int64_t *,
+                                      const std::int64_t *, std::size_t,
+                                      const double *, double *) {}
 void detail::multiplyVertexRowAvx2(const double *, std::size_t,
                                    const std::size_t *, std::size_t,
                                    std::size_t, std::size_t,
                                    const std::int64_t *, const std::int64_t *,
                                    const std::int64_t *, const double *,
                                    double *) {}
-
-void detail::multiplyVertexBlocksAvx2(const double *, const std::int64_t *,
-                                      const std::int64_t *,
-                                      const std::int64_t *, std::size_t,
-                                      const double *, double *) {}
+void detail::multiplyVertexRowAvx2(const float *, std::size_t,
+                                   const std::size_t *, std::size_t,
+                                   std::size_t, std::size_t,
+                                   const std::int64_t *, const std::int64_t *,
+                                   const std::int64_t *, const double *,
+                                   double *) {}
 
 #endif

@@ -20,8 +20,13 @@ bool hasVertexBlockSimd();
 /// row-major blocks at `data` (rows consecutive), block b at (row[b],
 /// col[b]) with DoF offsets `offset`. Adds the same terms in the same
 /// order as the scalar loop, one vector lane per row or column of a block,
-/// so the results are identical to the last bit.
+/// so the results are identical to the last bit. T, the blocks' type, is
+/// double or float (f32 blocks are widened exactly to f64 as they load).
 void multiplyVertexBlocksAvx2(const double *data, const std::int64_t *row,
+                              const std::int64_t *col,
+                              const std::int64_t *offset, std::size_t count,
+                              const double *x, double *y);
+void multiplyVertexBlocksAvx2(const float *data, const std::int64_t *row,
                               const std::int64_t *col,
                               const std::int64_t *offset, std::size_t count,
                               const double *x, double *y);
@@ -31,8 +36,14 @@ void multiplyVertexBlocksAvx2(const double *data, const std::int64_t *row,
 /// r), in order) and then y_r += B x_c for the `numOwn` consecutive blocks
 /// of row r starting at `own`. `values` holds block b at values + 9 b
 /// relative to `first`, the group's first block. Same order as the scalar
-/// products.
+/// products. Blocks in f64 or f32, as above.
 void multiplyVertexRowAvx2(const double *values, std::size_t first,
+                           const std::size_t *transposed,
+                           std::size_t numTransposed, std::size_t own,
+                           std::size_t numOwn, const std::int64_t *row,
+                           const std::int64_t *col, const std::int64_t *offset,
+                           const double *x, double *yr);
+void multiplyVertexRowAvx2(const float *values, std::size_t first,
                            const std::size_t *transposed,
                            std::size_t numTransposed, std::size_t own,
                            std::size_t numOwn, const std::int64_t *row,

@@ -34,8 +34,9 @@ def YaspsLowerToLoops : Pass<"yasps-lower-to-loops", "::mlir::ModuleOp"> {
     dynamic primitive changes size without a new kernel.
 
     Kernels compute in the element type of the IR (`f64` or `f32`); with
-    `storage=`, float buffers hold that type instead, converted at every
-    load and store (f32 arithmetic on f64 data).
+    `storage=` (attribute buffers) and `out-storage=` (the output), float
+    buffers hold that type instead, converted at every load and store (f32
+    arithmetic on f64 data).
   }];
   let options = [
     ListOption<"attributes", "attributes", "std::string",
@@ -59,7 +60,10 @@ def YaspsLowerToLoops : Pass<"yasps-lower-to-loops", "::mlir::ModuleOp"> {
            "buffer has its attribute's element type), `f32` or `f64`. Where "
            "it differs from the attribute's type, loads extend or truncate "
            "to the type the IR computes in and stores convert back: the "
-           "runtime keeps f64 buffers while kernels compute in f32">
+           "runtime keeps f64 buffers while kernels compute in f32">,
+    Option<"outStorage_", "out-storage", "std::string", /*default=*/"\"\"",
+           "Float type of the output buffer, as `storage` for attribute "
+           "buffers (empty: the attribute's type)">
   ];
   let dependentDialects = [
     "::mlir::arith::ArithDialect", "::mlir::func::FuncDialect",

@@ -63,6 +63,8 @@ struct KernelDescription {
   /// each as its printed fields, e.g. {"join", "@m::@t::@t2v", "2",
   /// "@m::@v::@x"}.
   std::vector<std::vector<std::string>> params;
+  /// The float type of the output buffer: "f64" or "f32".
+  std::string outType = "f64";
   /// Static counts of the kernel's arithmetic (yasps-count-ops): "mul",
   /// "add", "div", "math".
   std::map<std::string, int64_t> opCounts;
@@ -84,14 +86,16 @@ runPasses(ModuleOp module, const std::string &what,
 /// attributes that passes create. `lanes` > 1 evaluates that many
 /// instances at once in SIMD lanes (CPU kernels); `projectionLanes` (0:
 /// `lanes`) is the width of kernels that PSD-project a small matrix (see
-/// yasps-lower-to-loops). Float buffers are f64 whatever the IR computes
-/// in: the runtime holds attributes, derivatives and indices in f64. A
-/// requested attribute that does not exist after `prePipeline` is a
-/// MissingAttributeError.
+/// yasps-lower-to-loops). Attribute buffers are f64 whatever the IR
+/// computes in (the runtime holds values in f64); output buffers have type
+/// `outStorage` ("f64", or "" for the IR's type: f32 local derivatives of an
+/// f32 scene). A requested attribute that does not exist after
+/// `prePipeline` is a MissingAttributeError.
 llvm::Expected<OwningOpRef<ModuleOp>>
 generateLoopKernels(ModuleOp module, const std::vector<std::string> &attributes,
                     llvm::StringRef prePipeline, int64_t lanes = 1,
-                    int64_t projectionLanes = 0);
+                    int64_t projectionLanes = 0,
+                    llvm::StringRef outStorage = "f64");
 
 /// The widest float type the attributes of `module`'s scenes compute in, in
 /// bits: 32 for a scene written in f32 throughout, else 64. CPU kernels fit

@@ -26,13 +26,14 @@ namespace mlir::yasps {
 /// the evaluation meets stored attributes, connectivities and unions.
 class KernelEmitter {
 public:
-  /// `storageType`, when set, is the float type of every attribute and
-  /// output buffer, whatever the IR computes in (yasps-lower-to-loops'
-  /// `storage` option).
+  /// `attrStorage` and `outStorage`, when set, are the float types of the
+  /// attribute buffers and of the output buffer, whatever the IR computes
+  /// in (yasps-lower-to-loops' `storage` and `out-storage` options).
   KernelEmitter(SceneOp scene, SymbolTableCollection &tables, func::FuncOp func,
-                bool symbolicZeros, FloatType storageType = {})
+                bool symbolicZeros, FloatType attrStorage = {},
+                FloatType outStorage = {})
       : scene(scene), tables(tables), func(func), symbolicZeros(symbolicZeros),
-        storageType(storageType) {}
+        attrStorage(attrStorage), outStorage(outStorage) {}
 
   /// The buffer argument holding `symbol`'s data, created on first use.
   /// Float buffers hold the storage type where one is set.
@@ -42,8 +43,9 @@ public:
     if (it != buffers.end())
       return it->second;
     Block &entry = func.getBody().front();
-    if (storageType && isa<FloatType>(elementType))
-      elementType = storageType;
+    FloatType storage = kind == KernelArgKind::out ? outStorage : attrStorage;
+    if (storage && isa<FloatType>(elementType))
+      elementType = storage;
     Type type = MemRefType::get({ShapedType::kDynamic}, elementType);
     Value arg = entry.addArgument(type, symbol->getLoc());
     buffers[key] = arg;
@@ -353,7 +355,7 @@ private:
   SymbolTableCollection &tables;
   func::FuncOp func;
   bool symbolicZeros;
-  FloatType storageType;
+  FloatType attrStorage, outStorage;
   /// Scalar operations emitted so far (charge).
   int64_t spent = 0;
   std::map<std::pair<KernelArgKind, Operation *>, Value> buffers;

@@ -61,9 +61,9 @@ struct LowerToLoopsPass
   }
   LogicalResult lowerAttribute(SceneOp scene, SymbolTableCollection &tables,
                                SymbolRefAttr path);
-  /// The float type of buffers (the `storage` option); null: each buffer
-  /// has its attribute's type.
-  FloatType storageType;
+  /// The float types of attribute buffers (the `storage` option) and of
+  /// output buffers (`out-storage`); null: the attribute's own type.
+  FloatType attrStorage, outStorage;
 };
 
 } // namespace
@@ -93,7 +93,7 @@ LogicalResult LowerToLoopsPass::lowerAttribute(SceneOp scene,
   // Derivative attributes (from yasps-differentiate) get symbolic zeros.
   KernelEmitter emitter(scene, tables, func,
                         /*symbolicZeros=*/decl->hasAttr("yasps.params"),
-                        storageType);
+                        attrStorage, outStorage);
   Value out = emitter.buffer(KernelArgKind::out, decl, type.getElementType());
   Value one = arith::ConstantIndexOp::create(b, loc, 1);
   auto ret = func::ReturnOp::create(b, loc);
@@ -166,15 +166,21 @@ void LowerToLoopsPass::runOnOperation() {
     return signalPassFailure();
   }
 
-  if (storage == "f32")
-    storageType = Float32Type::get(&getContext());
-  else if (storage == "f64")
-    storageType = Float64Type::get(&getContext());
-  else if (!storage.empty()) {
-    module.emitError() << "yasps-lower-to-loops: storage='" << storage
-                       << "' is not f32 or f64";
+  auto parseStorage = [&](StringRef option, StringRef value, FloatType &type) {
+    if (value == "f32")
+      type = Float32Type::get(&getContext());
+    else if (value == "f64")
+      type = Float64Type::get(&getContext());
+    else if (!value.empty()) {
+      module.emitError() << "yasps-lower-to-loops: " << option << "='" << value
+                         << "' is not f32 or f64";
+      return false;
+    }
+    return true;
+  };
+  if (!parseStorage("storage", storage, attrStorage) ||
+      !parseStorage("out-storage", outStorage_, outStorage))
     return signalPassFailure();
-  }
 
   SmallVector<SymbolRefAttr> paths;
   for (const std::string &text : attributes) {

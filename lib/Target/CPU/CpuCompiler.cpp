@@ -352,8 +352,10 @@ mlir::yasps::compileCpuKernels(ModuleOp module,
   // By default projections of small matrices run two vectors of problems
   // at a time; a width the user chose applies to every kernel.
   int64_t projectionLanes = options.lanes > 0 ? options.lanes : 2 * lanes;
+  // Outputs in the type computed in: f32 local derivatives of an f32 scene
+  // are stored as they are, half the bytes, and assembled from f32.
   auto generated = generateLoopKernels(module, attributes, prePipeline, lanes,
-                                       projectionLanes);
+                                       projectionLanes, /*outStorage=*/"");
   if (!generated)
     return generated.takeError();
   OwningOpRef<ModuleOp> kernels = std::move(*generated);

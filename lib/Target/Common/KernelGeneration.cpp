@@ -101,7 +101,8 @@ checkAttributesExist(ModuleOp module,
 
 llvm::Expected<OwningOpRef<ModuleOp>> mlir::yasps::generateLoopKernels(
     ModuleOp module, const std::vector<std::string> &attributes,
-    StringRef prePipeline, int64_t lanes, int64_t projectionLanes) {
+    StringRef prePipeline, int64_t lanes, int64_t projectionLanes,
+    StringRef outStorage) {
   OwningOpRef<ModuleOp> kernels(cast<ModuleOp>(module->clone()));
   if (!prePipeline.empty())
     if (llvm::Error err = runPasses(*kernels, "kernel generation failed",
@@ -119,6 +120,7 @@ llvm::Expected<OwningOpRef<ModuleOp>> mlir::yasps::generateLoopKernels(
             lowerOptions.lanes = lanes;
             lowerOptions.projectionLanes = projectionLanes;
             lowerOptions.storage = "f64";
+            lowerOptions.outStorage_ = outStorage.str();
             pm.addPass(createYaspsLowerToLoops(lowerOptions));
             pm.addPass(createYaspsStripScenes());
             // Bottom-up: on the straight-line code of a large projection
@@ -173,6 +175,11 @@ std::vector<KernelDescription> mlir::yasps::describeKernels(ModuleOp kernels) {
             cast<IntegerAttr>(entry.getValue()).getInt();
     kernel.params =
         describeParams(func->getAttrOfType<ArrayAttr>("yasps.params"));
+    // The output is the first buffer argument (after begin and end).
+    for (auto [arg, role] : llvm::zip(func.getArguments().drop_front(2), args))
+      if (cast<KernelArgAttr>(role).getKind() == KernelArgKind::out &&
+          cast<MemRefType>(arg.getType()).getElementType().isF32())
+        kernel.outType = "f32";
     result.push_back(std::move(kernel));
   }
   return result;

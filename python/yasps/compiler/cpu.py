@@ -6,6 +6,8 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import Dict, List, Sequence
 
+import numpy as np
+
 from .. import config
 from .errors import native, translated
 from .params import KernelArgument, Param, decode_params, kernel_arguments
@@ -19,6 +21,7 @@ class KernelInfo:
     rows: int                      #: rows of each instance's value
     cols: int                      #: its columns (column-major in memory)
     projection: str                #: "full"/"reduced"/"separate", or ""
+    out_dtype: type = float        #: numpy type of the output buffer
 
 
 @dataclass
@@ -34,9 +37,11 @@ class CpuKernels:
         if path not in self._info:
             arguments = dict(self.library.kernels)[path]
             rows, cols = self.library.shape(path)
-            self._info[path] = KernelInfo(path, kernel_arguments(arguments),
-                                          rows, cols,
-                                          self.library.projection(path))
+            out = self.library.out_type(path)
+            self._info[path] = KernelInfo(
+                path, kernel_arguments(arguments), rows, cols,
+                self.library.projection(path),
+                np.float32 if out == "f32" else np.float64)
         return self._info[path]
 
     def params(self, path: str) -> List[Param]:

@@ -17,16 +17,20 @@ from .inputs import host_input
 from .native import native
 
 
-def allocate_output(path: str, count: int, rows: int, cols: int) -> np.ndarray:
-    """The output of ``count`` instances of ``rows x cols`` doubles; a yasps
-    error naming the attribute and the bytes where memory runs out."""
+def allocate_output(path: str, count: int, rows: int, cols: int,
+                    dtype=np.float64) -> np.ndarray:
+    """The output of ``count`` instances of ``rows x cols`` floats of
+    ``dtype``; a yasps error naming the attribute and the bytes where memory
+    runs out."""
+    size = np.dtype(dtype).itemsize
+    what = "doubles" if size == 8 else "floats"
     try:
-        return np.empty(count * rows * cols, dtype=np.float64)
+        return np.empty(count * rows * cols, dtype=dtype)
     except MemoryError:
         raise SceneError(
-            f"{path}: {count} instances of {rows}x{cols} doubles need "
-            f"{8 * count * rows * cols:,} bytes, more than this machine can "
-            "allocate") from None
+            f"{path}: {count} instances of {rows}x{cols} {what} need "
+            f"{size * count * rows * cols:,} bytes, more than this machine "
+            "can allocate") from None
 
 
 def _threads(threads: Optional[int]) -> int:
@@ -69,11 +73,13 @@ class CpuBackend:
         if reuse is not None:
             kept = self._outputs.setdefault(scene, {})
             out = kept.get(reuse)
-            if out is None or out.size != size:
+            if out is None or out.size != size or out.dtype != kernel.out_dtype:
                 out = kept[reuse] = allocate_output(path, count, kernel.rows,
-                                                    kernel.cols)
+                                                    kernel.cols,
+                                                    kernel.out_dtype)
         else:
-            out = allocate_output(path, count, kernel.rows, kernel.cols)
+            out = allocate_output(path, count, kernel.rows, kernel.cols,
+                                  kernel.out_dtype)
         buffers = [out if a.kind == "out" else given
                    for a, given in zip(kernel.arguments, inputs)]
         kernels.launch(path, count, buffers, _threads(threads))
@@ -97,7 +103,16 @@ class CpuBackend:
 
     def add(self, system, energy_index: int, inputs: LocalInputs,
             threads: Optional[int]) -> None:
-        add_host_arrays(system, energy_index, inputs, (_threads(threads),))
+        add_host_arrays(system, energy_index, inputs, (_threads(threads),),
+                        f32=True)
+
+    def finish_assembly(self, system) -> None:
+        """Ends an assembly. With ``config.hessian_storage`` "f32" the
+        solve's products read the Hessian's blocks rounded to f32 (f64
+        vectors and arithmetic)."""
+        system.single_product = (
+            config.resolve_hessian_storage() == "f32")
+        system.finish_assembly()
 
     def synchronize(self, system=None) -> None:
         """CPU work is done when its call returns."""
@@ -110,29 +125,38 @@ class CpuBackend:
                                            stopping))
 
 
+def _f64(array: np.ndarray) -> np.ndarray:
+    """``array`` as C-ordered f64 (a copy only when it is not)."""
+    return np.ascontiguousarray(array, dtype=np.float64)
+
+
 def add_host_arrays(system, energy_index: int, inputs: LocalInputs,
-                    options: tuple = ()) -> None:
+                    options: tuple = (), f32: bool = False) -> None:
     """Assembles local derivatives held in host memory into ``system`` (a
     GlobalSystem, or a GpuSystem, which uploads them); ``options`` are the
-    system's further arguments (the CPU's thread count)."""
+    system's further arguments (the CPU's thread count). With ``f32`` (the
+    CPU's GlobalSystem), f32 gradients and Hessians of an f32 scene are
+    assembled as they are; the factored paths, and other systems, take f64
+    (f32 ones are widened)."""
     count, n, m = inputs.count, inputs.n, inputs.inner_size
     slots = inputs.slot_factors
     if slots is not None:
         # P is symmetric: row- and column-major storage agree.
         system.add_slot_factored(
-            energy_index, np.ascontiguousarray(inputs.gradient).reshape(
-                count, m),
-            np.ascontiguousarray(inputs.inner_hessian).reshape(count, m, m),
+            energy_index, _f64(inputs.gradient).reshape(count, m),
+            _f64(inputs.inner_hessian).reshape(count, m, m),
             m, slots.tables, slots.slots, slots.sources, *options)
         return
-    gradient = np.ascontiguousarray(inputs.gradient).reshape(count, n)
     if inputs.inner_map is not None:
         # Hessians kept as factors: J^T P J is formed while assembling.
-        maps = np.ascontiguousarray(
-            from_column_major(inputs.inner_map, m, n, copy=False))
-        inner = np.ascontiguousarray(inputs.inner_hessian).reshape(count, m, m)
-        system.add_factored(energy_index, gradient, maps, inner, m, *options)
-    else:
-        # Symmetric: row- and column-major storage agree.
-        hessian = np.ascontiguousarray(inputs.hessian).reshape(count, n, n)
-        system.add(energy_index, gradient, hessian, *options)
+        maps = _f64(from_column_major(inputs.inner_map, m, n, copy=False))
+        inner = _f64(inputs.inner_hessian).reshape(count, m, m)
+        system.add_factored(energy_index, _f64(inputs.gradient).reshape(
+            count, n), maps, inner, m, *options)
+        return
+    gradient, hessian = inputs.gradient, inputs.hessian
+    if not (f32 and gradient.dtype == hessian.dtype == np.float32):
+        gradient, hessian = _f64(gradient), _f64(hessian)
+    # Symmetric: row- and column-major storage agree.
+    system.add(energy_index, np.ascontiguousarray(gradient).reshape(count, n),
+               np.ascontiguousarray(hessian).reshape(count, n, n), *options)

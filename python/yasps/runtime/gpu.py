@@ -12,6 +12,7 @@ few integers, compared by value. Results stay on the device until read.
 
 from __future__ import annotations
 
+import warnings
 import weakref
 from typing import Dict, List, Optional, Sequence, Tuple
 
@@ -162,6 +163,7 @@ class GpuBackend:
         self._systems: "weakref.WeakKeyDictionary" = weakref.WeakKeyDictionary()
         #: (kind, path) of the uploads of the last run()
         self.last_uploads: List[Tuple[str, str]] = []
+        self._warned_storage = False
 
     @property
     def host(self) -> CpuBackend:
@@ -225,6 +227,15 @@ class GpuBackend:
         mirror = native().GpuSystem(session().device, host_system)
         self._systems[scene] = (host_system, mirror)
         return mirror
+
+    def finish_assembly(self, system) -> None:
+        """Ends an assembly. The device keeps f64 blocks: with
+        ``config.hessian_storage`` "f32" it warns, once."""
+        if (config.resolve_hessian_storage() == "f32"
+                and not self._warned_storage):
+            self._warned_storage = True
+            warnings.warn("hessian_storage='f32' applies to the CPU solve; "
+                          "the GPU solve keeps f64 blocks", stacklevel=3)
 
     def add(self, system, energy_index: int, inputs: LocalInputs,
             threads: Optional[int]) -> None:

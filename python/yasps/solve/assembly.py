@@ -18,6 +18,7 @@ from typing import Dict, List, Optional
 
 import numpy as np
 
+from .. import config
 from ..frontend.attribute import Attribute
 from ..frontend.errors import SceneError
 from ..frontend.scene import Mesh, Primitive, PrimitiveUnion, Scene
@@ -85,6 +86,10 @@ def _static_structure_key(scene, ir: str, layout: DofLayout,
 
 #: The runtime system of each scene's static energies and the key of what
 #: it was built from, reused while the structure is unchanged.
+# f32 represents every integer below this exactly: the placement indices
+# (DoF + 1) f32 kernels compute.
+_F32_EXACT_INTEGERS = 2 ** 24
+
 _static_systems: "weakref.WeakKeyDictionary[Scene, tuple]" = \
     weakref.WeakKeyDictionary()
 
@@ -110,6 +115,12 @@ def assemble(scene: Scene, backend: Backend, threads: Optional[int] = None,
         raise SceneError(f"scene '{scene.name}' has no minimisation targets "
                          "(addMinimizeTarget)")
     layout = DofLayout(targets)
+    if (config.resolve_precision(scene.precision) == "f32"
+            and layout.size >= _F32_EXACT_INTEGERS):
+        raise SceneError(
+            f"scene '{scene.name}' has {layout.size:,} DoFs: f32 kernels "
+            f"compute placement indices exactly only below 2^24 "
+            f"({_F32_EXACT_INTEGERS:,}); compute this scene in f64")
     # One emission of the scene for every energy's kernels; it does not
     # change with the counts of dynamic primitives.
     ir = kernel_ir(scene)
@@ -153,6 +164,7 @@ def assemble(scene: Scene, backend: Backend, threads: Optional[int] = None,
     system.set_zero()
     for k, (_, (inputs, _)) in enumerate(static + dynamic):
         backend.add(system, k, inputs, threads)
+    backend.finish_assembly(system)
     # The local derivatives are reused by the next call: let assembly finish.
     backend.synchronize(system)
     spent["assembly"] += clock() - start

@@ -48,7 +48,8 @@ def project_compressed(dofs: np.ndarray, hess: np.ndarray, method: str,
     runtime = native()
     count, n = dofs.shape
     out = np.zeros((count, n, n))
-    hess = np.ascontiguousarray(hess)
+    # Compression is f64 (an f32 scene's local Hessians are widened).
+    hess = np.ascontiguousarray(hess, dtype=np.float64)
     for k, instances, matrices in runtime.compress_local_hessians(dofs, hess):
         if k == 0:
             continue

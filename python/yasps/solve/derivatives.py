@@ -173,8 +173,10 @@ class _Outputs:
             kernel = self.kernels.kernel(table.jacobian)
             out = self.backend.run(self.kernels, self.scene, table.jacobian,
                                    count, self.threads)
+            # The runtime's tables are f64 (an f32 scene's are widened).
             self.tables[table.jacobian] = np.ascontiguousarray(
-                self.backend.to_host(out, (count, kernel.rows, kernel.cols)))
+                self.backend.to_host(out, (count, kernel.rows, kernel.cols)),
+                dtype=np.float64)
         return self.tables[table.jacobian]
 
     def _slot_inputs(self) -> LocalInputs:

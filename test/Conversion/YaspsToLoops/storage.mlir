@@ -1,10 +1,13 @@
-// RUN: yasps-opt %s -yasps-lower-to-loops="attributes=@m::@p::@proj storage=f64" -yasps-strip-scenes -canonicalize | FileCheck %s
-// RUN: yasps-opt %s -yasps-lower-to-loops="attributes=@m::@p::@proj storage=f64 lanes=4" -yasps-strip-scenes -canonicalize | FileCheck %s --check-prefix=LANES
+// RUN: yasps-opt %s -yasps-lower-to-loops="attributes=@m::@p::@proj storage=f64 out-storage=f64" -yasps-strip-scenes -canonicalize | FileCheck %s
+// RUN: yasps-opt %s -yasps-lower-to-loops="attributes=@m::@p::@proj storage=f64 out-storage=f64 lanes=4" -yasps-strip-scenes -canonicalize | FileCheck %s --check-prefix=LANES
+// RUN: yasps-opt %s -yasps-lower-to-loops="attributes=@m::@p::@proj storage=f64" -yasps-strip-scenes -canonicalize | FileCheck %s --check-prefix=F32OUT
 // RUN: yasps-opt %s -yasps-lower-to-loops="attributes=@m::@p::@proj" -yasps-strip-scenes -canonicalize | FileCheck %s --check-prefix=OWN
 // RUN: not yasps-opt %s -yasps-lower-to-loops="storage=f16" 2>&1 | FileCheck %s --check-prefix=BAD
+// RUN: not yasps-opt %s -yasps-lower-to-loops="out-storage=bf16" 2>&1 | FileCheck %s --check-prefix=BADOUT
 
 // A scene written in f32 computes in f32. With storage=f64 (what the CPU and
-// GPU compilers ask for: the runtime's buffers are f64) every float buffer is
+// GPU compilers ask for: the runtime's attribute buffers are f64) and
+// out-storage=f64 (the GPU's: its assembly reads f64) every float buffer is
 // f64: loads truncate to f32, the arithmetic (here a PSD projection) runs in
 // f32 and the result is extended to f64 as it is stored. The eigensolver's
 // tolerance is f32's unit round-off, 2^-23 (a tolerance of 2^-52 is never
@@ -28,6 +31,13 @@
 // LANES: %[[ROW:.*]] = arith.extf {{.*}} : vector<4xf32> to vector<4xf64>
 // LANES: vector.store %[[ROW]], {{.*}} : memref<?xf64>, vector<4xf64>
 
+// storage=f64 alone (the CPU's): f64 attribute buffers, and the output in the
+// type computed in, stored as it is.
+// F32OUT-LABEL: func.func @yasps_eval_m__p__proj(
+// F32OUT-SAME: %{{.*}}: memref<?xf32>, %{{.*}}: memref<?xf64>)
+// F32OUT: arith.truncf
+// F32OUT-NOT: arith.extf
+
 // Without storage=, buffers have the attributes' own type.
 // OWN-LABEL: func.func @yasps_eval_m__p__proj(
 // OWN-SAME: memref<?xf32>, %{{.*}}: memref<?xf32>)
@@ -35,6 +45,7 @@
 // OWN-NOT: arith.extf
 
 // BAD: storage='f16' is not f32 or f64
+// BADOUT: out-storage='bf16' is not f32 or f64
 yasps.scene @s {
   yasps.mesh @m {
     yasps.primitive @p(3) {

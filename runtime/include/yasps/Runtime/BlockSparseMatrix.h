@@ -97,8 +97,20 @@ public:
       const std::vector<std::pair<std::int64_t, std::int64_t>> &coords,
       std::vector<BlockSlot> *positions = nullptr);
 
-  /// Sets every stored value to zero, keeping the structure.
+  /// Sets every stored value to zero, keeping the structure, and drops the
+  /// single-precision copy (roundValuesForProduct).
   void setZero();
+
+  /// Takes an f32 copy of the stored values that multiply reads from then
+  /// on, in place of the values: the product is bound by reading the
+  /// blocks, and f32 blocks halve that. Vectors and arithmetic stay f64, so
+  /// the product is exactly H~ x for H~ the values rounded to f32. The copy
+  /// is dropped by setZero() and dropSingleValues(); values changed after
+  /// it was taken are not seen by multiply until it is taken again.
+  void roundValuesForProduct();
+  void dropSingleValues() { singleValues_.clear(); }
+  /// Whether multiply reads the f32 copy.
+  bool hasSingleValues() const { return !singleValues_.empty(); }
 
   /// Adds the dense block `local` at a slot from the constructor. `local`
   /// is row-major and shaped as the input coordinate (row, col) it came
@@ -156,9 +168,18 @@ public:
   std::vector<double> &values() { return values_; }
 
 private:
-  void multiplyInStorageOrder(const double *x, double *y) const;
-  void multiply3x3InStorageOrder(std::size_t begin, std::size_t end,
-                                 const double *x, double *y) const;
+  // The products, over the values (f64) or their f32 copy (`values` is
+  // either's first entry; blocks sit at valueOffset_ in both).
+  template <typename T>
+  void multiplyInStorageOrder(const T *values, const double *x,
+                              double *y) const;
+  template <typename T>
+  void multiply3x3InStorageOrder(const T *values, std::size_t begin,
+                                 std::size_t end, const double *x,
+                                 double *y) const;
+  template <typename T>
+  void multiplyByRows(const T *values, const double *x, double *y,
+                      ThreadPool &pool) const;
 
   BlockLayout layout_;
   std::vector<BlockGroup> groups_;
@@ -168,6 +189,8 @@ private:
   std::vector<std::int64_t> blockCol_;
   std::vector<std::size_t> valueOffset_;
   std::vector<double> values_;
+  // roundValuesForProduct's copy; empty when multiply reads values_.
+  std::vector<float> singleValues_;
   // For multiply, per group g and block row r (index g * (numBlocks + 1)
   // + r): the group's stored blocks of row r are [rowStart_[i],
   // rowStart_[i + 1]), and its off-diagonal blocks of column r, whose

@@ -51,6 +51,18 @@ public:
   /// Zeroes the gradient and the Hessian before a new assembly.
   void setZero();
 
+  /// With `on`, products (multiply, solve) read the Hessian's blocks
+  /// rounded to f32 once an assembly is finished (finishAssembly): mixed
+  /// precision, f32 storage for the SpMV, which reading the blocks bounds,
+  /// with f64 vectors, dot products and preconditioner. The solve is then
+  /// of H~ x = g, H~ within f32's round-off of H entry by entry.
+  void setSingleProduct(bool on) { singleProduct_ = on; }
+  bool singleProduct() const { return singleProduct_; }
+  /// Ends an assembly: with single products, takes the blocks' f32 copies.
+  /// An add() after it drops its part's copy (products then read the f64
+  /// values until the next finishAssembly).
+  void finishAssembly();
+
   /// Adds energy `energy`'s local gradients (count x n) and local Hessians
   /// (count x n x n, each row-major) to the global system. With a pool of
   /// more than one thread, the instances are split across the threads,
@@ -59,6 +71,10 @@ public:
   /// from run to run. Without a pool, or with one thread, the instances are
   /// added in order.
   void add(std::size_t energy, const double *gradients, const double *hessians,
+           ThreadPool *pool = nullptr);
+  /// add() of f32 local derivatives (an f32 scene's kernels store them as
+  /// they compute them); the sums are f64, in the same order.
+  void add(std::size_t energy, const float *gradients, const float *hessians,
            ThreadPool *pool = nullptr);
 
   /// add() for an energy whose local Hessians are kept as factors (paper
@@ -126,14 +142,19 @@ private:
   /// The part and map of energy `energy` (throws std::out_of_range).
   std::pair<Part *, const EnergyMap *> energyMap(std::size_t energy);
   /// Adds instance i's gradient g (n) and Hessian h (n x n).
-  template <bool Atomic>
+  template <bool Atomic, typename T>
   static void addInstance(Part &part, const EnergyMap &map, std::int64_t i,
-                          const double *g, const double *h,
+                          const T *g, const T *h,
                           std::vector<double> &gradient);
+  /// add() for local derivatives of type T.
+  template <typename T>
+  void addLocal(std::size_t energy, const T *gradients, const T *hessians,
+                ThreadPool *pool);
 
   Part staticPart;
   Part dynamicPart;
   std::vector<double> gradientValues;
+  bool singleProduct_ = false;
 };
 
 } // namespace yasps::runtime

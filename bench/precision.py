@@ -1,0 +1,145 @@
+#!/usr/bin/env python3
+"""f32 against f64 derivative kernels on the CPU, one thread.
+
+For every energy of ``bench/energy_cases.py`` (or those named with
+``--cases``) the gradient, Hessian and projected-Hessian kernels are
+compiled from the scene in f64 and in f32 (``yasps.config.precision``; each
+with its default SIMD width: twice the lanes in f32), timed alternately on
+the same instances, and compared. Prints per kernel the time per instance
+in f64 and f32, the speed-up, and the f32 result's largest error relative to
+the largest f64 entry.
+
+With ``--newton``, also one Newton iteration (``minimizeEnergy``) on the
+19k-vertex bunny of ``bench/newton_system.py`` in each precision, timed in
+turns: the median time per stage, the speed-up and the directions'
+relative difference.
+
+    python3 bench/precision.py [--count 20000] [--repeat 7] [--cases snh]
+                               [--newton]
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import sys
+import tempfile
+from pathlib import Path
+
+os.environ.setdefault("YASPS_CACHE_DIR", tempfile.mkdtemp(prefix="yasps-bench-"))
+HERE = Path(__file__).resolve().parent
+sys.path.insert(0, str(HERE.parent / "python"))
+
+import numpy as np  # noqa: E402
+
+import yasps  # noqa: E402
+from energy_cases import CASES  # noqa: E402
+from newton_system import build as bunny_scene  # noqa: E402
+
+KERNELS = ("grad", "hess", "hess_proj")
+PRECISIONS = ("f64", "f32")
+
+
+def alternate(launches, repeat: int):
+    """Median seconds of each launch, timed in turns so that both
+    precisions see the same machine."""
+    import time
+    times = [[] for _ in launches]
+    for _ in range(repeat):
+        for k, launch in enumerate(launches):
+            t0 = time.perf_counter()
+            launch()
+            times[k].append(time.perf_counter() - t0)
+    return [float(np.median(t)) for t in times]
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    parser.add_argument("--count", type=int, default=20000)
+    parser.add_argument("--repeat", type=int, default=7)
+    parser.add_argument("--newton", action="store_true",
+                        help="also time a Newton iteration on the bunny")
+    parser.add_argument("--cases", default="",
+                        help="only energies whose name contains this text "
+                             "(e.g. 'Neo-Hookean')")
+    args = parser.parse_args()
+    n = args.count
+    print(f"{n} instances, one thread, median of {args.repeat}; time per "
+          f"instance f64 / f32 (speed-up), f32's largest error relative to "
+          f"the largest f64 entry")
+    print(f"{'energy':34s}" + "".join(f"{k:>36s}" for k in KERNELS))
+    for case in CASES:
+        if args.cases.lower() not in case.name.lower():
+            continue
+        energy = case.build(case.instances(n))
+        launches, outputs = {}, {}
+        for precision in PRECISIONS:
+            yasps.config.precision = precision
+            energy.scene.precision = precision
+            _, _, calls = energy.kernels(list(KERNELS))
+            for name, call in zip(KERNELS, calls):
+                call()
+                launches[precision, name] = call
+                outputs[precision, name] = call.args[2][0].copy()
+        yasps.config.precision = "f64"
+        cells = []
+        for name in KERNELS:
+            t64, t32 = alternate([launches["f64", name],
+                                  launches["f32", name]], args.repeat)
+            want, got = outputs["f64", name], outputs["f32", name]
+            error = np.abs(got - want).max() / np.abs(want).max()
+            cells.append(f"{t64 * 1e9 / n:7.0f} /{t32 * 1e9 / n:6.0f} ns "
+                         f"({t64 / t32:4.2f}x) {error:7.1e}")
+        print(f"{case.name:34s}" + "".join(f"{c:>36s}" for c in cells),
+              flush=True)
+    if args.newton:
+        yasps.config.num_threads = 1
+        newton(args.repeat)
+
+
+STAGES = ("derivatives", "indices", "assembly", "solve")
+
+#: (name, kernels' precision, Hessian storage of the solve's products)
+NEWTON_SETTINGS = (("f64", "f64", "f64"), ("f32", "f32", "f64"),
+                   ("mixed", "f32", "f32"))
+
+
+def newton(repeat: int) -> None:
+    """One Newton iteration on the bunny per setting, in turns: f64; f32
+    derivative kernels; and those with f32 Hessian blocks in PCG's SpMV."""
+    scenes = {}
+    for name, precision, storage in NEWTON_SETTINGS:
+        yasps.config.hessian_storage = storage
+        s = bunny_scene()
+        s.precision = precision
+        s.minimizeEnergy(tolerance=1e-4)      # compiles, builds the structure
+        scenes[name] = (s, storage)
+    seconds = {n: {k: [] for k in STAGES + ("total",)} for n in scenes}
+    directions, iterations = {}, {}
+    for _ in range(repeat):
+        for name, (s, storage) in scenes.items():
+            yasps.config.hessian_storage = storage
+            directions[name] = s.minimizeEnergy(tolerance=1e-4)[0]
+            iterations[name] = s.lastSolve["iterations"]
+            stages = s.lastSolve["seconds"]
+            for k in STAGES:
+                seconds[name][k].append(stages[k])
+            seconds[name]["total"].append(sum(stages[k] for k in STAGES))
+    yasps.config.hessian_storage = "f64"
+    names = list(scenes)
+    print(f"\none Newton iteration, bunny-19k, one thread, median of {repeat}"
+          f" (speed-up against f64): " + " / ".join(names))
+    for k in STAGES + ("total",):
+        t = [float(np.median(seconds[n][k])) for n in names]
+        cells = "".join(f"{v * 1e3:8.1f} ms ({t[0] / v:4.2f}x)" for v in t)
+        print(f"  {k:12s}{cells}")
+    d64 = directions["f64"]
+    for name in names[1:]:
+        error = np.abs(directions[name] - d64).max() / np.abs(d64).max()
+        print(f"  {name}: PCG iterations {iterations[name]} (f64: "
+              f"{iterations['f64']}), direction {error:.1e} off f64's "
+              f"(relative to its largest entry)")
+
+
+if __name__ == "__main__":
+    main()
