@@ -35,7 +35,12 @@ DHAT = 0.02 ** 2  # squared activation distance of the ground barrier
 KAPPA = 1e6       # barrier stiffness per unit of vertex mass
 
 
-def build(cells: int):
+def build(cells: int, projection: str = "clamp", dhat: float = DHAT,
+          kappa: float = KAPPA):
+    """The scene: a box of ``cells``^3 cells, its target x and prediction
+    x_hat. ``projection`` PSD-projects every energy (as addEnergy); ``dhat``
+    (a squared distance) and ``kappa`` (per unit of vertex mass) are the
+    ground barrier's (bench/accuracy_speed.py varies them)."""
     verts, tets = box_tet_mesh(cells, size=0.2)
     verts = verts + [0.0, 0.0, 0.1]   # 10 cm above the ground
     rest = verts[tets]
@@ -60,11 +65,14 @@ def build(cells: int):
     corners = t.addAttribute("x", through=t2v, source=x)
     F = E.deformation_gradient(corners, t["DmInv"])
     s.addEnergy(t.addAttribute("elastic", computed_attribute=DT * DT *
-                               E.stable_neo_hookean(F, mu, lam, t["volume"])))
-    s.addEnergy(v.addAttribute("inertia", computed_attribute=E.inertia(x, x_hat, mass)))
+                               E.stable_neo_hookean(F, mu, lam, t["volume"])),
+                projection=projection)
+    s.addEnergy(v.addAttribute("inertia", computed_attribute=E.inertia(x, x_hat, mass)),
+                projection=projection)
     height2 = x[2] * x[2]
     s.addEnergy(v.addAttribute("ground", computed_attribute=DT * DT *
-                               E.ipc_barrier(height2, DHAT, KAPPA * mass)))
+                               E.ipc_barrier(height2, dhat, kappa * mass)),
+                projection=projection)
     s.addMinimizeTarget([x])
     return s, x, x_hat
 

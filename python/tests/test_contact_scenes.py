@@ -14,11 +14,15 @@ import numpy as np
 
 import yasps
 from yasps.contact import Contact, surface_of
-from yasps.sim import (ImplicitEuler, add_cloth, add_elastic_tets,
-                       add_free_vertices, box_tet_mesh, cloth_grid)
+from yasps.sim import (ImplicitEuler, add_cloth, add_free_vertices,
+                       box_tet_mesh, cloth_grid)
 
 REPO = Path(__file__).resolve().parents[2]
 DT = 0.01
+
+sys.path.insert(0, str(REPO / "examples"))
+
+import soft_boxes  # noqa: E402
 
 
 def check_frame(report, V: np.ndarray, faces: np.ndarray) -> None:
@@ -34,26 +38,10 @@ def test_soft_box_dropped_on_a_soft_box_on_the_ground():
     """Two soft boxes, one on the ground (a half-space), one falling onto
     it: they touch (pairs between them), stay apart, and the lower one stays
     above the ground."""
-    verts, tets = box_tet_mesh(2, 0.2)
-    faces = surface_of(tets).astype(np.int32)
-    s = yasps.scene("soft_on_soft")
-    xs, hats, prims = [], [], []
-    for name, lift in (("low", 5e-4), ("high", 0.23)):
-        mesh = s.addMesh(name)
-        start = verts + [0.03 if name == "high" else 0.0, 0.02, lift]
-        free = add_free_vertices(mesh, start, 0.1)
-        add_elastic_tets(mesh, free.x, start, tets, 2e4, 2e4, scale=DT * DT)
-        xs.append(free.x)
-        hats.append(free.x_hat)
-        prims.append(free.primitive)
-    union = s.addMesh("all").addPrimitiveUnion("v", prims)
-    union.addAttribute("position")
-    both = np.concatenate([faces, faces + len(verts)])
-    contact = Contact(s, union, faces=both, dhat=1e-3, average_mass=0.1,
-                      halfspaces=[((0, 0, 0), (0, 0, 1))])
-    s.addMinimizeTarget(xs)
-    stepper = ImplicitEuler(s, xs, hats, DT, gravity=[(0, 0, -9.81)] * 2,
-                            contact=contact)
+    boxes = soft_boxes.build()
+    xs, contact, both = boxes.xs, boxes.contact, boxes.faces
+    verts_per_box = len(xs[0].value)
+    stepper = boxes.stepper()
     between = 0
     for _ in range(12):
         report = stepper.step()
@@ -62,7 +50,7 @@ def test_soft_box_dropped_on_a_soft_box_on_the_ground():
         assert V[:, 2].min() > 0.0
         ids = [c.vertex_ids(contact.mesh.edges, contact.mesh.faces)
                for c in contact.collisions.fv_collisions]
-        between += sum(min(i) < len(verts) <= max(i) for i in ids)
+        between += sum(min(i) < verts_per_box <= max(i) for i in ids)
     assert between > 0
     # Resting on it, pressed into its top: below its top corners, well above
     # its middle.

@@ -1,4 +1,4 @@
-"""The Python examples the README's demo runs."""
+"""The Python examples: those the README's demo runs, and the soft boxes."""
 
 import subprocess
 import sys
@@ -13,3 +13,17 @@ def test_two_bunnies_example_runs():
     assert "16 point-point pairs" in out
     assert "Hessians (16, 24, 24)" in out
     assert "pair 0 (affine-soft) has 15 real parameters" in out
+
+
+def test_soft_boxes_example_runs():
+    """Two frames of examples/soft_boxes.py: the boxes fall (the high one
+    starts 3 cm above the low one: the gap closes) and stay above ground."""
+    out = subprocess.run([sys.executable, str(REPO / "examples" / "soft_boxes.py"),
+                          "--frames", "2"],
+                         check=True, capture_output=True, text=True).stdout
+    lines = [line for line in out.splitlines() if line.startswith("frame")]
+    assert len(lines) == 2
+    gaps = [float(line.split("gap")[1].split("mm")[0]) for line in lines]
+    lowest = [float(line.split("lowest z")[1].split("cm")[0]) for line in lines]
+    assert 0 < gaps[1] < gaps[0] < 30
+    assert min(lowest) > 0

@@ -1,9 +1,12 @@
-"""Derivatives and projections at the extremes, in f64, against mpmath at
-60 digits evaluated on the same floating-point inputs: the IPC barrier from
-d/dhat = 1e-12 to 1 - 1e-8, stable Neo-Hookean near and past inversion and
-at |F| ~ 1e3, a sliver tet, and PSD projections of matrices with repeated
-and clustered eigenvalues at norms 1, 1e-300 and 1e300. Each check states
-the bound f64 must meet and why."""
+"""Derivatives and projections at the extremes, in f64 and in f32, against
+mpmath at 60 digits evaluated on the same floating-point inputs (in f32:
+the inputs rounded to f32, which is what an f32 kernel computes on): the
+IPC barrier from d/dhat = 1e-12 to 1 - 1e-8, stable Neo-Hookean near and
+past inversion and at |F| ~ 1e3, a sliver tet, and PSD projections of
+matrices with repeated and clustered eigenvalues at norms 1, 1e-300 and
+1e300 (f32: 1e-30 and 1e30, its range). Each check states the bound its
+precision must meet and why, or, where f32 has no correct digits left, that
+it breaks there (docs/accuracy.md)."""
 
 import mpmath
 import numpy as np
@@ -13,13 +16,14 @@ import yasps
 from yasps import energies as E
 
 EPS = np.finfo(float).eps
+EPS32 = float(np.finfo(np.float32).eps)
 mpmath.mp.dps = 60
 
 
-def scalar_energy(make, values, rows=1, cols=1):
+def scalar_energy(make, values, rows=1, cols=1, precision="f64"):
     """energyDerivatives of ``make(x)`` over one target x per instance."""
     values = np.asarray(values, float)
-    s = yasps.scene("extremes")
+    s = yasps.scene("extremes", precision=precision)
     p = s.addMesh("m").addPrimitive("p", numInstances=len(values))
     x = p.addAttribute("x", rows=rows, cols=cols)
     x.updateValue(values.reshape(len(values), rows, cols))
@@ -219,3 +223,109 @@ def test_projection_against_mpmath(case, scale):
     want = mp_clamped(A)
     assert np.abs(got.projectedHessian[0] - want).max() <= \
         64 * EPS * np.abs(A).max()
+
+
+# ------------------------------------------------------------------ f32
+
+def f32(values) -> np.ndarray:
+    """``values`` rounded to f32, as an f32 kernel loads them."""
+    return np.asarray(values, dtype=np.float32).astype(float)
+
+
+@pytest.mark.parametrize("ratio", [1e-12, 1e-8, 1e-4, 0.5, 1 - 1e-4])
+def test_barrier_in_f32_against_mpmath(ratio):
+    """The f64 bound with f32's eps: 16 eps32 (1 + 1 / |log(d / dhat)|),
+    against mpmath at the f32-rounded distance. At 1 - 1e-4 that is 2% of
+    a barrier that is 1e-16 of its size at d = dhat/2: f32 keeps few digits
+    of the barrier near dhat, where it is negligible (test below)."""
+    d = float(f32(ratio * DHAT))
+    got = scalar_energy(lambda x: E.ipc_barrier(x, DHAT, KAPPA), [[d]],
+                        precision="f32")
+
+    def barrier(t):
+        return KAPPA * (t - DHAT) ** 2 * mpmath.log(t / DHAT) ** 2
+
+    value, grad, hess = mp_derivatives(barrier, [d])
+    bound = 16 * EPS32 * (1 + 1 / abs(np.log(d / DHAT)))
+    assert relative(got.value[0], value) <= bound
+    assert relative(got.gradient[0], grad) <= bound
+    assert relative(got.hessian[0], hess) <= bound
+
+
+def test_barrier_in_f32_breaks_only_where_it_vanishes():
+    """At d/dhat = 1 - 1e-8, f32 cannot tell d from dhat (their ratio
+    rounds to 1 within eps32 = 1.2e-7): the barrier's value, 1e-32 of its
+    size at dhat/2, has no correct digit, but its error is below eps32 of
+    that size, so the energy and forces it adds are right to f32."""
+    d = (1 - 1e-8) * DHAT
+    got = scalar_energy(lambda x: E.ipc_barrier(x, DHAT, KAPPA), [[d]],
+                        precision="f32")
+    half = scalar_energy(lambda x: E.ipc_barrier(x, DHAT, KAPPA),
+                         [[0.5 * DHAT]])
+    for ours, scale in ((got.value, half.value), (got.gradient, half.gradient),
+                        (got.hessian, half.hessian)):
+        assert np.abs(ours).max() <= EPS32 * np.abs(scale).max()
+
+
+@pytest.mark.parametrize("case", sorted(CASES))
+def test_stable_neo_hookean_in_f32_against_mpmath(case):
+    """64 eps32 of the largest entry, at the f32-rounded F (the f64 test's
+    bound and reasoning with f32's eps)."""
+    F = f32(CASES[case])
+    got = scalar_energy(lambda x: E.stable_neo_hookean(x, MU, LAM, 1.0),
+                        [F], rows=3, cols=3, precision="f32")
+    value, grad, hess = mp_derivatives(snh_mp, F.T.reshape(-1))
+    bound = 64 * EPS32
+    assert relative(got.value[0], value) <= bound
+    assert relative(got.gradient[0], grad) <= bound
+    assert relative(got.hessian[0], hess) <= bound
+
+
+def test_sliver_tet_breaks_in_f32():
+    """f32 has eps32 cond(Dm) = 1.2e-7 x 1e8 > 1 on the 1e-8-high sliver:
+    no correct digit (its positions' 1e-9 perturbation is below their f32
+    rounding). The f32 derivatives are off by more than 10% of the
+    largest entry: such shapes need f64 (docs/accuracy.md)."""
+    h = 1e-8
+    rest = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0.3, 0.3, h]])
+    Dm = (rest[1:] - rest[0]).T
+    x = rest + 1e-9 * np.random.default_rng(5).standard_normal((4, 3))
+    grads = {}
+    for precision in ("f64", "f32"):
+        s = yasps.scene("sliver", precision=precision)
+        m = s.addMesh("m")
+        v = m.addPrimitive("v", numInstances=4)
+        pos = v.addAttribute("x", rows=3)
+        pos.updateValue(x)
+        t = m.addPrimitive("t", numInstances=1)
+        t.addConstant("inv", rows=3, cols=3).updateValue(np.linalg.inv(Dm)[None])
+        corners = t.addAttribute("c", through=t.addConnectivity(
+            "t2v", v, [[0, 1, 2, 3]], 4), source=pos)
+        s.addEnergy(t.addAttribute("snh", computed_attribute=E.stable_neo_hookean(
+            E.deformation_gradient(corners, t["inv"]), MU, LAM, 1.0)))
+        s.addMinimizeTarget(pos)
+        grads[precision] = s.energyDerivatives(s.m.t["snh"]).gradient[0]
+    assert EPS32 * np.linalg.cond(Dm) > 1
+    assert relative(grads["f32"], grads["f64"]) > 0.1
+
+
+@pytest.mark.parametrize("scale", [1.0, 1e-30, 1e30])
+@pytest.mark.parametrize("case", ["repeated", "clustered", "spread"])
+def test_projection_in_f32_against_mpmath(case, scale):
+    """The f64 test's bound with f32's eps, 64 eps32 |A|_max, at the
+    f32-rounded A, over f32's range (1e-30..1e30: its squares stay
+    normal where the kernels scale them)."""
+    A = projection_cases()[case] * scale
+    A = f32(0.5 * (A + A.T))
+    s = yasps.scene("projection", precision="f32")
+    p = s.addMesh("m").addPrimitive("p", numInstances=1)
+    x = p.addAttribute("x", rows=N)
+    x.updateValue(np.zeros((1, N)))
+    a = p.addConstant("A", rows=N, cols=N)
+    a.updateValue(A[None])
+    s.addEnergy(p.addAttribute("q", computed_attribute=0.5 * (x.T * a * x)))
+    s.addMinimizeTarget(x)
+    got = s.energyDerivatives(s.m.p["q"])
+    want = mp_clamped(A)
+    assert np.abs(got.projectedHessian[0] - want).max() <= \
+        64 * EPS32 * np.abs(A).max()

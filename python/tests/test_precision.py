@@ -8,16 +8,20 @@ The runtime keeps its buffers in f64: an f32 kernel rounds what it loads to
 f32, computes in f32 and stores f64, so the bounds below are those of f32
 arithmetic on f32-rounded inputs."""
 
+import sys
+
 import ipctk
 import numpy as np
 import pytest
 
 import yasps
+from conftest import REPO
 from yasps import energies as E
-from yasps.contact import Contact, surface_of
 from yasps.ir import emit_scene
-from yasps.sim import (ImplicitEuler, add_elastic_tets, add_free_vertices,
-                       box_tet_mesh)
+
+sys.path.insert(0, str(REPO / "examples"))
+
+import soft_boxes  # noqa: E402
 
 EPS32 = float(np.finfo(np.float32).eps)
 EPS64 = float(np.finfo(np.float64).eps)
@@ -148,36 +152,6 @@ def test_f32_newton_direction_agrees_with_f64():
     assert relative(p32, p64) > 1e3 * EPS64
 
 
-def soft_boxes(precision):
-    """Two soft boxes, one falling onto the other on the ground, with IPC
-    contact (dhat 1 mm) between them and against the ground."""
-    verts, tets = box_tet_mesh(2, 0.2)
-    faces = surface_of(tets).astype(np.int32)
-    s = yasps.scene("soft_boxes", precision=precision)
-    xs, hats, prims = [], [], []
-    for name, lift in (("low", 5e-4), ("high", 0.205)):
-        mesh = s.addMesh(name)
-        start = verts + [0.03 if name == "high" else 0.0, 0.02, lift]
-        free = add_free_vertices(mesh, start, 0.1)
-        add_elastic_tets(mesh, free.x, start, tets, 2e4, 2e4, scale=0.01 ** 2)
-        xs.append(free.x)
-        hats.append(free.x_hat)
-        prims.append(free.primitive)
-    union = s.addMesh("all").addPrimitiveUnion("v", prims)
-    union.addAttribute("position")
-    both = np.concatenate([faces, faces + len(verts)])
-    contact = Contact(s, union, faces=both, dhat=1e-3, average_mass=0.1,
-                      halfspaces=[((0, 0, 0), (0, 0, 1))])
-    s.addMinimizeTarget(xs)
-    # Newton and CG converged far past f32's effect on the step, so that
-    # the two precisions' trajectories differ by f32, not by where each
-    # Newton loop stopped.
-    stepper = ImplicitEuler(s, xs, hats, 0.01, gravity=[(0, 0, -9.81)] * 2,
-                            contact=contact, velocity_tolerance=1e-5,
-                            cg_tolerance=1e-9)
-    return stepper, xs, both
-
-
 def test_contact_in_f32_stays_apart_and_near_f64():
     """Eight frames of the boxes in contact in f32: every frame free of
     intersections by ipctk, every accepted step lowering the energy, and
@@ -187,7 +161,13 @@ def test_contact_in_f32_stays_apart_and_near_f64():
     took other paths and ended 3e-4 m apart."""
     runs = {}
     for precision in ("f64", "f32"):
-        stepper, xs, faces = soft_boxes(precision)
+        boxes = soft_boxes.build(lift=0.205, precision=precision,
+                                 name="soft_boxes")
+        # Newton and CG converged far past f32's effect on the step, so
+        # that the two precisions' trajectories differ by f32, not by
+        # where each Newton loop stopped.
+        stepper = boxes.stepper(velocity_tolerance=1e-5, cg_tolerance=1e-9)
+        xs, faces = boxes.xs, boxes.faces
         for _ in range(8):
             report = stepper.step()
             V = np.concatenate([x.value[:, :, 0] for x in xs])

@@ -15,12 +15,14 @@ from .meshes import HEX_CORNERS, hinges_of
 
 def add_elastic_tets(mesh: Mesh, positions: Attribute, rest: np.ndarray,
                      tets: np.ndarray, mu: float, lam: float,
-                     scale: float = 1.0, name: str = "t") -> Attribute:
+                     scale: float = 1.0, name: str = "t",
+                     projection: str = "clamp") -> Attribute:
     """Adds a primitive ``name`` of the tets (M, 4) of the vertices that
     ``positions`` belongs to, with their rest shape (the inverse of the rest
     edge matrix and the volume, from ``rest`` (N, 3)) and registers
     ``scale`` times stable Neo-Hookean (``mu``, ``lam``, per unit volume) on
-    them as an energy (``scale``: dt^2 for implicit Euler). Returns it."""
+    them as an energy (``scale``: dt^2 for implicit Euler), PSD-projected
+    by ``projection`` (as ``addEnergy``). Returns it."""
     tets = np.asarray(tets, dtype=np.int64).reshape(-1, 4)
     corners = np.asarray(rest, dtype=float)[tets]
     edges = np.stack([corners[:, k] - corners[:, 0] for k in (1, 2, 3)], axis=2)
@@ -33,7 +35,7 @@ def add_elastic_tets(mesh: Mesh, positions: Attribute, rest: np.ndarray,
     energy = t.addAttribute("elastic", computed_attribute=scale *
                             E.stable_neo_hookean(E.deformation_gradient(
                                 gathered, t["inv"]), mu, lam, t["vol"]))
-    mesh.scene.addEnergy(energy)
+    mesh.scene.addEnergy(energy, projection=projection)
     return energy
 
 
@@ -85,15 +87,15 @@ def _triangle_rest_frames(rest: np.ndarray, faces: np.ndarray):
 def add_cloth(mesh: Mesh, positions: Attribute, rest: np.ndarray,
               faces: np.ndarray, stretch: float, shear: float,
               bending: float, scale: float = 1.0,
-              name: str = "cloth") -> Attribute:
+              name: str = "cloth", projection: str = "clamp") -> Attribute:
     """Registers a cloth on the triangles ``faces`` (M, 3) of the vertices
     ``positions`` belongs to, at rest ``rest`` (N, 3): Baraff-Witkin
     stretch and shear per triangle (``stretch``, ``shear`` per unit area,
     the rest (u, v) frame in each triangle's plane) and, if ``bending`` >
     0, dihedral bending on every interior edge (its rest length times
     ``bending``; zero when flat), all times ``scale`` (dt^2 for implicit
-    Euler). Primitives ``name`` and ``name + "_hinges"``. Returns the
-    stretch energy."""
+    Euler), PSD-projected by ``projection`` (as ``addEnergy``). Primitives
+    ``name`` and ``name + "_hinges"``. Returns the stretch energy."""
     rest = np.asarray(rest, dtype=float).reshape(-1, 3)
     faces = np.asarray(faces, dtype=np.int64).reshape(-1, 3)
     inverse, areas = _triangle_rest_frames(rest, faces)
@@ -105,7 +107,7 @@ def add_cloth(mesh: Mesh, positions: Attribute, rest: np.ndarray,
     energy = tri.addAttribute("stretch", computed_attribute=scale *
                               E.baraff_witkin(corners, tri["uv_inv"],
                                               tri["area"], stretch, shear))
-    mesh.scene.addEnergy(energy)
+    mesh.scene.addEnergy(energy, projection=projection)
     hinges = hinges_of(faces)
     if bending > 0 and len(hinges):
         h = mesh.addPrimitive(name + "_hinges", numInstances=len(hinges))
@@ -115,7 +117,7 @@ def add_cloth(mesh: Mesh, positions: Attribute, rest: np.ndarray,
             "h2v", positions.owner, hinges, 4), source=positions)
         mesh.scene.addEnergy(h.addAttribute(
             "bending", computed_attribute=scale * E.dihedral_bending(
-                joined, h["length"], bending)))
+                joined, h["length"], bending)), projection=projection)
     return energy
 
 
@@ -197,11 +199,13 @@ class FreeVertices:
 
 
 def add_free_vertices(mesh: Mesh, start: np.ndarray, masses,
-                      name: str = "v") -> FreeVertices:
+                      name: str = "v",
+                      projection: str = "clamp") -> FreeVertices:
     """A primitive ``name`` of vertices at ``start`` (N, 3) whose positions
     ``position`` are a minimisation target's candidates, with the
     implicit-Euler inertia ``m/2 |x - x_hat|^2`` of their ``masses`` (one
-    per vertex, or one for all) registered."""
+    per vertex, or one for all) registered (PSD-projected by
+    ``projection``, as ``addEnergy``: a no-op on this convex energy)."""
     start = np.asarray(start, dtype=float).reshape(-1, 3)
     v = mesh.addPrimitive(name, numInstances=len(start))
     x = v.addAttribute("position", rows=3)
@@ -212,7 +216,7 @@ def add_free_vertices(mesh: Mesh, start: np.ndarray, masses,
     mass.updateValue(np.broadcast_to(np.asarray(masses, float).reshape(-1, 1),
                                      (len(start), 1)).copy())
     mesh.scene.addEnergy(v.addAttribute("inertia", computed_attribute=E.inertia(
-        x, x_hat, mass)))
+        x, x_hat, mass)), projection=projection)
     return FreeVertices(v, x, x_hat)
 
 
