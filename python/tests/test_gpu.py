@@ -94,19 +94,21 @@ def test_demo_scene_compiles_for_gpus_and_caches():
 
 
 def test_an_f32_scene_compiles_to_f32_arithmetic_with_f64_buffers():
-    """An f32 scene's device kernels compute in f32 (f32 multiplies and
-    divisions in the PTX) and read and write the f64 buffers the device
-    keeps: loads rounded (cvt.rn.f32.f64), results widened (cvt.f64.f32)
-    before they are stored. (Their f32 square roots are libdevice's
-    default, sqrt.approx.f32: docs/accuracy.md.)"""
+    """An f32 scene's device kernels compute in f32 (f32 multiplies,
+    divisions and correctly rounded square roots in the PTX: not
+    libdevice's default sqrt.approx.f32, yasps-precise-gpu-sqrt) and read
+    and write the f64 buffers the device keeps: loads rounded
+    (cvt.rn.f32.f64), results widened (cvt.f64.f32) before they are
+    stored."""
     s = drop.build(1)[0]
     s.precision = "f32"
     kernels = yasps.compiler.gpu.compile_scene(s, chips=["sm_90"])
     check_binaries(kernels, ["sm_90"])
     ptx = kernels.binaries[("sm_90", "ptx")].decode()
-    for instruction in ("mul.rn.f32", "div.rn.f32", "cvt.rn.f32.f64",
-                        "cvt.f64.f32"):
+    for instruction in ("mul.rn.f32", "div.rn.f32", "sqrt.rn.f32",
+                        "cvt.rn.f32.f64", "cvt.f64.f32"):
         assert instruction in ptx, instruction
+    assert "sqrt.approx" not in ptx
 
 
 def test_projection_scratch_is_per_thread():

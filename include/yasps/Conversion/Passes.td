@@ -88,4 +88,18 @@ def YaspsSinkScratchIntoLaunch
   }];
 }
 
+def YaspsPreciseGpuSqrt
+    : Pass<"yasps-precise-gpu-sqrt", "::mlir::gpu::GPUModuleOp"> {
+  let summary = "Correctly rounded f32 square roots in GPU kernels";
+  let description = [{
+    Replaces each scalar f32 `math.sqrt` in a GPU module by the correctly
+    rounded PTX instruction `sqrt.rn.f32` (`llvm.inline_asm`). Run before
+    `convert-gpu-to-nvvm`, whose libdevice lowering (`__nv_sqrtf`, also for
+    `llvm.intr.sqrt`) is `sqrt.approx.f32` unless `__CUDA_PREC_SQRT` is
+    reflected: f32 kernels would differ from the CPU's IEEE square roots.
+    f64 square roots are left to libdevice, which rounds them correctly.
+  }];
+  let dependentDialects = ["::mlir::LLVM::LLVMDialect"];
+}
+
 #endif // YASPS_CONVERSION_PASSES_TD

@@ -47,6 +47,7 @@ void mlir::yasps::buildGpuSerializationPipeline(
   }
   OpPassManager &modules = pm.nest<gpu::GPUModuleOp>();
   modules.addPass(createSCFToControlFlowPass());
+  modules.addPass(createYaspsPreciseGpuSqrt());
   modules.addPass(createConvertGpuOpsToNVVMOps());
   modules.addPass(createCanonicalizerPass());
   modules.addPass(createCSEPass());
