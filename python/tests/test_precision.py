@@ -134,6 +134,21 @@ def test_f32_loses_digits_far_from_the_origin():
     assert 64 * EPS32 < error <= 64 * EPS32 * 1e3
 
 
+def test_an_f32_scene_far_from_the_origin_warns():
+    """minimizeEnergy on an f32 scene 1000 units out (its extent: a few
+    units) warns once, naming the target and the loss; f64, or the same
+    scene near the origin, does not."""
+    import warnings
+    far = tet_scene("f32", offset=1e3)
+    with pytest.warns(yasps.PrecisionWarning, match=r"attribute 'x' .* of its extent"):
+        far.minimizeEnergy()
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", yasps.PrecisionWarning)
+        far.minimizeEnergy()                          # once per scene
+        tet_scene("f64", offset=1e3).minimizeEnergy()
+        tet_scene("f32").minimizeEnergy()
+
+
 def test_values_stay_f64_in_an_f32_scene():
     """evaluateEnergy (the line search's comparison) and compute() are f64
     whatever the scene's precision: to 1e-14 of the f64 scene's."""

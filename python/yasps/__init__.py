@@ -30,7 +30,7 @@ from .frontend.scene import (Connectivity, Entity, Mesh, Primitive,
 from .frontend.services import Services, install
 from .runtime import BackendError, backend, gpu_status
 from .solve import SolverError
-from .solve.diagnosis import IllConditionedSolve
+from .solve.diagnosis import IllConditionedSolve, PrecisionWarning
 
 
 def _differentiate(s: Scene) -> None:
@@ -56,8 +56,7 @@ install(Services(
 __all__ = [
     "Attribute", "BackendError", "backend", "Connectivity", "config",
     "Entity", "IRError", "IllConditionedSolve", "LineageError", "Mesh",
-    "Primitive",
-    "PrimitiveUnion", "Scene", "SceneError", "ShapeError", "SolverError",
+    "PrecisionWarning", "Primitive", "PrimitiveUnion", "Scene", "SceneError", "ShapeError", "SolverError",
     "ValueUpdateError", "YaspsError", "concat", "constant", "energies",
     "gpu_status", "hstack", "identity", "scene", "select", "vstack", "zeros",
 ]

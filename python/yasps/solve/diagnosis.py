@@ -1,6 +1,7 @@
 """What minimizeEnergy tells a user about a solve beyond "converged": a
-target no energy reads, the energy and instance behind a NaN, and a
-residual too weak to vouch for the step in an ill-conditioned system."""
+target no energy reads, the energy and instance behind a NaN, a residual
+too weak to vouch for the step in an ill-conditioned system, and targets
+too far from the origin for f32 kernels."""
 
 from __future__ import annotations
 
@@ -27,6 +28,47 @@ def first_warning_for(scene) -> bool:
     if scene in _warned:
         return False
     _warned.add(scene)
+    return True
+
+
+#: A target's f32 rounding, eps32 |x|_max, relative to its extent, above
+#: which an f32 scene warns: elements are smaller than the extent, so
+#: their edge vectors lose more than this (1e-5 of the extent: about three
+#: digits of an element a hundredth of the scene).
+F32_ROUNDING_WARNING = 1e-5
+_EPS32 = float(np.finfo(np.float32).eps)
+_warned_rounding: "weakref.WeakSet" = weakref.WeakSet()
+
+
+class PrecisionWarning(UserWarning):
+    """An f32 scene whose targets lie so far from the origin, for their
+    extent, that rounding them to f32 costs digits (docs/accuracy.md)."""
+
+
+def f32_rounding_losses(layout: DofLayout) -> List[Tuple[str, float]]:
+    """Per target of more than one instance: eps32 |x|_max over the
+    target's extent (the largest spread of one of its entries across
+    instances), where that exceeds F32_ROUNDING_WARNING."""
+    out = []
+    for target in layout.targets:
+        values = target.value
+        if values is None or len(values) < 2:
+            continue
+        values = np.asarray(values, dtype=float).reshape(len(values), -1)
+        extent = float((values.max(axis=0) - values.min(axis=0)).max())
+        if extent <= 0:
+            continue
+        loss = _EPS32 * float(np.abs(values).max()) / extent
+        if loss > F32_ROUNDING_WARNING:
+            out.append((target.describe(), loss))
+    return out
+
+
+def first_rounding_warning_for(scene) -> bool:
+    """True the first time it is asked for ``scene``."""
+    if scene in _warned_rounding:
+        return False
+    _warned_rounding.add(scene)
     return True
 
 

@@ -10,10 +10,13 @@ from typing import Dict, List, Optional
 
 import numpy as np
 
+from .. import config
 from ..frontend.errors import SceneError, YaspsError
 from ..runtime import Backend
 from .assembly import DofLayout, assemble
 from .diagnosis import (ERROR_BOUND_WARNING, IllConditionedSolve,
+                        PrecisionWarning, f32_rounding_losses,
+                        first_rounding_warning_for,
                         describe_non_finite, first_warning_for,
                         non_finite_sources,
                         residual_error_bound, unread_targets)
@@ -110,6 +113,19 @@ def minimize_energy(scene, backend: Backend, tolerance: float = 1e-6,
             "step would be zero without meaning it. Register an energy that "
             "depends on it (inertia, elasticity, ...), fix it, or leave it "
             "out of addMinimizeTarget")
+    if config.resolve_precision(scene.precision) == "f32" and \
+            first_rounding_warning_for(scene):
+        losses = f32_rounding_losses(layout)
+        if losses:
+            described = ", ".join(f"{name} ({loss:.1e} of its extent)"
+                                  for name, loss in losses)
+            warnings.warn(
+                f"minimizeEnergy: f32 kernels round {described} to f32: the "
+                "targets lie far from the origin for their extent, and "
+                "their elements' edge vectors lose digits accordingly. "
+                "Translate the scene toward the origin or compute it in "
+                "f64 (warned once per scene)", PrecisionWarning,
+                stacklevel=4)
     x = np.zeros(system.size)
     start = time.perf_counter()
     pcg = backend.solve(system, x, float(tolerance), int(maxIterations),
