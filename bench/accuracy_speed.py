@@ -84,14 +84,12 @@ import ipctk  # noqa: E402
 import numpy as np  # noqa: E402
 from tqdm import tqdm  # noqa: E402
 
+import cloth_drape  # noqa: E402
 import drop  # noqa: E402
 import soft_boxes  # noqa: E402
 import yasps  # noqa: E402
 from yasps.compiler.cpu import kernels_compiled  # noqa: E402
-from yasps.contact import Contact, surface_of  # noqa: E402
-from yasps.sim import (FreeVertices, ImplicitEuler, NewtonReport,  # noqa: E402
-                       add_cloth, add_elastic_tets, add_free_vertices,
-                       box_tet_mesh, cloth_grid)
+from yasps.sim import ImplicitEuler, NewtonReport  # noqa: E402
 
 DT = 0.01
 #: The soft box of the drop scene has DROP_CELLS^3 cells (6 tets each).
@@ -204,33 +202,6 @@ def configured(setting: Setting) -> Iterator[None]:
 
 # ------------------------------------------------------------------- scenes
 
-class Energies:
-    """Adds a scene's bodies with the project's helpers (``yasps.sim``),
-    every energy PSD-projected by ``projection`` (None: the helpers'
-    default, clamp)."""
-
-    def __init__(self, projection: Optional[str]):
-        self.projection = projection or "clamp"
-
-    def free_vertices(self, mesh, start: np.ndarray, masses) -> FreeVertices:
-        """``yasps.sim.add_free_vertices``."""
-        return add_free_vertices(mesh, start, masses,
-                                 projection=self.projection)
-
-    def elastic_tets(self, mesh, x, rest: np.ndarray, tets: np.ndarray,
-                     mu: float, lam: float, scale: float) -> None:
-        """``yasps.sim.add_elastic_tets`` (stable Neo-Hookean)."""
-        add_elastic_tets(mesh, x, rest, tets, mu, lam, scale=scale,
-                         projection=self.projection)
-
-    def cloth(self, mesh, x, rest: np.ndarray, faces: np.ndarray,
-              stretch: float, shear: float, bending: float,
-              scale: float) -> None:
-        """``yasps.sim.add_cloth`` (Baraff-Witkin and dihedral bending)."""
-        add_cloth(mesh, x, rest, faces, stretch=stretch, shear=shear,
-                  bending=bending, scale=scale, projection=self.projection)
-
-
 @dataclass
 class Sim:
     """A built scene and its stepper. ``targets``: the vertex positions
@@ -293,37 +264,18 @@ def _contact_kappa(setting: Setting,
     return kappa_base * setting.kappa_factor
 
 
-CLOTH_DHAT = 2e-3
+CLOTH_DHAT = cloth_drape.DHAT
 
 
 def build_cloth(setting: Setting, kappa_base: Optional[float]) -> Sim:
-    """A 10x10 cloth 1 cm above a static box (its vertices constants in the
-    UNION), IPC contact with friction 0.3: the scene of
-    ``test_cloth_draped_over_a_static_box``."""
-    add = Energies(setting.projection)
-    cv, cf = cloth_grid(10, size=0.6, height=0.21)
-    bv, bt = box_tet_mesh(1, 0.2)
-    bv = bv - [0.1, 0.1, 0.0]
-    box_faces = surface_of(bt)
-    s = yasps.scene("drape")
-    cloth = s.addMesh("cloth")
-    free = add.free_vertices(cloth, cv, 0.3 / len(cv))
-    x = free.x
-    add.cloth(cloth, x, cv, cf, stretch=1e3, shear=1e2, bending=1e-3,
-              scale=DT * DT)
-    obstacle = s.addMesh("box").addPrimitive("v", numInstances=len(bv))
-    obstacle.addConstant("position", rows=3).updateValue(bv)
-    union = s.addMesh("all").addPrimitiveUnion("v", [free.primitive, obstacle])
-    union.addAttribute("position")
-    faces = np.concatenate([cf, box_faces + len(cv)]).astype(np.int32)
-    contact = Contact(s, union, faces=faces,
-                      dhat=CLOTH_DHAT * setting.dhat_factor,
-                      kappa=_contact_kappa(setting, kappa_base),
-                      average_mass=0.3 / len(cv), friction=0.3,
-                      projection=setting.projection)
-    s.addMinimizeTarget(x)
-    stepper = ImplicitEuler(s, x, free.x_hat, DT, contact=contact,
-                            **_stepper_options(setting, 1e-2))
+    """``examples/cloth_drape.py``: a 10x10 cloth 1 cm above a static box
+    (its vertices constants in the UNION), IPC contact with friction 0.3."""
+    drape = cloth_drape.build(projection=setting.projection,
+                              dhat=CLOTH_DHAT * setting.dhat_factor,
+                              kappa=_contact_kappa(setting, kappa_base))
+    s, x, bv, faces = drape.scene, drape.x, drape.box, drape.faces
+    contact = drape.contact
+    stepper = drape.stepper(**_stepper_options(setting, 1e-2))
     return Sim(s, stepper, [x], bv, faces, False, lambda: contact.kappa)
 
 

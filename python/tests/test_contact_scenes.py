@@ -13,15 +13,14 @@ import ipctk
 import numpy as np
 
 import yasps
-from yasps.contact import Contact, surface_of
-from yasps.sim import (ImplicitEuler, add_cloth, add_free_vertices,
-                       box_tet_mesh, cloth_grid)
+from yasps.sim import ImplicitEuler, add_free_vertices
 
 REPO = Path(__file__).resolve().parents[2]
 DT = 0.01
 
 sys.path.insert(0, str(REPO / "examples"))
 
+import cloth_drape  # noqa: E402
 import soft_boxes  # noqa: E402
 
 
@@ -61,25 +60,9 @@ def test_cloth_draped_over_a_static_box():
     """A cloth falls on a box whose vertices are constants (an obstacle in
     the UNION): it comes to rest on the box's top face, hanging over its
     edges, without going through."""
-    cv, cf = cloth_grid(10, size=0.6, height=0.21)
-    bv, bt = box_tet_mesh(1, 0.2)
-    bv = bv - [0.1, 0.1, 0.0]
-    box_faces = surface_of(bt)
-    s = yasps.scene("drape")
-    cloth = s.addMesh("cloth")
-    free = add_free_vertices(cloth, cv, 0.3 / len(cv))
-    v, x, x_hat = free.primitive, free.x, free.x_hat
-    add_cloth(cloth, x, cv, cf, stretch=1e3, shear=1e2, bending=1e-3,
-              scale=DT * DT)
-    obstacle = s.addMesh("box").addPrimitive("v", numInstances=len(bv))
-    obstacle.addConstant("position", rows=3).updateValue(bv)
-    union = s.addMesh("all").addPrimitiveUnion("v", [v, obstacle])
-    union.addAttribute("position")
-    faces = np.concatenate([cf, box_faces + len(cv)]).astype(np.int32)
-    contact = Contact(s, union, faces=faces, dhat=2e-3,
-                      average_mass=0.3 / len(cv), friction=0.3)
-    s.addMinimizeTarget(x)
-    stepper = ImplicitEuler(s, x, x_hat, DT, contact=contact)
+    drape = cloth_drape.build()
+    x, bv, faces = drape.x, drape.box, drape.faces
+    stepper = drape.stepper()
     frames = []
 
     def check(frame, report):

@@ -1,4 +1,5 @@
-"""The Python examples: those the README's demo runs, and the soft boxes."""
+"""The Python examples: those the README's demo runs, the soft boxes and
+the cloth drape."""
 
 import subprocess
 import sys
@@ -27,3 +28,15 @@ def test_soft_boxes_example_runs():
     lowest = [float(line.split("lowest z")[1].split("cm")[0]) for line in lines]
     assert 0 < gaps[1] < gaps[0] < 30
     assert min(lowest) > 0
+
+
+def test_cloth_drape_example_runs():
+    """Two frames of examples/cloth_drape.py: the cloth falls from 21 cm
+    toward the box's top at 20 cm."""
+    out = subprocess.run([sys.executable, str(REPO / "examples" / "cloth_drape.py"),
+                          "--frames", "2"],
+                         check=True, capture_output=True, text=True).stdout
+    lowest = [float(line.split("lowest z")[1].split("cm")[0])
+              for line in out.splitlines() if line.startswith("frame")]
+    assert len(lowest) == 2
+    assert 20 < lowest[1] < lowest[0] < 21

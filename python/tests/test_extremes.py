@@ -135,29 +135,39 @@ def test_stable_neo_hookean_against_mpmath(case):
     assert relative(got.hessian[0], hess) <= bound
 
 
-def test_sliver_tet_against_mpmath():
-    """A tet of height 1e-8 over a unit triangle: the rest edge matrix Dm
-    has condition ~1e8, and F = Ds Dm^-1 amplifies the rounding of the
-    position differences by it. Bound: 16 eps cond(Dm) relative to the
-    largest entry, the f64 price of the shape."""
-    h = 1e-8
-    rest = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0.3, 0.3, h]])
-    Dm = (rest[1:] - rest[0]).T
-    inv = np.linalg.inv(Dm)
-    x = rest + 1e-9 * np.random.default_rng(5).standard_normal((4, 3))
-    s = yasps.scene("sliver")
+# A tet 1e-8 high over a unit triangle, its positions perturbed by 1e-9.
+SLIVER_REST = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0.3, 0.3, 1e-8]])
+SLIVER_DM = (SLIVER_REST[1:] - SLIVER_REST[0]).T
+SLIVER_X = SLIVER_REST + 1e-9 * np.random.default_rng(5).standard_normal((4, 3))
+
+
+def sliver_derivatives(precision):
+    """energyDerivatives of stable Neo-Hookean on the sliver tet, its four
+    vertices the target, computed in ``precision``."""
+    s = yasps.scene("sliver", precision=precision)
     m = s.addMesh("m")
     v = m.addPrimitive("v", numInstances=4)
     pos = v.addAttribute("x", rows=3)
-    pos.updateValue(x)
+    pos.updateValue(SLIVER_X)
     t = m.addPrimitive("t", numInstances=1)
-    t.addConstant("inv", rows=3, cols=3).updateValue(inv[None])
+    t.addConstant("inv", rows=3, cols=3).updateValue(
+        np.linalg.inv(SLIVER_DM)[None])
     corners = t.addAttribute("c", through=t.addConnectivity(
         "t2v", v, [[0, 1, 2, 3]], 4), source=pos)
     s.addEnergy(t.addAttribute("snh", computed_attribute=E.stable_neo_hookean(
         E.deformation_gradient(corners, t["inv"]), MU, LAM, 1.0)))
     s.addMinimizeTarget(pos)
-    got = s.energyDerivatives(s.m.t["snh"])
+    return s.energyDerivatives(s.m.t["snh"])
+
+
+def test_sliver_tet_against_mpmath():
+    """A tet of height 1e-8 over a unit triangle: the rest edge matrix Dm
+    has condition ~1e8, and F = Ds Dm^-1 amplifies the rounding of the
+    position differences by it. Bound: 16 eps cond(Dm) relative to the
+    largest entry, the f64 price of the shape."""
+    x, Dm = SLIVER_X, SLIVER_DM
+    inv = np.linalg.inv(Dm)
+    got = sliver_derivatives("f64")
     inv_mp = mpmath.matrix(inv.tolist())
 
     def energy(*q):
@@ -200,6 +210,21 @@ def mp_clamped(A: np.ndarray) -> np.ndarray:
     return np.array(P.tolist(), dtype=float)
 
 
+def quadratic_derivatives(A: np.ndarray, precision: str):
+    """energyDerivatives of x^T A x / 2 over one N-vector x, in
+    ``precision``: its Hessian is A and its projected Hessian A's PSD
+    projection."""
+    s = yasps.scene("projection", precision=precision)
+    p = s.addMesh("m").addPrimitive("p", numInstances=1)
+    x = p.addAttribute("x", rows=N)
+    x.updateValue(np.zeros((1, N)))
+    a = p.addConstant("A", rows=N, cols=N)
+    a.updateValue(A[None])
+    s.addEnergy(p.addAttribute("q", computed_attribute=0.5 * (x.T * a * x)))
+    s.addMinimizeTarget(x)
+    return s.energyDerivatives(s.m.p["q"])
+
+
 @pytest.mark.parametrize("scale", [1.0, 1e-300, 1e300])
 @pytest.mark.parametrize("case", ["repeated", "clustered", "spread"])
 def test_projection_against_mpmath(case, scale):
@@ -210,15 +235,7 @@ def test_projection_against_mpmath(case, scale):
     matrix into range)."""
     A = projection_cases()[case] * scale
     A = 0.5 * (A + A.T)
-    s = yasps.scene("projection")
-    p = s.addMesh("m").addPrimitive("p", numInstances=1)
-    x = p.addAttribute("x", rows=N)
-    x.updateValue(np.zeros((1, N)))
-    a = p.addConstant("A", rows=N, cols=N)
-    a.updateValue(A[None])
-    s.addEnergy(p.addAttribute("q", computed_attribute=0.5 * (x.T * a * x)))
-    s.addMinimizeTarget(x)
-    got = s.energyDerivatives(s.m.p["q"])
+    got = quadratic_derivatives(A, "f64")
     assert relative(got.hessian[0], A) <= EPS
     want = mp_clamped(A)
     assert np.abs(got.projectedHessian[0] - want).max() <= \
@@ -286,26 +303,8 @@ def test_sliver_tet_breaks_in_f32():
     no correct digit (its positions' 1e-9 perturbation is below their f32
     rounding). The f32 derivatives are off by more than 10% of the
     largest entry: such shapes need f64 (docs/accuracy.md)."""
-    h = 1e-8
-    rest = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0.3, 0.3, h]])
-    Dm = (rest[1:] - rest[0]).T
-    x = rest + 1e-9 * np.random.default_rng(5).standard_normal((4, 3))
-    grads = {}
-    for precision in ("f64", "f32"):
-        s = yasps.scene("sliver", precision=precision)
-        m = s.addMesh("m")
-        v = m.addPrimitive("v", numInstances=4)
-        pos = v.addAttribute("x", rows=3)
-        pos.updateValue(x)
-        t = m.addPrimitive("t", numInstances=1)
-        t.addConstant("inv", rows=3, cols=3).updateValue(np.linalg.inv(Dm)[None])
-        corners = t.addAttribute("c", through=t.addConnectivity(
-            "t2v", v, [[0, 1, 2, 3]], 4), source=pos)
-        s.addEnergy(t.addAttribute("snh", computed_attribute=E.stable_neo_hookean(
-            E.deformation_gradient(corners, t["inv"]), MU, LAM, 1.0)))
-        s.addMinimizeTarget(pos)
-        grads[precision] = s.energyDerivatives(s.m.t["snh"]).gradient[0]
-    assert EPS32 * np.linalg.cond(Dm) > 1
+    grads = {p: sliver_derivatives(p).gradient[0] for p in ("f64", "f32")}
+    assert EPS32 * np.linalg.cond(SLIVER_DM) > 1
     assert relative(grads["f32"], grads["f64"]) > 0.1
 
 
@@ -317,15 +316,7 @@ def test_projection_in_f32_against_mpmath(case, scale):
     normal where the kernels scale them)."""
     A = projection_cases()[case] * scale
     A = f32(0.5 * (A + A.T))
-    s = yasps.scene("projection", precision="f32")
-    p = s.addMesh("m").addPrimitive("p", numInstances=1)
-    x = p.addAttribute("x", rows=N)
-    x.updateValue(np.zeros((1, N)))
-    a = p.addConstant("A", rows=N, cols=N)
-    a.updateValue(A[None])
-    s.addEnergy(p.addAttribute("q", computed_attribute=0.5 * (x.T * a * x)))
-    s.addMinimizeTarget(x)
-    got = s.energyDerivatives(s.m.p["q"])
+    got = quadratic_derivatives(A, "f32")
     want = mp_clamped(A)
     assert np.abs(got.projectedHessian[0] - want).max() <= \
         64 * EPS32 * np.abs(A).max()
