@@ -5,6 +5,7 @@
 #include "yasps/Runtime/Pcg.h"
 
 namespace nb = nanobind;
+using ::yasps::runtime::PcgPreconditioner;
 using ::yasps::runtime::PcgResult;
 using ::yasps::runtime::PcgStop;
 using ::yasps::runtime::PcgStopping;
@@ -13,6 +14,9 @@ void yasps::python::bindPcg(nb::module_ &m) {
   nb::enum_<PcgStopping>(m, "PcgStopping", "When PCG stops on success.")
       .value("residual", PcgStopping::Residual)
       .value("energy_norm", PcgStopping::EnergyNorm);
+  nb::enum_<PcgPreconditioner>(m, "PcgPreconditioner", "PCG's preconditioner.")
+      .value("block_jacobi", PcgPreconditioner::BlockJacobi)
+      .value("multilevel", PcgPreconditioner::Multilevel);
   nb::enum_<PcgStop>(m, "PcgStop", "Why PCG stopped.")
       .value("converged", PcgStop::Converged)
       .value("max_iterations", PcgStop::MaxIterations)
@@ -33,5 +37,7 @@ void yasps::python::bindPcg(nb::module_ &m) {
       .def_ro("diagonal_ratio", &PcgResult::diagonalRatio,
               "max / min diagonal entry of H on the free DoFs: a lower "
               "bound of its condition number")
-      .def_ro("residual_replacements", &PcgResult::residualReplacements);
+      .def_ro("residual_replacements", &PcgResult::residualReplacements)
+      .def_ro("levels", &PcgResult::levels,
+              "The preconditioner's levels (1 for block-Jacobi)");
 }

@@ -157,9 +157,11 @@ public:
   ::yasps::runtime::PcgResult
   solve(DoubleArray out, double tolerance, int64_t maxIterations,
         unsigned threads, std::optional<MaskArray> fixed,
-        ::yasps::runtime::PcgStopping stopping) const {
+        ::yasps::runtime::PcgStopping stopping,
+        ::yasps::runtime::PcgPreconditioner preconditioner) const {
     check(out, size_t(size()));
     ::yasps::runtime::PcgOptions options;
+    options.preconditioner = preconditioner;
     options.relativeTolerance = tolerance;
     options.maxIterations = maxIterations;
     options.stopping = stopping;
@@ -385,6 +387,8 @@ NB_MODULE(_yasps_runtime, m) {
            nb::arg("max_iterations"), nb::arg("threads") = 0,
            nb::arg("fixed") = nb::none(),
            nb::arg("stopping") = ::yasps::runtime::PcgStopping::Residual,
+           nb::arg("preconditioner") =
+               ::yasps::runtime::PcgPreconditioner::BlockJacobi,
            "PCG on H x = g into out; `fixed` (uint8 per DoF) excludes DoFs, "
            "whose solution is 0; returns a PcgReport");
   ::yasps::python::bindGpuSystem(

@@ -65,6 +65,15 @@
   Newton update stay f64 (mixed precision). The solve is then of a matrix
   within f32's round-off of the assembled one, entry by entry. The GPU
   solve keeps f64 blocks (and warns once).
+- ``preconditioner``: PCG's preconditioner on the CPU, ``"block-jacobi"``
+  (the default: the inverses of the Hessian's diagonal blocks) or
+  ``"multilevel"`` (a V-cycle over coarse levels of aggregated blocks,
+  ``runtime/include/yasps/Runtime/Multilevel.h``). The multilevel one
+  needs several times fewer iterations on meshes; each costs about three
+  products with the Hessian instead of one, and every solve builds the
+  levels first, so it pays off where block-Jacobi needs many iterations
+  (fine meshes, stiff materials). ``docs/benchmarks.md`` has the figures.
+  The GPU solve is block-Jacobi only (it refuses "multilevel").
 - ``gpu_derivatives``: on the GPU backend, ``minimizeEnergy`` computes the
   energies' local derivatives on the device, where assembly reads them
   (``yasps.gpu_derivatives``). Off, they are computed on the CPU and
@@ -111,6 +120,20 @@ def resolve_hessian_storage() -> str:
         raise ValueError(f"hessian_storage must be one of {PRECISIONS}, got "
                          f"{hessian_storage!r}")
     return hessian_storage
+
+
+preconditioner: str = "block-jacobi"
+
+#: The values ``preconditioner`` may take.
+PRECONDITIONERS = ("block-jacobi", "multilevel")
+
+
+def resolve_preconditioner() -> str:
+    """``preconditioner``, checked: one of PRECONDITIONERS, else ValueError."""
+    if preconditioner not in PRECONDITIONERS:
+        raise ValueError(f"preconditioner must be one of {PRECONDITIONERS}, "
+                         f"got {preconditioner!r}")
+    return preconditioner
 
 
 def resolve_precision(scene_precision: Optional[str]) -> str:

@@ -7,6 +7,7 @@
 #include "VertexBlockSpmv.h"
 
 #include <algorithm>
+#include <atomic>
 #include <map>
 #include <stdexcept>
 #include <string>
@@ -40,11 +41,18 @@ static void checkLayout(const BlockLayout &layout) {
                                   std::to_string(offsets[i + 1]));
 }
 
+/// A new structure's id (BlockSparseMatrix::structureId).
+static std::uint64_t nextStructureId() {
+  static std::atomic<std::uint64_t> next{1};
+  return next.fetch_add(1, std::memory_order_relaxed);
+}
+
 BlockSparseMatrix::BlockSparseMatrix(
     BlockLayout layout,
     const std::vector<std::pair<std::int64_t, std::int64_t>> &coords,
     std::vector<BlockSlot> *positions)
-    : layout_(std::move(layout)), locks_(new std::mutex[kNumLocks]) {
+    : layout_(std::move(layout)), structureId_(nextStructureId()),
+      locks_(new std::mutex[kNumLocks]) {
   checkLayout(layout_);
   const std::int64_t n = layout_.numBlocks();
 

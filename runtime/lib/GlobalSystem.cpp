@@ -468,5 +468,9 @@ std::vector<double> GlobalSystem::toDense() const {
 
 PcgResult GlobalSystem::solve(double *x, const PcgOptions &options,
                               ThreadPool &pool) const {
-  return solvePcg(hessianParts(), gradientValues.data(), x, options, pool);
+  std::lock_guard<std::mutex> lock(*solveMutex_);
+  PcgOptions kept = options;
+  if (!kept.multilevelCache)
+    kept.multilevelCache = &multilevel_;
+  return solvePcg(hessianParts(), gradientValues.data(), x, kept, pool);
 }

@@ -55,23 +55,32 @@ std::pair<double, double> yasps::runtime::tridiagonalExtremeEigenvalues(
   return {bisect(0), bisect(diagonal.size() - 1)};
 }
 
-double yasps::runtime::ritzConditionNumber(const std::vector<double> &alphas,
-                                           const std::vector<double> &betas) {
+std::pair<double, double>
+yasps::runtime::ritzExtremeValues(const std::vector<double> &alphas,
+                                  const std::vector<double> &betas) {
   const double nan = std::numeric_limits<double>::quiet_NaN();
   const std::size_t k = alphas.size();
-  if (k < 2 || betas.size() + 1 < k)
-    return nan;
+  if (k < 1 || betas.size() + 1 < k)
+    return {nan, nan};
   std::vector<double> diagonal(k), offDiagonal(k - 1);
   for (std::size_t j = 0; j < k; ++j) {
     if (!(alphas[j] > 0.0) || (j + 1 < k && !(betas[j] >= 0.0)))
-      return nan;
+      return {nan, nan};
     diagonal[j] =
         1.0 / alphas[j] + (j > 0 ? betas[j - 1] / alphas[j - 1] : 0.0);
     if (j + 1 < k)
       offDiagonal[j] = std::sqrt(betas[j]) / alphas[j];
   }
-  auto [smallest, largest] =
-      tridiagonalExtremeEigenvalues(diagonal, offDiagonal);
+  return tridiagonalExtremeEigenvalues(diagonal, offDiagonal);
+}
+
+double yasps::runtime::ritzConditionNumber(const std::vector<double> &alphas,
+                                           const std::vector<double> &betas) {
+  if (alphas.size() < 2)
+    return std::numeric_limits<double>::quiet_NaN();
+  auto [smallest, largest] = ritzExtremeValues(alphas, betas);
+  if (std::isnan(smallest))
+    return smallest;
   return smallest > 0.0 ? largest / smallest
                         : std::numeric_limits<double>::infinity();
 }

@@ -2,14 +2,16 @@
 
 #include "yasps/Runtime/Pcg.h"
 
-#include "yasps/Runtime/BlockInverse.h"
+#include "yasps/Runtime/BlockJacobi.h"
 #include "yasps/Runtime/BlockSparseMatrix.h"
 #include "yasps/Runtime/Lanczos.h"
+#include "yasps/Runtime/Multilevel.h"
 #include "yasps/Runtime/ThreadPool.h"
 
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <memory>
 #include <stdexcept>
 #include <string>
 
@@ -26,102 +28,6 @@ static constexpr std::int64_t kElementsPerChunk = 4096;
 // pool costs (bunny-19k, 57,579 DoFs, two threads: 1.36 ms per iteration
 // split, 1.15 on one). The SpMV decides for itself.
 static constexpr std::int64_t kMinParallelVector = 1 << 18;
-// Diagonal blocks per chunk when building and applying the preconditioner.
-static constexpr std::int64_t kBlocksPerChunk = 64;
-
-namespace {
-/// The inverses of the diagonal blocks restricted to the free DoFs, each
-/// stored whole (size x size, row-major) with zero rows and columns at fixed
-/// DoFs, so that applying it also projects onto the free DoFs.
-class BlockJacobi {
-public:
-  BlockJacobi(const HessianParts &parts, const std::uint8_t *fixed,
-              ThreadPool &pool)
-      : layout_(parts.front()->layout()) {
-    parts.front()->diagonalBlocks(inverse_);
-    std::vector<double> more;
-    for (std::size_t k = 1; k < parts.size(); ++k) {
-      parts[k]->diagonalBlocks(more);
-      for (std::size_t i = 0; i < more.size(); ++i)
-        inverse_[i] += more[i];
-    }
-    start_.assign(static_cast<std::size_t>(layout_.numBlocks()) + 1, 0);
-    for (std::int64_t r = 0; r < layout_.numBlocks(); ++r)
-      start_[r + 1] =
-          start_[r] +
-          static_cast<std::size_t>(layout_.blockSize(r) * layout_.blockSize(r));
-    measureDiagonal(fixed);
-    pool.parallelFor(0, layout_.numBlocks(), kBlocksPerChunk,
-                     [&](std::int64_t begin, std::int64_t end) {
-                       std::vector<long long> freeDofs;
-                       std::vector<double> a, l;
-                       for (std::int64_t r = begin; r < end; ++r)
-                         invertBlock(r, fixed, freeDofs, a, l);
-                     });
-  }
-
-  /// z = M^-1 r.
-  void apply(const double *r, double *z, ThreadPool &pool) const {
-    pool.parallelFor(0, layout_.numBlocks(), kBlocksPerChunk,
-                     [&](std::int64_t begin, std::int64_t end) {
-                       for (std::int64_t b = begin; b < end; ++b) {
-                         std::int64_t s = layout_.blockSize(b);
-                         std::int64_t o = layout_.blockOffset[b];
-                         const double *inv = inverse_.data() + start_[b];
-                         for (std::int64_t i = 0; i < s; ++i) {
-                           double sum = 0.0;
-                           for (std::int64_t j = 0; j < s; ++j)
-                             sum += inv[i * s + j] * r[o + j];
-                           z[o + i] = sum;
-                         }
-                       }
-                     });
-  }
-
-  /// The largest over the smallest diagonal entry of H on the free DoFs
-  /// (inf if one is <= 0, NaN if there is none).
-  double diagonalRatio() const { return diagonalRatio_; }
-
-private:
-  /// Sets diagonalRatio_ from the diagonal blocks (before they are inverted).
-  void measureDiagonal(const std::uint8_t *fixed) {
-    double smallest = std::numeric_limits<double>::infinity(), largest = 0.0;
-    bool any = false;
-    for (std::int64_t b = 0; b < layout_.numBlocks(); ++b) {
-      std::int64_t s = layout_.blockSize(b), o = layout_.blockOffset[b];
-      for (std::int64_t i = 0; i < s; ++i) {
-        if (fixed && fixed[o + i])
-          continue;
-        double d = inverse_[start_[b] + static_cast<std::size_t>(i * s + i)];
-        any = true;
-        smallest = std::min(smallest, d);
-        largest = std::max(largest, d);
-      }
-    }
-    diagonalRatio_ = !any             ? std::numeric_limits<double>::quiet_NaN()
-                     : smallest > 0.0 ? largest / smallest
-                                      : std::numeric_limits<double>::infinity();
-  }
-
-  /// Replaces diagonal block `r` (in inverse_) by its preconditioner.
-  void invertBlock(std::int64_t r, const std::uint8_t *fixed,
-                   std::vector<long long> &freeDofs, std::vector<double> &a,
-                   std::vector<double> &l) {
-    std::int64_t s = layout_.blockSize(r);
-    freeDofs.resize(static_cast<std::size_t>(s));
-    a.resize(static_cast<std::size_t>(s * s));
-    l.resize(static_cast<std::size_t>(s * s));
-    invertDiagonalBlock(s, inverse_.data() + start_[r],
-                        fixed ? fixed + layout_.blockOffset[r] : nullptr,
-                        freeDofs.data(), a.data(), l.data());
-  }
-
-  const BlockLayout &layout_;
-  std::vector<double> inverse_;
-  std::vector<std::size_t> start_;
-  double diagonalRatio_ = std::numeric_limits<double>::quiet_NaN();
-};
-} // namespace
 
 static double dot(const double *a, const double *b, std::int64_t n,
                   std::vector<double> &partial, ThreadPool &pool) {
@@ -308,15 +214,39 @@ PcgResult PcgSolve::run() {
       return finish(PcgStop::NonFinite, nan);
 
   const double bNorm = std::sqrt(dot(r.data(), r.data()));
-  BlockJacobi preconditioner(parts_, fixed_, pool_);
-  result_.diagonalRatio = preconditioner.diagonalRatio();
+  // The multilevel preconditioner's V-cycle runs products, which split
+  // across pool_ by themselves.
+  std::unique_ptr<BlockJacobi> jacobi;
+  std::unique_ptr<Multilevel> ownLevels;
+  Multilevel *multilevel = nullptr;
+  if (options_.preconditioner == PcgPreconditioner::Multilevel) {
+    std::unique_ptr<Multilevel> &kept =
+        options_.multilevelCache ? *options_.multilevelCache : ownLevels;
+    if (kept && kept->matches(parts_) && kept->options() == options_.multilevel)
+      kept->refresh(parts_, fixed_, pool_);
+    else
+      kept = std::make_unique<Multilevel>(parts_, fixed_, pool_,
+                                          options_.multilevel);
+    multilevel = kept.get();
+    result_.diagonalRatio = multilevel->diagonalRatio();
+    result_.levels = static_cast<std::int64_t>(multilevel->levelSizes().size());
+  } else {
+    jacobi = std::make_unique<BlockJacobi>(parts_, fixed_, pool_);
+    result_.diagonalRatio = jacobi->diagonalRatio();
+  }
+  auto precondition = [&](const double *in, double *out) {
+    if (multilevel)
+      multilevel->apply(in, out, pool_);
+    else
+      jacobi->apply(in, out, vectors_);
+  };
   if (bNorm == 0.0)
     return finish(PcgStop::Converged, 0.0);
 
   std::vector<double> z(un), p(un), q(un), trueResidual(un);
   double rz = 0.0;
   auto restart = [&] {
-    preconditioner.apply(r.data(), z.data(), vectors_);
+    precondition(r.data(), z.data());
     p = z;
     rz = dot(r.data(), z.data());
   };
@@ -369,7 +299,7 @@ PcgResult PcgSolve::run() {
       alphas_.push_back(alpha);
     rNorm = std::sqrt(dot(r.data(), r.data()));
 
-    preconditioner.apply(r.data(), z.data(), vectors_);
+    precondition(r.data(), z.data());
     double rzNext = dot(r.data(), z.data());
     double beta = rzNext / rz;
     if (!restarted_)

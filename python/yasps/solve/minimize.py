@@ -142,6 +142,7 @@ def minimize_energy(scene, backend: Backend, tolerance: float = 1e-6,
             "diagonalRatio": float(pcg.diagonal_ratio),
             "errorBound": bound,
             "residualReplacements": int(pcg.residual_replacements),
+            "preconditionerLevels": int(pcg.levels),
             "seconds": timings, "backend": backend.name, **report}
     scene.lastSolve = info
     solution = layout.split(x)

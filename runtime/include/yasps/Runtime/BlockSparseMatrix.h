@@ -140,6 +140,11 @@ public:
   std::vector<double> toDense() const;
 
   const BlockLayout &layout() const { return layout_; }
+  /// Names the structure (layout and stored blocks): unique to the
+  /// constructor call that built it, kept by copies and moves, since only
+  /// the values change after construction. What caches of structure (the
+  /// multilevel preconditioner's levels) compare.
+  std::uint64_t structureId() const { return structureId_; }
   std::int64_t numBlocks() const { return layout_.numBlocks(); }
   /// Scalar dimension.
   std::int64_t size() const { return layout_.blockOffset.back(); }
@@ -182,6 +187,7 @@ private:
                       ThreadPool &pool) const;
 
   BlockLayout layout_;
+  std::uint64_t structureId_;
   std::vector<BlockGroup> groups_;
   // Per stored block: its block coordinates and where its values start
   // (valueOffset_ has one more entry, the total).

@@ -20,6 +20,8 @@
 #include "yasps/Runtime/SlotFactors.h"
 
 #include <cstdint>
+#include <memory>
+#include <mutex>
 #include <vector>
 
 namespace yasps::runtime {
@@ -108,7 +110,10 @@ public:
   /// The dense H (both parts), row-major. For tests and debugging.
   std::vector<double> toDense() const;
 
-  /// Solves H x = g by block-Jacobi PCG (x has size() entries).
+  /// Solves H x = g by PCG (x has size() entries). The multilevel
+  /// preconditioner's levels are kept between solves, rebuilt only when the
+  /// Hessian's structure changes (set_dynamic); solves on one system are
+  /// serialised.
   PcgResult solve(double *x, const PcgOptions &options, ThreadPool &pool) const;
 
   /// Per energy: for each instance and parameter, the index of its block
@@ -155,6 +160,11 @@ private:
   Part dynamicPart;
   std::vector<double> gradientValues;
   bool singleProduct_ = false;
+  // solve()'s multilevel preconditioner and the lock that serialises
+  // solves (behind a pointer: mutexes cannot move).
+  mutable std::unique_ptr<Multilevel> multilevel_;
+  mutable std::unique_ptr<std::mutex> solveMutex_ =
+      std::make_unique<std::mutex>();
 };
 
 } // namespace yasps::runtime

@@ -24,6 +24,14 @@ namespace yasps::runtime {
 double ritzConditionNumber(const std::vector<double> &alphas,
                            const std::vector<double> &betas);
 
+/// The smallest and largest eigenvalue of that Lanczos matrix (k >= 1
+/// iterations). They lie inside the preconditioned matrix's spectrum: the
+/// largest is a lower estimate of its largest eigenvalue, and converges
+/// within a few iterations. {NaN, NaN} where
+/// ritzConditionNumber would be NaN for a reason other than k < 2.
+std::pair<double, double> ritzExtremeValues(const std::vector<double> &alphas,
+                                            const std::vector<double> &betas);
+
 /// The eigenvalues of the symmetric tridiagonal matrix with `diagonal` and
 /// `offDiagonal` (one fewer) closest to its spectrum's ends: {smallest,
 /// largest}, by Sturm-sequence bisection to a relative accuracy near

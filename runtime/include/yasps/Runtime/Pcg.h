@@ -10,8 +10,12 @@
 #ifndef YASPS_RUNTIME_PCG_H
 #define YASPS_RUNTIME_PCG_H
 
+#include "yasps/Runtime/BlockJacobi.h"
+#include "yasps/Runtime/Multilevel.h"
+
 #include <cstdint>
 #include <limits>
+#include <memory>
 #include <vector>
 
 namespace yasps::runtime {
@@ -49,6 +53,15 @@ enum class PcgStop {
 /// The name of a stop reason ("converged", "max-iterations", ...).
 const char *stopName(PcgStop stop);
 
+/// PCG's preconditioner.
+enum class PcgPreconditioner {
+  /// The inverses of the diagonal blocks (BlockJacobi.h).
+  BlockJacobi,
+  /// A V-cycle over aggregated coarse levels (Multilevel.h): fewer
+  /// iterations at a higher cost per iteration and a setup per solve.
+  Multilevel,
+};
+
 struct PcgOptions {
   /// See `stopping`; 2-norms over the free DoFs.
   double relativeTolerance = 1e-6;
@@ -60,6 +73,15 @@ struct PcgOptions {
   /// solution is 0 and whose row and column of H are ignored (the solve runs
   /// on the free DoFs only). Not owned.
   const std::vector<std::uint8_t> *fixedDofs = nullptr;
+  PcgPreconditioner preconditioner = PcgPreconditioner::BlockJacobi;
+  /// The levels of PcgPreconditioner::Multilevel.
+  MultilevelOptions multilevel;
+  /// Where the multilevel preconditioner is kept between solves (not
+  /// owned; null: built for this solve only). PCG refreshes the one there
+  /// when its structure and options match, else builds one there: the
+  /// aggregation and the coarse structures are then built once per
+  /// structure of H. Solves sharing a cache must not run concurrently.
+  std::unique_ptr<Multilevel> *multilevelCache = nullptr;
 };
 
 struct PcgResult {
@@ -85,6 +107,8 @@ struct PcgResult {
   double diagonalRatio = std::numeric_limits<double>::quiet_NaN();
   /// Times the updated residual was replaced by the recomputed one.
   std::int64_t residualReplacements = 0;
+  /// The preconditioner's levels: 1 for block-Jacobi.
+  std::int64_t levels = 1;
 };
 
 /// Throws std::invalid_argument if `options` do not fit a matrix of `size`
@@ -108,10 +132,6 @@ void checkPcgOptions(const PcgOptions &options, std::int64_t size);
 /// maxIterations is negative or the tolerance is negative or NaN.
 PcgResult solvePcg(const BlockSparseMatrix &H, const double *b, double *x,
                    const PcgOptions &options, ThreadPool &pool);
-
-/// A matrix kept as the sum of parts with one block layout (the static and
-/// dynamic parts of a Hessian, paper section 10.6).
-using HessianParts = std::vector<const BlockSparseMatrix *>;
 
 /// solvePcg on H = the sum of `parts`; the preconditioner inverts the sums
 /// of their diagonal blocks. Also throws std::invalid_argument if there is

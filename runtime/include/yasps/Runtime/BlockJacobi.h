@@ -1,0 +1,55 @@
+//===- BlockJacobi.h - the block-Jacobi preconditioner ----------*- C++ -*-===//
+//
+// PCG's default preconditioner (the paper's appendix D), and the smoother of
+// every level of the multilevel one (Multilevel.h): the inverses of the
+// Hessian's diagonal blocks, which capture the strong coupling inside each
+// DoF group at little cost.
+//
+//===----------------------------------------------------------------------===//
+
+#ifndef YASPS_RUNTIME_BLOCKJACOBI_H
+#define YASPS_RUNTIME_BLOCKJACOBI_H
+
+#include "yasps/Runtime/BlockSparseMatrix.h"
+
+#include <cstdint>
+#include <limits>
+#include <vector>
+
+namespace yasps::runtime {
+
+class ThreadPool;
+
+/// A matrix kept as the sum of parts with one block layout (the static and
+/// dynamic parts of a Hessian, paper section 10.6).
+using HessianParts = std::vector<const BlockSparseMatrix *>;
+
+/// The inverses of the diagonal blocks of the sum of `parts` restricted to
+/// the free DoFs (see invertDiagonalBlock), each stored whole (size x size,
+/// row-major) with zero rows and columns at fixed DoFs, so that applying it
+/// also projects onto the free DoFs.
+class BlockJacobi {
+public:
+  /// `fixed`: one entry per DoF, nonzero for a fixed DoF; null: all free.
+  BlockJacobi(const HessianParts &parts, const std::uint8_t *fixed,
+              ThreadPool &pool);
+
+  /// z = M^-1 r.
+  void apply(const double *r, double *z, ThreadPool &pool) const;
+
+  /// The largest over the smallest diagonal entry of H on the free DoFs
+  /// (inf if one is <= 0, NaN if there is none), taken before inverting.
+  double diagonalRatio() const { return diagonalRatio_; }
+
+private:
+  void measureDiagonal(const std::uint8_t *fixed);
+
+  BlockLayout layout_;
+  std::vector<double> inverse_;
+  std::vector<std::size_t> start_;
+  double diagonalRatio_ = std::numeric_limits<double>::quiet_NaN();
+};
+
+} // namespace yasps::runtime
+
+#endif // YASPS_RUNTIME_BLOCKJACOBI_H

@@ -1,0 +1,81 @@
+//===- BlockJacobi.cpp - the block-Jacobi preconditioner ------------------===//
+
+#include "yasps/Runtime/BlockJacobi.h"
+
+#include "yasps/Runtime/BlockInverse.h"
+#include "yasps/Runtime/ThreadPool.h"
+
+#include <algorithm>
+
+using namespace yasps::runtime;
+
+// Diagonal blocks per chunk when building and applying the preconditioner.
+static constexpr std::int64_t kBlocksPerChunk = 64;
+
+BlockJacobi::BlockJacobi(const HessianParts &parts, const std::uint8_t *fixed,
+                         ThreadPool &pool)
+    : layout_(parts.front()->layout()) {
+  parts.front()->diagonalBlocks(inverse_);
+  std::vector<double> more;
+  for (std::size_t k = 1; k < parts.size(); ++k) {
+    parts[k]->diagonalBlocks(more);
+    for (std::size_t i = 0; i < more.size(); ++i)
+      inverse_[i] += more[i];
+  }
+  start_.assign(static_cast<std::size_t>(layout_.numBlocks()) + 1, 0);
+  for (std::int64_t r = 0; r < layout_.numBlocks(); ++r)
+    start_[r + 1] = start_[r] + static_cast<std::size_t>(layout_.blockSize(r) *
+                                                         layout_.blockSize(r));
+  measureDiagonal(fixed);
+  pool.parallelFor(0, layout_.numBlocks(), kBlocksPerChunk,
+                   [&](std::int64_t begin, std::int64_t end) {
+                     std::vector<long long> freeDofs;
+                     std::vector<double> a, l;
+                     for (std::int64_t r = begin; r < end; ++r) {
+                       std::int64_t s = layout_.blockSize(r);
+                       freeDofs.resize(static_cast<std::size_t>(s));
+                       a.resize(static_cast<std::size_t>(s * s));
+                       l.resize(static_cast<std::size_t>(s * s));
+                       invertDiagonalBlock(
+                           s, inverse_.data() + start_[r],
+                           fixed ? fixed + layout_.blockOffset[r] : nullptr,
+                           freeDofs.data(), a.data(), l.data());
+                     }
+                   });
+}
+
+void BlockJacobi::apply(const double *r, double *z, ThreadPool &pool) const {
+  pool.parallelFor(0, layout_.numBlocks(), kBlocksPerChunk,
+                   [&](std::int64_t begin, std::int64_t end) {
+                     for (std::int64_t b = begin; b < end; ++b) {
+                       std::int64_t s = layout_.blockSize(b);
+                       std::int64_t o = layout_.blockOffset[b];
+                       const double *inv = inverse_.data() + start_[b];
+                       for (std::int64_t i = 0; i < s; ++i) {
+                         double sum = 0.0;
+                         for (std::int64_t j = 0; j < s; ++j)
+                           sum += inv[i * s + j] * r[o + j];
+                         z[o + i] = sum;
+                       }
+                     }
+                   });
+}
+
+void BlockJacobi::measureDiagonal(const std::uint8_t *fixed) {
+  double smallest = std::numeric_limits<double>::infinity(), largest = 0.0;
+  bool any = false;
+  for (std::int64_t b = 0; b < layout_.numBlocks(); ++b) {
+    std::int64_t s = layout_.blockSize(b), o = layout_.blockOffset[b];
+    for (std::int64_t i = 0; i < s; ++i) {
+      if (fixed && fixed[o + i])
+        continue;
+      double d = inverse_[start_[b] + static_cast<std::size_t>(i * s + i)];
+      any = true;
+      smallest = std::min(smallest, d);
+      largest = std::max(largest, d);
+    }
+  }
+  diagonalRatio_ = !any             ? std::numeric_limits<double>::quiet_NaN()
+                   : smallest > 0.0 ? largest / smallest
+                                    : std::numeric_limits<double>::infinity();
+}
