@@ -321,9 +321,11 @@ struct PyGpuSystem {
   }
 
   PcgResult solve(DoubleArray out, double tolerance, std::int64_t maxIterations,
-                  std::optional<MaskArray> fixed, int checkEvery) {
+                  std::optional<MaskArray> fixed, int checkEvery,
+                  ::yasps::runtime::PcgPreconditioner preconditioner) {
     checkSize(out);
     PcgOptions options;
+    options.preconditioner = preconditioner;
     options.relativeTolerance = tolerance;
     options.maxIterations = maxIterations;
     std::vector<std::uint8_t> mask;
@@ -389,7 +391,7 @@ void yasps::python::bindGpuSystem(nb::module_ &m, HostSystemOf hostSystemOf) {
   nb::class_<PyGpuSystem>(
       m, "GpuSystem",
       "The Newton system of a GlobalSystem on a GPU: assembly, SpMV and "
-      "block-Jacobi PCG on the device")
+      "PCG on the device")
       .def(
           "__init__",
           [](PyGpuSystem *self, const PyDevice &device, nb::handle system) {
@@ -434,7 +436,10 @@ void yasps::python::bindGpuSystem(nb::module_ &m, HostSystemOf hostSystemOf) {
       .def("solve", &PyGpuSystem::solve, nb::arg("out"), nb::arg("tolerance"),
            nb::arg("max_iterations"), nb::arg("fixed").none() = nb::none(),
            nb::arg("check_every") = 8,
-           "Solves H x = g into `out` on the device; returns a PcgReport")
+           nb::arg("preconditioner") =
+               ::yasps::runtime::PcgPreconditioner::BlockJacobi,
+           "Solves H x = g into `out` on the device (block-Jacobi or "
+           "multilevel PCG); returns a PcgReport")
       .def("multiply", &PyGpuSystem::multiply, nb::arg("x"), nb::arg("y"),
            "y = H x on the device")
       .def("gradient", &PyGpuSystem::gradient, nb::arg("out"),

@@ -117,3 +117,55 @@ def test_an_unknown_preconditioner_is_refused(restore_preconditioner):
     yasps.config.preconditioner = "ilu"
     with pytest.raises(ValueError, match="preconditioner must be one of"):
         s.minimizeEnergy()
+
+
+GPU_AGAINST_CPU = """
+    import sys
+    import numpy as np, yasps
+    sys.path.insert(0, %r)
+    from test_preconditioner import stiff_box
+    from test_minimize import mixed_scene
+    yasps.config.gpu_derivatives = False
+    yasps.config.preconditioner = "multilevel"
+
+    def solve(scene, backend, **kw):
+        yasps.config.backend = backend
+        out = scene.minimizeEnergy(tolerance=1e-10, **kw)
+        info = scene.lastSolve
+        assert info["backend"] == backend and info["converged"]
+        return np.concatenate([a.reshape(-1) for a in out]), info
+
+    def compare(scene, **kw):
+        cpu, cpu_info = solve(scene, "cpu", **kw)
+        gpu, gpu_info = solve(scene, "gpu", **kw)
+        err = np.abs(gpu - cpu).max() / np.abs(cpu).max()
+        print(err < 1e-8, abs(gpu_info["iterations"] - cpu_info["iterations"]) <= 1,
+              gpu_info["preconditionerLevels"])
+
+    box, verts = stiff_box(6)
+    compare(box)
+    bottom = verts[:, 2] < 1e-9
+    compare(box, fixed=[np.repeat(bottom[:, None], 3, axis=1)[:, :, None]])
+    s, pp, p2v, *_ = mixed_scene([[0, 3], [1, 4]])
+    compare(s)
+    for pairs in ([[2, 4]], [[0, 1], [2, 3], [1, 4]]):
+        pp.updateNumInstances(len(pairs))
+        p2v.updateConnectivity(np.array(pairs, dtype=np.int64))
+        compare(s)
+"""
+
+
+def test_multilevel_on_the_gpu_backend_matches_the_cpu():
+    """The GPU's multilevel PCG (its kernels run by the stand-in driver on
+    the host) against the CPU's: the same direction and iteration count, on
+    a mesh with three levels, with fixed DoFs, and on a scene whose dynamic
+    pairs change between solves."""
+    from test_gpu_runtime import FAKE_DRIVER, HAS_PTXAS, run_python
+    if not FAKE_DRIVER.exists() or not HAS_PTXAS:
+        pytest.skip("needs the stand-in driver and the CUDA toolkit")
+    out = run_python(GPU_AGAINST_CPU % str(Path(__file__).resolve().parent),
+                     YASPS_CUDA_LIBRARY=str(FAKE_DRIVER))
+    lines = [line.split() for line in out.splitlines()]
+    assert len(lines) == 5, out
+    assert all(line[:2] == ["True", "True"] for line in lines), out
+    assert int(lines[0][2]) >= 2, out

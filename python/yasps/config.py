@@ -68,12 +68,13 @@
 - ``preconditioner``: PCG's preconditioner on the CPU, ``"block-jacobi"``
   (the default: the inverses of the Hessian's diagonal blocks) or
   ``"multilevel"`` (a V-cycle over coarse levels of aggregated blocks,
-  ``runtime/include/yasps/Runtime/Multilevel.h``). The multilevel one
-  needs several times fewer iterations on meshes; each costs about three
-  products with the Hessian instead of one, and every solve builds the
-  levels first, so it pays off where block-Jacobi needs many iterations
-  (fine meshes, stiff materials). ``docs/benchmarks.md`` has the figures.
-  The GPU solve is block-Jacobi only (it refuses "multilevel").
+  ``runtime/include/yasps/Runtime/Multilevel.h``), on the CPU and the GPU.
+  The multilevel one needs several times fewer iterations on meshes; each
+  costs about three products with the Hessian instead of one, and every
+  solve computes the levels' values first (their structure is kept while
+  the Hessian's static structure stays), so on the CPU it pays off where
+  block-Jacobi needs many iterations (fine meshes, stiff materials).
+  ``docs/benchmarks.md`` has the figures.
 - ``gpu_derivatives``: on the GPU backend, ``minimizeEnergy`` computes the
   energies' local derivatives on the device, where assembly reads them
   (``yasps.gpu_derivatives``). Off, they are computed on the CPU and

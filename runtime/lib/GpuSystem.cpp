@@ -2,7 +2,9 @@
 
 #include "yasps/Runtime/GpuSystem.h"
 
-#include "yasps/Runtime/GpuSolverKernels.h"
+#include "yasps/Runtime/GpuMultilevelKernels.h"
+
+#include "GpuSystemDetail.h"
 
 #include <algorithm>
 #include <cmath>
@@ -12,16 +14,30 @@
 
 using namespace yasps::runtime;
 using namespace yasps::runtime::gpu;
+using namespace yasps::runtime::detail;
 
 namespace {
 #define YASPS_SPMV_NAME(R, C) "yasps_spmv_" #R "x" #C,
 const char *const kSpmvKernels[] = {YASPS_SPMV_SHAPES(YASPS_SPMV_NAME)};
 #undef YASPS_SPMV_NAME
-const char *const kOtherKernels[] = {
-    "yasps_assemble",     "yasps_check_finite",  "yasps_jacobi_invert",
-    "yasps_jacobi_apply", "yasps_dot",           "yasps_pcg_init",
-    "yasps_pcg_update",   "yasps_pcg_direction", "yasps_pcg_scalar",
-    "yasps_spmv_any"};
+const char *const kOtherKernels[] = {"yasps_assemble",
+                                     "yasps_check_finite",
+                                     "yasps_jacobi_invert",
+                                     "yasps_jacobi_apply",
+                                     "yasps_dot",
+                                     "yasps_pcg_init",
+                                     "yasps_pcg_update",
+                                     "yasps_pcg_direction",
+                                     "yasps_pcg_scalar",
+                                     "yasps_spmv_any",
+                                     "yasps_ml_coarsen",
+                                     "yasps_ml_restrict",
+                                     "yasps_ml_prolong",
+                                     "yasps_ml_smooth",
+                                     "yasps_ml_residual",
+                                     "yasps_ml_dense_scatter",
+                                     "yasps_ml_dense_invert",
+                                     "yasps_ml_dense_apply"};
 
 /// The specialised SpMV kernel of a rows x cols block, else the generic one.
 std::string spmvKernel(std::int64_t rows, std::int64_t cols) {
@@ -33,31 +49,6 @@ std::string spmvKernel(std::int64_t rows, std::int64_t cols) {
   return "yasps_spmv_any";
 }
 
-/// Makes `buffer` hold at least `bytes`, reallocating (with room to grow
-/// by half) only when it is smaller: the dynamic part changes size every
-/// Newton iteration, and allocations cost more than the uploads.
-void reserve(const CudaContext &context, DeviceBuffer &buffer,
-             std::size_t bytes) {
-  if (buffer.size() < bytes)
-    buffer = DeviceBuffer(context, bytes + bytes / 2);
-}
-
-/// Copies `host` to the start of `buffer`, growing it when needed.
-template <typename T>
-void uploadInto(const CudaContext &context, DeviceBuffer &buffer,
-                const std::vector<T> &host) {
-  reserve(context, buffer, host.size() * sizeof(T));
-  buffer.upload(host.data(), host.size() * sizeof(T));
-}
-
-template <typename T> T *as(const DeviceBuffer &buffer) {
-  return reinterpret_cast<T *>(buffer.pointer());
-}
-template <typename T> T *as(cu::DevicePtr pointer) {
-  return reinterpret_cast<T *>(pointer);
-}
-
-std::int64_t ceilDiv(std::int64_t a, std::int64_t b) { return (a + b - 1) / b; }
 } // namespace
 
 std::vector<std::string> yasps::runtime::gpuSolverKernelNames() {
@@ -67,27 +58,8 @@ std::vector<std::string> yasps::runtime::gpuSolverKernelNames() {
   return names;
 }
 
-/// One energy's placement tables (GlobalSystem::EnergyMap, flattened for
-/// the assembly kernel).
-struct GpuSystem::Energy {
-  std::int64_t count = 0, numParams = 0, maxBlocks = 0;
-  DeviceBuffer dofs, localBlock, offset, blockSize, pairValue;
-};
-
-/// One part of the Hessian (BlockSparseMatrix, on the device).
-struct GpuSystem::Part {
-  struct Group {
-    std::int64_t rows, cols, count, first, valueStart;
-    cu::Function spmv; // the SpMV kernel of its shape
-  };
-  std::vector<Group> groups;
-  std::size_t numValues = 0;
-  DeviceBuffer values, rowDof, colDof, diagonalValue;
-  std::vector<Energy> energies;
-};
-
 GpuSystem::GpuSystem(const CudaContext &context, const GlobalSystem &host)
-    : ctx(context) {
+    : ctx(context), host(host) {
   const std::vector<GpuImage> &images = gpuSolverImages();
   if (images.empty())
     throw CudaError("this build of yasps has no GPU solver kernels: nvcc was "
@@ -108,19 +80,8 @@ GpuSystem::GpuSystem(const CudaContext &context, const GlobalSystem &host)
         std::to_string(numDofs));
   numBlocks = layout.numBlocks();
   numStatic = host.numStaticEnergies();
-  std::vector<long long> offsets(layout.blockOffset.begin(),
-                                 layout.blockOffset.end());
-  std::vector<long long> starts{0};
-  for (std::int64_t b = 0; b < numBlocks; ++b)
-    starts.push_back(starts.back() + layout.blockSize(b) * layout.blockSize(b));
-  blockOffset = deviceCopy(ctx, offsets);
-  inverseStart = deviceCopy(ctx, starts);
-  const std::size_t squares = static_cast<std::size_t>(starts.back());
+  allocateJacobi(ctx, jacobi, layout);
   const std::size_t n = static_cast<std::size_t>(numDofs);
-  inverse = DeviceBuffer(ctx, squares * sizeof(double));
-  scratchA = DeviceBuffer(ctx, squares * sizeof(double));
-  scratchL = DeviceBuffer(ctx, squares * sizeof(double));
-  scratchFree = DeviceBuffer(ctx, n * sizeof(long long));
   for (DeviceBuffer *vector : {&gradientValues, &r, &z, &p, &q})
     *vector = DeviceBuffer(ctx, n * sizeof(double));
   partials = DeviceBuffer(ctx, kMaxPartials * sizeof(double));
@@ -135,6 +96,46 @@ GpuSystem::GpuSystem(const CudaContext &context, const GlobalSystem &host)
 
 GpuSystem::~GpuSystem() = default;
 
+void GpuSystem::allocateJacobi(const CudaContext &context, Jacobi &jacobi,
+                               const BlockLayout &layout) {
+  jacobi.numBlocks = layout.numBlocks();
+  std::vector<long long> offsets(layout.blockOffset.begin(),
+                                 layout.blockOffset.end());
+  std::vector<long long> starts{0};
+  for (std::int64_t b = 0; b < jacobi.numBlocks; ++b)
+    starts.push_back(starts.back() + layout.blockSize(b) * layout.blockSize(b));
+  jacobi.blockOffset = deviceCopy(context, offsets);
+  jacobi.inverseStart = deviceCopy(context, starts);
+  const std::size_t squares = static_cast<std::size_t>(starts.back());
+  jacobi.inverse = DeviceBuffer(context, squares * sizeof(double));
+  jacobi.scratchA = DeviceBuffer(context, squares * sizeof(double));
+  jacobi.scratchL = DeviceBuffer(context, squares * sizeof(double));
+  jacobi.scratchFree = DeviceBuffer(
+      context,
+      static_cast<std::size_t>(layout.blockOffset.back()) * sizeof(long long));
+}
+
+void GpuSystem::invertJacobi(const Jacobi &jacobi,
+                             const std::vector<Part *> &parts,
+                             const unsigned char *mask) {
+  JacobiInvertArgs invert{};
+  invert.numBlocks = jacobi.numBlocks;
+  invert.numParts = static_cast<long long>(parts.size());
+  invert.blockOffset = as<const long long>(jacobi.blockOffset);
+  invert.inverseStart = as<const long long>(jacobi.inverseStart);
+  for (std::size_t k = 0; k < parts.size(); ++k) {
+    invert.diagonalValue[k] = as<const long long>(parts[k]->diagonalValue);
+    invert.values[k] = as<const double>(parts[k]->values);
+  }
+  invert.fixed = mask;
+  invert.inverse = as<double>(jacobi.inverse);
+  invert.scratchA = as<double>(jacobi.scratchA);
+  invert.scratchL = as<double>(jacobi.scratchL);
+  invert.scratchFree = as<long long>(jacobi.scratchFree);
+  launch("yasps_jacobi_invert", ceilDiv(jacobi.numBlocks, kThreadsPerBlock),
+         invert);
+}
+
 void GpuSystem::updateDynamic(const GlobalSystem &host) {
   if (host.size() != numDofs || host.numStaticEnergies() != numStatic)
     throw std::invalid_argument("GpuSystem::updateDynamic: a GlobalSystem "
@@ -146,12 +147,11 @@ void GpuSystem::updateDynamic(const GlobalSystem &host) {
   parts[1]->values.setZero(parts[1]->numValues * sizeof(double));
 }
 
-void GpuSystem::uploadPart(Part &part, const BlockSparseMatrix &matrix,
-                           const GlobalSystem &host, std::size_t firstEnergy,
-                           std::size_t numEnergies) {
+void GpuSystem::uploadMatrix(Part &part, const BlockSparseMatrix &matrix) {
   // A part's buffers are reused when it is uploaded again (the dynamic
   // part, every Newton iteration).
   const BlockLayout &layout = matrix.layout();
+  const std::int64_t numBlocks = layout.numBlocks();
   const std::size_t stored = matrix.numStoredBlocks();
   part.groups.clear();
   std::vector<int> rowDof(stored), colDof(stored);
@@ -175,6 +175,13 @@ void GpuSystem::uploadPart(Part &part, const BlockSparseMatrix &matrix,
   uploadInto(ctx, part.rowDof, rowDof);
   uploadInto(ctx, part.colDof, colDof);
   uploadInto(ctx, part.diagonalValue, diagonal);
+}
+
+void GpuSystem::uploadPart(Part &part, const BlockSparseMatrix &matrix,
+                           const GlobalSystem &host, std::size_t firstEnergy,
+                           std::size_t numEnergies) {
+  uploadMatrix(part, matrix);
+  const BlockLayout &layout = matrix.layout();
   part.energies.resize(numEnergies);
 
   for (std::size_t e = firstEnergy; e < firstEnergy + numEnergies; ++e) {
@@ -222,25 +229,6 @@ cu::Function GpuSystem::function(const std::string &name) const {
   cu::Function fn = module->function(name);
   const_cast<GpuSystem *>(this)->functions.emplace(name, fn);
   return fn;
-}
-
-template <typename Args>
-void GpuSystem::launch(const char *kernel, std::int64_t blocks,
-                       const Args &args) {
-  launch(function(kernel), blocks, args);
-}
-
-template <typename Args>
-void GpuSystem::launch(cu::Function kernel, std::int64_t blocks,
-                       const Args &args) {
-  if (blocks <= 0)
-    return;
-  ctx.makeCurrent();
-  void *params[] = {const_cast<Args *>(&args)};
-  ctx.driver().check(ctx.driver().cuLaunchKernel(
-                         kernel, static_cast<unsigned>(blocks), 1, 1,
-                         kThreadsPerBlock, 1, 1, 0, nullptr, params, nullptr),
-                     "cuLaunchKernel");
 }
 
 std::int64_t GpuSystem::reductionBlocks(std::int64_t n) {
@@ -302,7 +290,13 @@ void GpuSystem::addFactored(std::size_t energy, cu::DevicePtr gradients,
 }
 
 void GpuSystem::addProducts(const double *x, double *y, const PcgState *state) {
-  for (const std::unique_ptr<Part> &part : parts)
+  addPartProducts({parts[0].get(), parts[1].get()}, x, y, state);
+}
+
+void GpuSystem::addPartProducts(const std::vector<Part *> &parts,
+                                const double *x, double *y,
+                                const PcgState *state) {
+  for (const Part *part : parts)
     for (const Part::Group &group : part->groups) {
       SpmvArgs args{};
       args.count = group.count;
@@ -348,6 +342,8 @@ double GpuSystem::recomputedResidual(cu::DevicePtr x,
 PcgResult GpuSystem::solve(cu::DevicePtr x, const PcgOptions &options,
                            int checkEvery) {
   checkPcgOptions(options, numDofs);
+  if (options.preconditioner == PcgPreconditioner::Multilevel)
+    prepareLevels(options);
   if (options.stopping != PcgStopping::Residual)
     throw std::invalid_argument("the GPU solve stops on the residual only; "
                                 "the energy-norm rule is the CPU's");
@@ -390,6 +386,8 @@ PcgResult GpuSystem::solve(cu::DevicePtr x, const PcgOptions &options,
         out.stop = PcgStop::RoundOff;
     }
     out.converged = out.stop == PcgStop::Converged;
+    if (options.preconditioner == PcgPreconditioner::Multilevel)
+      out.levels = levelCount();
     return out;
   };
 
@@ -408,37 +406,40 @@ PcgResult GpuSystem::solve(cu::DevicePtr x, const PcgOptions &options,
   if (now.stopped)
     return finish(now);
 
-  JacobiInvertArgs invert{};
-  invert.numBlocks = numBlocks;
-  invert.numParts = 2;
-  invert.blockOffset = as<const long long>(blockOffset);
-  invert.inverseStart = as<const long long>(inverseStart);
-  for (int k = 0; k < 2; ++k) {
-    invert.diagonalValue[k] = as<const long long>(parts[k]->diagonalValue);
-    invert.values[k] = as<const double>(parts[k]->values);
-  }
-  invert.fixed = mask;
-  invert.inverse = as<double>(inverse);
-  invert.scratchA = as<double>(scratchA);
-  invert.scratchL = as<double>(scratchL);
-  invert.scratchFree = as<long long>(scratchFree);
-  launch("yasps_jacobi_invert", ceilDiv(numBlocks, kThreadsPerBlock), invert);
+  invertJacobi(jacobi, {parts[0].get(), parts[1].get()}, mask);
+  const bool multilevel =
+      options.preconditioner == PcgPreconditioner::Multilevel;
+  if (multilevel)
+    refreshLevels(mask,
+                  options.fixedDofs ? options.fixedDofs->data() : nullptr);
 
   const std::int64_t blockBlocks = reductionBlocks(numBlocks);
   const JacobiApplyArgs apply{numBlocks,
-                              as<const long long>(blockOffset),
-                              as<const long long>(inverseStart),
-                              as<const double>(inverse),
+                              as<const long long>(jacobi.blockOffset),
+                              as<const long long>(jacobi.inverseStart),
+                              as<const double>(jacobi.inverse),
                               as<const double>(r),
                               as<double>(z),
                               partialSums,
                               st};
   const PcgDirectionArgs direction{numDofs, as<const double>(z), as<double>(p),
                                    st};
-  // z = M^-1 r, rz = r . z, p = z.
+  // z = M^-1 r and the partial sums of r . z, then rz.
+  auto precondition = [&] {
+    if (!multilevel) {
+      launch("yasps_jacobi_apply", blockBlocks, apply);
+      scalar(kPcgBeta, blockBlocks);
+      return;
+    }
+    cycle(0, as<const double>(r), as<double>(z), mask, st);
+    launch("yasps_dot", vectorBlocks,
+           DotArgs{numDofs, as<const double>(r), as<double>(z), nullptr,
+                   partialSums, st});
+    scalar(kPcgBeta, vectorBlocks);
+  };
+  // p = z.
   p.setZero();
-  launch("yasps_jacobi_apply", blockBlocks, apply);
-  scalar(kPcgBeta, blockBlocks);
+  precondition();
   launch("yasps_pcg_direction", vectorBlocks, direction);
 
   for (std::int64_t k = 0; k <= options.maxIterations; ++k) {
@@ -453,8 +454,7 @@ PcgResult GpuSystem::solve(cu::DevicePtr x, const PcgOptions &options,
            PcgUpdateArgs{numDofs, as<const double>(p), as<const double>(q),
                          as<double>(x), as<double>(r), partialSums, st});
     scalar(kPcgAfterUpdate, vectorBlocks);
-    launch("yasps_jacobi_apply", blockBlocks, apply);
-    scalar(kPcgBeta, blockBlocks);
+    precondition();
     launch("yasps_pcg_direction", vectorBlocks, direction);
     if ((k + 1) % checkEvery == 0) {
       now = result();

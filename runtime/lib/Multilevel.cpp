@@ -105,6 +105,12 @@ double dot(const std::vector<double> &a, const std::vector<double> &b) {
 
 Multilevel::Multilevel(const HessianParts &parts, const std::uint8_t *fixed,
                        ThreadPool &pool, const MultilevelOptions &options)
+    : Multilevel(parts, options) {
+  refresh(parts, fixed, pool);
+}
+
+Multilevel::Multilevel(const HessianParts &parts,
+                       const MultilevelOptions &options)
     : options_(options), structure_(parts.front()->structureId()) {
   auto fine = std::make_unique<Level>();
   fine->parts = parts;
@@ -156,7 +162,23 @@ Multilevel::Multilevel(const HessianParts &parts, const std::uint8_t *fixed,
     added.size = added.parts.front()->size();
     added.r.resize(static_cast<std::size_t>(added.size));
   }
-  refresh(parts, fixed, pool);
+}
+
+const HessianParts &Multilevel::levelParts(std::size_t l) const {
+  return levels_.at(l)->parts;
+}
+const Aggregates &Multilevel::aggregates(std::size_t l) const {
+  return levels_.at(l)->aggregates;
+}
+const std::vector<std::size_t> &Multilevel::memberStart(std::size_t l) const {
+  return levels_.at(l)->memberStart;
+}
+const std::vector<std::int64_t> &Multilevel::members(std::size_t l) const {
+  return levels_.at(l)->members;
+}
+const std::vector<BlockSlot> &Multilevel::slots(std::size_t l,
+                                                std::size_t part) const {
+  return levels_.at(l)->slots.at(part);
 }
 
 void Multilevel::buildCoarsePart(std::size_t l, std::size_t k) {
@@ -190,8 +212,6 @@ void Multilevel::coarsen(std::size_t l) {
   const BlockLayout &layout = level.parts.front()->layout();
   std::vector<double> masked;
   for (std::size_t k = 0; k < level.parts.size(); ++k) {
-    if (level.slotsFor[k] != level.parts[k]->structureId())
-      buildCoarsePart(l, k);
     const BlockSparseMatrix &part = *level.parts[k];
     BlockSparseMatrix &coarse = *levels_[l + 1]->matrices[k];
     coarse.setZero();
@@ -216,12 +236,24 @@ void Multilevel::coarsen(std::size_t l) {
   }
 }
 
+bool Multilevel::restructure(const HessianParts &parts) {
+  if (!matches(parts))
+    throw std::invalid_argument("Multilevel: the parts' structure is not the "
+                                "one the levels were built for");
+  levels_.front()->parts = parts;
+  bool changed = false;
+  for (std::size_t l = 0; l + 1 < levels_.size(); ++l)
+    for (std::size_t k = 0; k < parts.size(); ++k)
+      if (levels_[l]->slotsFor[k] != levels_[l]->parts[k]->structureId()) {
+        buildCoarsePart(l, k);
+        changed = true;
+      }
+  return changed;
+}
+
 void Multilevel::refresh(const HessianParts &parts, const std::uint8_t *fixed,
                          ThreadPool &pool) {
-  if (!matches(parts))
-    throw std::invalid_argument("Multilevel::refresh: the parts' structure "
-                                "is not the one the levels were built for");
-  levels_.front()->parts = parts;
+  restructure(parts);
   levels_.front()->fixed = fixed;
   for (std::size_t l = 0; l < levels_.size(); ++l) {
     Level &level = *levels_[l];

@@ -16,7 +16,7 @@
 //
 //===----------------------------------------------------------------------===//
 
-#include "yasps/Runtime/GpuSolverKernels.h"
+#include "yasps/Runtime/GpuMultilevelKernels.h"
 
 #include <cstddef>
 #include <cstdlib>
@@ -77,6 +77,17 @@ const EmulatedKernel kEmulated[] = {
      emulate<PcgDirectionArgs, pcgDirectionBody<HostBlock>>},
     {"yasps_pcg_scalar", emulate<PcgScalarArgs, pcgScalarBody<HostBlock>>},
     {"yasps_spmv_any", emulate<SpmvArgs, spmvBody<0, 0, HostBlock>>},
+    {"yasps_ml_coarsen", emulate<CoarsenArgs, coarsenBody<HostBlock>>},
+    {"yasps_ml_restrict", emulate<TransferArgs, restrictBody<HostBlock>>},
+    {"yasps_ml_prolong", emulate<TransferArgs, prolongBody<HostBlock>>},
+    {"yasps_ml_smooth", emulate<SmoothArgs, smoothBody<HostBlock>>},
+    {"yasps_ml_residual", emulate<ResidualArgs, residualBody<HostBlock>>},
+    {"yasps_ml_dense_scatter",
+     emulate<DenseScatterArgs, denseScatterBody<HostBlock>>},
+    {"yasps_ml_dense_invert",
+     emulate<DenseInvertArgs, denseInvertBody<HostBlock>>},
+    {"yasps_ml_dense_apply",
+     emulate<DenseApplyArgs, denseApplyBody<HostBlock>>},
     YASPS_SPMV_SHAPES(YASPS_EMULATED_SPMV)};
 #undef YASPS_EMULATED_SPMV
 

@@ -198,6 +198,7 @@ protected:
     DeviceBuffer x(*context, host->size() * sizeof(double));
     PcgResult result = gpu->solve(x.pointer(), options, checkEvery);
     EXPECT_EQ(result.converged, cpu.converged);
+    EXPECT_EQ(result.levels, cpu.levels);
     EXPECT_NEAR(double(result.iterations), double(cpu.iterations), 1.0);
     if (cpu.converged)
       // Near convergence the last residual is mostly rounding.
@@ -376,6 +377,58 @@ TEST_P(GpuSystemTest, FollowsANewDynamicPart) {
               "new dynamic Hessian");
   PcgOptions options;
   options.relativeTolerance = 1e-12;
+  expectSameSolve(options);
+}
+
+/// Options of a multilevel solve with levels small enough that the scene
+/// has three of them.
+PcgOptions multilevelOptions() {
+  PcgOptions options;
+  options.relativeTolerance = 1e-12;
+  options.preconditioner = PcgPreconditioner::Multilevel;
+  options.multilevel.coarsestDofs = 60;
+  return options;
+}
+
+TEST_P(GpuSystemTest, MultilevelSolvesLikeTheCpu) {
+  assemble();
+  PcgOptions options = multilevelOptions();
+  Multilevel levels(host->hessianParts(), options.multilevel);
+  ASSERT_GE(levels.numLevels(), 3u);
+  expectSameSolve(options);
+  // Again on the same levels, and with a dense coarsest level only.
+  expectSameSolve(options, 1);
+  options.multilevel.coarsestDofs = 2000;
+  expectSameSolve(options);
+  // Fewer iterations than block-Jacobi.
+  DeviceBuffer x(*context, host->size() * sizeof(double));
+  PcgOptions jacobi;
+  jacobi.relativeTolerance = 1e-12;
+  EXPECT_LT(gpu->solve(x.pointer(), multilevelOptions()).iterations,
+            gpu->solve(x.pointer(), jacobi).iterations);
+}
+
+TEST_P(GpuSystemTest, MultilevelSolvesWithFixedDofs) {
+  assemble();
+  std::vector<std::uint8_t> mask(host->size(), 0);
+  std::bernoulli_distribution pick(0.1);
+  for (auto &m : mask)
+    m = pick(scene.rng);
+  // A whole aggregate's worth: the first 20 vertices.
+  std::fill(mask.begin(), mask.begin() + 60, 1);
+  PcgOptions options = multilevelOptions();
+  options.fixedDofs = &mask;
+  expectSameSolve(options);
+}
+
+TEST_P(GpuSystemTest, MultilevelFollowsANewDynamicPart) {
+  assemble();
+  PcgOptions options = multilevelOptions();
+  expectSameSolve(options);
+  scene.energies[3] = scene.randomPairs(90);
+  host->setDynamic(scene.maps(3, 4));
+  gpu->updateDynamic(*host);
+  assemble();
   expectSameSolve(options);
 }
 

@@ -259,10 +259,8 @@ class GpuBackend:
             raise SceneError(f"minimizeEnergy: the GPU's PCG stops on the "
                              f"residual only, not {stopping!r}; use the CPU "
                              f"backend for the energy-norm rule")
-        if config.resolve_preconditioner() != "block-jacobi":
-            raise SceneError("minimizeEnergy: the GPU's PCG is block-Jacobi "
-                             "only; set yasps.config.preconditioner = "
-                             "'block-jacobi' or use the CPU backend for "
-                             "the multilevel preconditioner")
-        return system.solve(x, tolerance, max_iterations, fixed)
+        preconditioner = config.resolve_preconditioner().replace("-", "_")
+        return system.solve(x, tolerance, max_iterations, fixed,
+                            preconditioner=getattr(
+                                native().PcgPreconditioner, preconditioner))
 

@@ -9,7 +9,7 @@
 //
 //===----------------------------------------------------------------------===//
 
-#include "yasps/Runtime/GpuSolverKernels.h"
+#include "yasps/Runtime/GpuMultilevelKernels.h"
 
 using namespace yasps::runtime::gpu;
 
@@ -31,6 +31,14 @@ YASPS_SOLVER_KERNEL(yasps_pcg_update, PcgUpdateArgs, pcgUpdateBody)
 YASPS_SOLVER_KERNEL(yasps_pcg_direction, PcgDirectionArgs, pcgDirectionBody)
 YASPS_SOLVER_KERNEL(yasps_pcg_scalar, PcgScalarArgs, pcgScalarBody)
 YASPS_SOLVER_KERNEL(yasps_spmv_any, SpmvArgs, (spmvBody<0, 0>))
+YASPS_SOLVER_KERNEL(yasps_ml_coarsen, CoarsenArgs, coarsenBody)
+YASPS_SOLVER_KERNEL(yasps_ml_restrict, TransferArgs, restrictBody)
+YASPS_SOLVER_KERNEL(yasps_ml_prolong, TransferArgs, prolongBody)
+YASPS_SOLVER_KERNEL(yasps_ml_smooth, SmoothArgs, smoothBody)
+YASPS_SOLVER_KERNEL(yasps_ml_residual, ResidualArgs, residualBody)
+YASPS_SOLVER_KERNEL(yasps_ml_dense_scatter, DenseScatterArgs, denseScatterBody)
+YASPS_SOLVER_KERNEL(yasps_ml_dense_invert, DenseInvertArgs, denseInvertBody)
+YASPS_SOLVER_KERNEL(yasps_ml_dense_apply, DenseApplyArgs, denseApplyBody)
 
 #define YASPS_SPMV_KERNEL(R, C)                                                \
   YASPS_SOLVER_KERNEL(yasps_spmv_##R##x##C, SpmvArgs, (spmvBody<R, C>))

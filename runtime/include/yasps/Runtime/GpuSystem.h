@@ -42,9 +42,11 @@ std::vector<std::string> gpuSolverKernelNames();
 class GpuSystem {
 public:
   /// Uploads `host`'s structure to the device of `context`; values start
-  /// at zero. Throws CudaError when the solver kernels cannot be loaded
-  /// (built without nvcc, or no binary fits the device), and
-  /// std::invalid_argument for more than 2^31 - 1 DoFs.
+  /// at zero. `host` must outlive this system: the multilevel
+  /// preconditioner reads its structure when a solve first asks for it. Throws
+  /// CudaError when the solver kernels cannot be loaded (built without nvcc, or
+  /// no binary fits the device), and std::invalid_argument for more than 2^31 -
+  /// 1 DoFs.
   GpuSystem(const CudaContext &context, const GlobalSystem &host);
   ~GpuSystem();
   GpuSystem(const GpuSystem &) = delete;
@@ -70,10 +72,12 @@ public:
   /// y = H x (both parts), x and y in device memory (size() each).
   void multiply(cu::DevicePtr x, cu::DevicePtr y);
 
-  /// Solves H x = gradient by block-Jacobi PCG on the device, x in device
-  /// memory. Same contract as GlobalSystem::solve; the host looks at the
-  /// solver's state every `checkEvery` iterations (iterations queued past
-  /// the end do nothing).
+  /// Solves H x = gradient by PCG on the device, x in device memory, with
+  /// options.preconditioner: block-Jacobi, or the multilevel V-cycle
+  /// (Multilevel.h; its levels' structure built on the host once, their
+  /// values on the device every solve). Same contract as
+  /// GlobalSystem::solve; the host looks at the solver's state every
+  /// `checkEvery` iterations (iterations queued past the end do nothing).
   PcgResult solve(cu::DevicePtr x, const PcgOptions &options,
                   int checkEvery = 8);
 
@@ -93,6 +97,35 @@ public:
 private:
   struct Energy;
   struct Part;
+  struct Levels;
+  /// Block-Jacobi inverse blocks of one layout on the device.
+  struct Jacobi {
+    std::int64_t numBlocks = 0;
+    DeviceBuffer blockOffset, inverseStart, inverse, scratchA, scratchL,
+        scratchFree;
+  };
+  static void allocateJacobi(const CudaContext &context, Jacobi &jacobi,
+                             const BlockLayout &layout);
+  void invertJacobi(const Jacobi &jacobi, const std::vector<Part *> &parts,
+                    const unsigned char *mask);
+  /// y += H x over `parts` (addProducts for any level's matrix).
+  void addPartProducts(const std::vector<Part *> &parts, const double *x,
+                       double *y, const gpu::PcgState *state);
+  /// The structure of a matrix into `part`: its groups, coordinates and
+  /// diagonal blocks (no energies).
+  void uploadMatrix(Part &part, const BlockSparseMatrix &matrix);
+  // The multilevel preconditioner (GpuMultilevel.cpp): its levels built or
+  // brought up to date with the host's structure, refreshed from the
+  // Hessian's values, and one V-cycle z = M^-1 r on level l.
+  void prepareLevels(const PcgOptions &options);
+  void uploadLevels();
+  std::int64_t levelCount() const;
+  void refreshLevels(const unsigned char *mask, const std::uint8_t *hostMask);
+  double estimateDamping(std::size_t l, const unsigned char *mask,
+                         const std::uint8_t *hostMask);
+  /// `fineMask`: the solve's fixed DoFs (level 0 only).
+  void cycle(std::size_t l, const double *r, double *z,
+             const unsigned char *fineMask, const gpu::PcgState *state);
   template <typename Args>
   void launch(const char *kernel, std::int64_t blocks, const Args &args);
   template <typename Args>
@@ -113,13 +146,15 @@ private:
   double recomputedResidual(cu::DevicePtr x, const unsigned char *mask);
 
   const CudaContext &ctx;
+  const GlobalSystem &host;
+  std::unique_ptr<Levels> levels;
   std::unique_ptr<CudaModule> module;
   std::map<std::string, cu::Function> functions;
   std::int64_t numDofs = 0, numBlocks = 0;
   std::size_t numStatic = 0;
   std::unique_ptr<Part> parts[2];
-  DeviceBuffer gradientValues, blockOffset, inverseStart, inverse, scratchA,
-      scratchL, scratchFree, r, z, p, q, partials, state, fixed;
+  Jacobi jacobi;
+  DeviceBuffer gradientValues, r, z, p, q, partials, state, fixed;
 };
 
 } // namespace yasps::runtime

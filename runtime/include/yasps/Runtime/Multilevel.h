@@ -62,6 +62,9 @@ public:
   /// next refresh.
   Multilevel(const HessianParts &parts, const std::uint8_t *fixed,
              ThreadPool &pool, const MultilevelOptions &options = {});
+  /// Builds the levels' structure only, for a backend that computes their
+  /// values itself (the GPU): apply() needs a refresh() first.
+  Multilevel(const HessianParts &parts, const MultilevelOptions &options);
   ~Multilevel();
 
   /// Whether `parts` have the structure the levels were built for: the
@@ -70,6 +73,10 @@ public:
   /// refreshes (contact): refresh rebuilds their coarse structures only.
   bool matches(const HessianParts &parts) const;
   const MultilevelOptions &options() const { return options_; }
+  /// Takes `parts` (whose structure must match) and rebuilds the coarse
+  /// structures of the parts whose structure changed, without values;
+  /// returns whether any did. What refresh() does first.
+  bool restructure(const HessianParts &parts);
   /// Recomputes every level's values from `parts`, whose structure must
   /// match (else std::invalid_argument).
   void refresh(const HessianParts &parts, const std::uint8_t *fixed,
@@ -84,6 +91,20 @@ public:
   std::vector<std::int64_t> levelSizes() const;
   /// Per level but the coarsest, the smoother's damping w.
   std::vector<double> dampings() const;
+
+  /// The structure of level l, for backends that upload it: its parts (a
+  /// coarse level's hold the structure, and after a refresh the values),
+  /// and for every level but the coarsest its aggregates, their members
+  /// (members[memberStart[a] .. memberStart[a + 1])) and per part, per
+  /// stored block with both blocks aggregated, its slot in level l + 1's
+  /// matrix of that part. A block between two members of one aggregate
+  /// lands there twice: as itself and as its transpose.
+  std::size_t numLevels() const { return levels_.size(); }
+  const HessianParts &levelParts(std::size_t l) const;
+  const Aggregates &aggregates(std::size_t l) const;
+  const std::vector<std::size_t> &memberStart(std::size_t l) const;
+  const std::vector<std::int64_t> &members(std::size_t l) const;
+  const std::vector<BlockSlot> &slots(std::size_t l, std::size_t part) const;
 
 private:
   struct Level;
