@@ -366,6 +366,18 @@ void BlockSparseMatrix::multiply(const double *x, double *y,
   multiplyByRows(values_.data(), x, y, pool);
 }
 
+void BlockSparseMatrix::multiplyRounded(const std::vector<float> &rounded,
+                                        const double *x, double *y,
+                                        ThreadPool &pool) const {
+  if (rounded.size() != values_.size())
+    throw std::invalid_argument(
+        "multiplyRounded: " + std::to_string(rounded.size()) +
+        " rounded values for a matrix of " + std::to_string(values_.size()));
+  if (pool.size() < kMinThreadsForThreadedProduct)
+    return multiplyInStorageOrder(rounded.data(), x, y);
+  multiplyByRows(rounded.data(), x, y, pool);
+}
+
 template <typename T>
 void BlockSparseMatrix::multiplyByRows(const T *values, const double *x,
                                        double *y, ThreadPool &pool) const {

@@ -42,6 +42,11 @@ struct Multilevel::Level {
   /// its smoother stands in for the solve.
   std::vector<double> cholesky;
   bool coarsest = false;
+  /// The fine level's parts' values rounded to f32, which the cycle's
+  /// products read: they are bound by reading the blocks, and a
+  /// preconditioner's products need not be exact (the cycle stays a
+  /// symmetric positive definite operator: see refresh()).
+  std::vector<std::vector<float>> rounded;
   /// Vectors of the cycle: the restricted residual (coarse levels), the
   /// correction, a residual and a smoothing step.
   std::vector<double> r, z, t, u;
@@ -255,6 +260,18 @@ void Multilevel::refresh(const HessianParts &parts, const std::uint8_t *fixed,
                          ThreadPool &pool) {
   restructure(parts);
   levels_.front()->fixed = fixed;
+  // The cycle reads the fine matrix rounded to f32 (A~): it remains
+  // M^-1 = 2S - S A~ S + (I - S A~) P C P^T (I - A~ S) with S = w D^-1,
+  // symmetric, and positive definite while w lmax(D^-1 A~) < 2, whatever
+  // the coarse inverse C's matrix (the coarse levels sum the f64 blocks).
+  Level &fine = *levels_.front();
+  fine.rounded.resize(parts.size());
+  for (std::size_t k = 0; k < parts.size(); ++k) {
+    const std::vector<double> &values = parts[k]->values();
+    fine.rounded[k].resize(values.size());
+    for (std::size_t i = 0; i < values.size(); ++i)
+      fine.rounded[k][i] = static_cast<float>(values[i]);
+  }
   for (std::size_t l = 0; l < levels_.size(); ++l) {
     Level &level = *levels_[l];
     level.smoother =
@@ -353,7 +370,21 @@ std::vector<double> Multilevel::dampings() const {
 void Multilevel::multiply(std::size_t l, const double *x, double *y,
                           ThreadPool &pool) {
   Level &level = *levels_[l];
-  multiplySum(level.parts, x, y, scratch_, pool);
+  if (level.rounded.empty()) {
+    multiplySum(level.parts, x, y, scratch_, pool);
+  } else {
+    const std::size_t n = static_cast<std::size_t>(level.size);
+    level.parts.front()->multiplyRounded(level.rounded.front(), x, y, pool);
+    for (std::size_t k = 1; k < level.parts.size(); ++k) {
+      if (level.parts[k]->numStoredBlocks() == 0)
+        continue;
+      scratch_.resize(n);
+      level.parts[k]->multiplyRounded(level.rounded[k], x, scratch_.data(),
+                                      pool);
+      for (std::size_t i = 0; i < n; ++i)
+        y[i] += scratch_[i];
+    }
+  }
   if (level.fixed)
     for (std::int64_t i = 0; i < level.size; ++i)
       if (level.fixed[i])

@@ -294,6 +294,19 @@ TEST(BlockSparseMatrix, SingleValuesMultiplyAsTheRoundedMatrix) {
   ThreadPool single(1);
   m.multiply(x.data(), exact.data(), single);
   EXPECT_FALSE(m.hasSingleValues());
+  // An outside f32 copy gives the rounded matrix's product, the matrix
+  // itself still the exact one.
+  std::vector<float> copy(m.values().begin(), m.values().end());
+  for (unsigned threads : {1u, 3u}) {
+    ThreadPool pool(threads);
+    rounded.multiply(x.data(), want.data(), pool);
+    m.multiplyRounded(copy, x.data(), got.data(), pool);
+    EXPECT_EQ(got, want) << threads << " threads";
+  }
+  EXPECT_FALSE(m.hasSingleValues());
+  copy.pop_back();
+  EXPECT_THROW(m.multiplyRounded(copy, x.data(), got.data(), single),
+               std::invalid_argument);
   m.roundValuesForProduct();
   EXPECT_TRUE(m.hasSingleValues());
   for (unsigned threads : {1u, 3u}) {

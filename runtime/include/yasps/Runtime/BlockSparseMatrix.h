@@ -131,6 +131,12 @@ public:
   /// same order, so the result does not depend on the number of threads.
   void multiply(const double *x, double *y, ThreadPool &pool) const;
 
+  /// multiply() of the matrix whose values are `rounded` (values().size()
+  /// f32 entries in the values' order, as roundValuesForProduct takes
+  /// them): for a preconditioner's products, which need not be exact.
+  void multiplyRounded(const std::vector<float> &rounded, const double *x,
+                       double *y, ThreadPool &pool) const;
+
   /// Writes the diagonal blocks to `out`, concatenated in block order, each
   /// row-major (size(i) x size(i)); blocks that are not stored are zero.
   void diagonalBlocks(std::vector<double> &out) const;
