@@ -6,9 +6,9 @@
 // benchmarks do (a 12-parameter energy per tet, such as stable
 // Neo-Hookean, and a 3-parameter one per vertex, such as inertia), fills it
 // with random positive definite local Hessians and times, on the CPU and,
-// where there is one, on the GPU: assembly, the block-sparse SpMV, and a
-// block-Jacobi PCG solve; on the GPU also a device-to-device copy, for the
-// bandwidth bound of the SpMV's bytes. Results are checked against the CPU
+// where there is one, on the GPU: assembly, the block-sparse SpMV, and
+// block-Jacobi and multilevel PCG solves; on the GPU also a device-to-device
+// copy, for the bandwidth bound of the SpMV's bytes. Results are checked against the CPU
 // before they are timed. `--export DIR` writes the whole matrix as CSR,
 // a vector and its product as .npy files for bench/gpu_cusparse.py, which
 // times cuSPARSE on the same matrix.
@@ -264,6 +264,15 @@ int run(int argc, char **argv) {
   start = Clock::now();
   PcgResult cpuSolve = system.solve(solution.data(), options, all);
   double solveAll = secondsSince(start);
+  // The multilevel preconditioner: a first solve builds the levels'
+  // structure, the second (timed) reuses it, as Newton iterations do.
+  PcgOptions multilevel = options;
+  multilevel.preconditioner = PcgPreconditioner::Multilevel;
+  std::vector<double> levelSolution(n);
+  system.solve(levelSolution.data(), multilevel, all);
+  start = Clock::now();
+  PcgResult cpuLevels = system.solve(levelSolution.data(), multilevel, all);
+  double levelsAll = secondsSince(start);
   std::size_t stored = system.staticHessian().numStoredBlocks() +
                        system.dynamicHessian().numStoredBlocks();
 
@@ -278,6 +287,11 @@ int run(int argc, char **argv) {
   std::printf("  CPU PCG (%u threads) %lld iterations to %.1e: %9.3f ms\n",
               cores, (long long)cpuSolve.iterations, cpuSolve.relativeResidual,
               solveAll * 1e3);
+  std::printf("  CPU multilevel PCG (%u threads, %lld levels) %lld iterations "
+              "to %.1e: %9.3f ms, solutions within %.1e\n",
+              cores, (long long)cpuLevels.levels,
+              (long long)cpuLevels.iterations, cpuLevels.relativeResidual,
+              levelsAll * 1e3, relativeDifference(levelSolution, solution));
   if (!exportDir.empty()) {
     exportCsr(system, x, y, exportDir);
     std::printf("  matrix, x and y = H x written to %s (CSR, .npy)\n",
@@ -327,6 +341,12 @@ int run(int argc, char **argv) {
   double solveGpu = secondsSince(start);
   std::vector<double> gsol(n);
   dsol.download(gsol.data(), n * sizeof(double));
+  gpu.solve(dsol.pointer(), multilevel);
+  start = Clock::now();
+  PcgResult gpuLevels = gpu.solve(dsol.pointer(), multilevel);
+  double levelsGpu = secondsSince(start);
+  std::vector<double> glsol(n);
+  dsol.download(glsol.data(), n * sizeof(double));
 
   const CudaDeviceInfo &info = driver.devices()[0];
   std::printf("GPU %s (%s), results within %.1e of the CPU's\n",
@@ -346,6 +366,11 @@ int run(int argc, char **argv) {
               (long long)gpuSolve.iterations, gpuSolve.relativeResidual,
               solveGpu * 1e3, solveAll / solveGpu,
               relativeDifference(gsol, solution));
+  std::printf("  GPU multilevel PCG %lld iterations to %.1e: %9.3f ms (%.1fx "
+              "the GPU block-Jacobi's), solutions within %.1e\n",
+              (long long)gpuLevels.iterations, gpuLevels.relativeResidual,
+              levelsGpu * 1e3, solveGpu / levelsGpu,
+              relativeDifference(glsol, solution));
   return 0;
 }
 

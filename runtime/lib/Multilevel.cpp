@@ -11,6 +11,11 @@
 
 using namespace yasps::runtime;
 
+// Below this many DoFs a level's vector steps (smoothing, restriction,
+// prolongation) run on the calling thread, as PCG's do (Pcg.cpp): each is
+// a few tens of microseconds, about what handing it to the pool costs. The
+// products decide for themselves.
+static constexpr std::int64_t kMinParallelVector = 1 << 18;
 // Aggregates per chunk when restricting and prolonging.
 static constexpr std::int64_t kAggregatesPerChunk = 256;
 // Coarsening stops where a level keeps more than this share of its finer
@@ -401,7 +406,7 @@ void Multilevel::cycle(std::size_t l, const double *r, double *z,
   const std::int64_t n = level.size;
   if (level.coarsest) {
     if (level.cholesky.empty()) {
-      level.smoother->apply(r, z, pool);
+      level.smoother->apply(r, z, serial_);
       return;
     }
     const double *L = level.cholesky.data();
@@ -421,7 +426,8 @@ void Multilevel::cycle(std::size_t l, const double *r, double *z,
   }
   const double w = level.damping;
   double *t = level.t.data(), *u = level.u.data();
-  level.smoother->apply(r, z, pool);
+  ThreadPool &vectors = n >= kMinParallelVector ? pool : serial_;
+  level.smoother->apply(r, z, vectors);
   for (std::int64_t i = 0; i < n; ++i)
     z[i] *= w;
   multiply(l, z, t, pool);
@@ -431,7 +437,7 @@ void Multilevel::cycle(std::size_t l, const double *r, double *z,
   Level &coarse = *levels_[l + 1];
   const BlockLayout &fine = level.parts.front()->layout();
   const BlockLayout &coarseLayout = coarse.parts.front()->layout();
-  pool.parallelFor(0, level.aggregates.count(), kAggregatesPerChunk,
+  vectors.parallelFor(0, level.aggregates.count(), kAggregatesPerChunk,
                    [&](std::int64_t begin, std::int64_t end) {
                      for (std::int64_t a = begin; a < end; ++a) {
                        std::int64_t o = coarseLayout.blockOffset[a];
@@ -447,7 +453,7 @@ void Multilevel::cycle(std::size_t l, const double *r, double *z,
                      }
                    });
   cycle(l + 1, coarse.r.data(), coarse.z.data(), pool);
-  pool.parallelFor(0, level.aggregates.count(), kAggregatesPerChunk,
+  vectors.parallelFor(0, level.aggregates.count(), kAggregatesPerChunk,
                    [&](std::int64_t begin, std::int64_t end) {
                      for (std::int64_t a = begin; a < end; ++a) {
                        std::int64_t o = coarseLayout.blockOffset[a];
@@ -465,7 +471,7 @@ void Multilevel::cycle(std::size_t l, const double *r, double *z,
   multiply(l, z, t, pool);
   for (std::int64_t i = 0; i < n; ++i)
     t[i] = r[i] - t[i];
-  level.smoother->apply(t, u, pool);
+  level.smoother->apply(t, u, vectors);
   for (std::int64_t i = 0; i < n; ++i)
     z[i] += w * u[i];
 }

@@ -29,6 +29,7 @@
 
 #include "yasps/Runtime/Aggregation.h"
 #include "yasps/Runtime/BlockJacobi.h"
+#include "yasps/Runtime/ThreadPool.h"
 
 #include <cstdint>
 #include <memory>
@@ -42,7 +43,7 @@ struct MultilevelOptions {
   /// Levels at most, the fine one included.
   std::int64_t maxLevels = 10;
   /// Lanczos steps that estimate each level's lmax(D^-1 A).
-  std::int64_t eigenvalueSteps = 6;
+  std::int64_t eigenvalueSteps = 4;
 
   bool operator==(const MultilevelOptions &other) const {
     return coarsestDofs == other.coarsestDofs && maxLevels == other.maxLevels &&
@@ -122,6 +123,8 @@ private:
   std::uint64_t structure_;
   std::vector<std::unique_ptr<Level>> levels_;
   std::vector<double> scratch_;
+  /// The pool of small levels' vector steps.
+  ThreadPool serial_{1};
 };
 
 } // namespace yasps::runtime
