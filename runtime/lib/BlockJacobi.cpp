@@ -11,6 +11,8 @@ using namespace yasps::runtime;
 
 // Diagonal blocks per chunk when building and applying the preconditioner.
 static constexpr std::int64_t kBlocksPerChunk = 64;
+// Diagonal blocks per segment of applyDot's sum.
+static constexpr std::int64_t kBlocksPerSegment = 1024;
 
 BlockJacobi::BlockJacobi(const HessianParts &parts, const std::uint8_t *fixed,
                          ThreadPool &pool)
@@ -59,6 +61,40 @@ void BlockJacobi::apply(const double *r, double *z, ThreadPool &pool) const {
                        }
                      }
                    });
+}
+
+double BlockJacobi::applyDot(const double *r, double *z,
+                             std::vector<double> &partial,
+                             ThreadPool &pool) const {
+  const std::int64_t numBlocks = layout_.numBlocks();
+  const std::int64_t numSegments =
+      (numBlocks + kBlocksPerSegment - 1) / kBlocksPerSegment;
+  partial.assign(static_cast<std::size_t>(numSegments), 0.0);
+  pool.parallelFor(
+      0, numSegments, 1, [&](std::int64_t begin, std::int64_t end) {
+        for (std::int64_t segment = begin; segment < end; ++segment) {
+          double rz = 0.0;
+          for (std::int64_t b = segment * kBlocksPerSegment;
+               b < std::min(numBlocks, (segment + 1) * kBlocksPerSegment);
+               ++b) {
+            std::int64_t s = layout_.blockSize(b);
+            std::int64_t o = layout_.blockOffset[b];
+            const double *inv = inverse_.data() + start_[b];
+            for (std::int64_t i = 0; i < s; ++i) {
+              double sum = 0.0;
+              for (std::int64_t j = 0; j < s; ++j)
+                sum += inv[i * s + j] * r[o + j];
+              z[o + i] = sum;
+              rz += r[o + i] * sum;
+            }
+          }
+          partial[segment] = rz;
+        }
+      });
+  double sum = 0.0;
+  for (double p : partial)
+    sum += p;
+  return sum;
 }
 
 void BlockJacobi::measureDiagonal(const std::uint8_t *fixed) {

@@ -29,8 +29,12 @@ static constexpr std::int64_t kElementsPerChunk = 4096;
 // split, 1.15 on one). The SpMV decides for itself.
 static constexpr std::int64_t kMinParallelVector = 1 << 18;
 
-static double dot(const double *a, const double *b, std::int64_t n,
-                  std::vector<double> &partial, ThreadPool &pool) {
+/// The sum of term(i) over [0, n): fixed segments summed in parallel,
+/// then the segment sums in order. `term` may also update entry i of
+/// vectors, fusing a vector step with the dot product it feeds.
+template <typename Term>
+static double sumBySegments(std::int64_t n, std::vector<double> &partial,
+                            ThreadPool &pool, Term term) {
   std::int64_t numSegments = (n + kSegment - 1) / kSegment;
   partial.assign(static_cast<std::size_t>(numSegments), 0.0);
   pool.parallelFor(0, numSegments, 1,
@@ -39,7 +43,7 @@ static double dot(const double *a, const double *b, std::int64_t n,
                        double sum = 0.0;
                        for (std::int64_t i = s * kSegment;
                             i < std::min(n, (s + 1) * kSegment); ++i)
-                         sum += a[i] * b[i];
+                         sum += term(i);
                        partial[s] = sum;
                      }
                    });
@@ -47,6 +51,12 @@ static double dot(const double *a, const double *b, std::int64_t n,
   for (double p : partial)
     sum += p;
   return sum;
+}
+
+static double dot(const double *a, const double *b, std::int64_t n,
+                  std::vector<double> &partial, ThreadPool &pool) {
+  return sumBySegments(n, partial, pool,
+                       [&](std::int64_t i) { return a[i] * b[i]; });
 }
 
 /// y = a * x + b * y, element-wise.
@@ -234,11 +244,12 @@ PcgResult PcgSolve::run() {
     jacobi = std::make_unique<BlockJacobi>(parts_, fixed_, pool_);
     result_.diagonalRatio = jacobi->diagonalRatio();
   }
+  // out = M^-1 in; returns in . out.
   auto precondition = [&](const double *in, double *out) {
-    if (multilevel)
-      multilevel->apply(in, out, pool_);
-    else
-      jacobi->apply(in, out, vectors_);
+    if (!multilevel)
+      return jacobi->applyDot(in, out, partial_, vectors_);
+    multilevel->apply(in, out, pool_);
+    return dot(in, out);
   };
   if (bNorm == 0.0)
     return finish(PcgStop::Converged, 0.0);
@@ -246,9 +257,8 @@ PcgResult PcgSolve::run() {
   std::vector<double> z(un), p(un), q(un), trueResidual(un);
   double rz = 0.0;
   auto restart = [&] {
-    precondition(r.data(), z.data());
+    rz = precondition(r.data(), z.data());
     p = z;
-    rz = dot(r.data(), z.data());
   };
   restart();
   double rNorm = bNorm;
@@ -283,24 +293,33 @@ PcgResult PcgSolve::run() {
     }
 
     multiplySum(parts_, p.data(), q.data(), partProduct_, pool_);
-    maskFixed(q.data());
-    double pq = dot(p.data(), q.data());
+    // q's fixed entries zeroed, and p . q, in one pass.
+    double *pp = p.data(), *qq = q.data();
+    double pq = sumBySegments(n_, partial_, vectors_, [&](std::int64_t i) {
+      if (fixed_ && fixed_[i])
+        qq[i] = 0.0;
+      return pp[i] * qq[i];
+    });
     // H is not positive definite along p (or rz vanished): CG cannot go on.
     if (!(pq > 0.0) || !std::isfinite(pq) || !(rz > 0.0))
       return finish(PcgStop::Breakdown,
                     std::isfinite(pq) ? rNorm / bNorm : nan);
     double alpha = rz / pq;
-    axpby(alpha, p.data(), 1.0, x_, n_, vectors_);
-    axpby(-alpha, q.data(), 1.0, r.data(), n_, vectors_);
+    // x += alpha p, r -= alpha q and r . r in one pass.
+    double *rr = r.data(), *xx = x_;
+    double rr2 = sumBySegments(n_, partial_, vectors_, [&](std::int64_t i) {
+      xx[i] += alpha * pp[i];
+      rr[i] -= alpha * qq[i];
+      return rr[i] * rr[i];
+    });
     ++result_.iterations;
     terms_.push_back(alpha * rz);
     termSum_ += alpha * rz;
     if (!restarted_)
       alphas_.push_back(alpha);
-    rNorm = std::sqrt(dot(r.data(), r.data()));
+    rNorm = std::sqrt(rr2);
 
-    precondition(r.data(), z.data());
-    double rzNext = dot(r.data(), z.data());
+    double rzNext = precondition(r.data(), z.data());
     double beta = rzNext / rz;
     if (!restarted_)
       betas_.push_back(beta);

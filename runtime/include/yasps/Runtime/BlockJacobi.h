@@ -36,6 +36,11 @@ public:
 
   /// z = M^-1 r.
   void apply(const double *r, double *z, ThreadPool &pool) const;
+  /// apply(), returning r . z from the same pass: the sums of fixed
+  /// segments of blocks, added in order (the same on any thread count).
+  /// `partial` is scratch.
+  double applyDot(const double *r, double *z, std::vector<double> &partial,
+                  ThreadPool &pool) const;
 
   /// The largest over the smallest diagonal entry of H on the free DoFs
   /// (inf if one is <= 0, NaN if there is none), taken before inverting.
