@@ -169,3 +169,31 @@ def test_multilevel_on_the_gpu_backend_matches_the_cpu():
     assert len(lines) == 5, out
     assert all(line[:2] == ["True", "True"] for line in lines), out
     assert int(lines[0][2]) >= 2, out
+
+
+@pytest.mark.parametrize("preconditioner", ["block-jacobi", "multilevel"])
+def test_a_warm_newton_loop_allocates_no_large_buffers(restore_preconditioner,
+                                                       preconditioner):
+    """Once warm, minimizeEnergy reuses its NumPy buffers (the local
+    derivatives, the DoF masks): over three calls tracemalloc's peak stays
+    far below one fresh copy of the local Hessians (6.9 MB), and the
+    process takes no new pages (the native side's vectors and levels)."""
+    import resource
+    import tracemalloc
+    s, _ = stiff_box(10)
+    yasps.config.preconditioner = preconditioner
+    for _ in range(3):
+        s.minimizeEnergy(tolerance=1e-6)
+    hessian_bytes = 6 * 10 ** 3 * 144 * 8   # 6000 tets' 12x12
+    tracemalloc.start()
+    try:
+        before = resource.getrusage(resource.RUSAGE_SELF).ru_minflt
+        start, _ = tracemalloc.get_traced_memory()
+        for _ in range(3):
+            s.minimizeEnergy(tolerance=1e-6)
+        _, peak = tracemalloc.get_traced_memory()
+        faults = resource.getrusage(resource.RUSAGE_SELF).ru_minflt - before
+    finally:
+        tracemalloc.stop()
+    assert peak - start < hessian_bytes // 10, peak - start
+    assert faults < hessian_bytes // 4096 // 10, faults
