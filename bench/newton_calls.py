@@ -1,0 +1,75 @@
+#!/usr/bin/env python3
+"""The spread of many warm Newton iterations on the 19k-vertex bunny.
+
+bench/newton_system.py's scene, ``minimizeEnergy`` (CG relative residual
+1e-4) called ``--calls`` times after three warm-up calls: per stage
+(derivatives, indices, assembly, solve) and in total, the median, the 90th
+percentile and the slowest call, and the minor page faults each call took
+(a warm loop allocates nothing: any fault is a fresh buffer). Slow
+outliers, where they exist, show as a maximum far above the median.
+
+    python3 bench/newton_calls.py [--calls 60] [--threads 1]
+        [--preconditioner block-jacobi|multilevel]
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import resource
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+os.environ.setdefault("YASPS_CACHE_DIR", tempfile.mkdtemp(prefix="yasps-bench-"))
+for _var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
+    os.environ[_var] = "1"
+
+HERE = Path(__file__).resolve().parent
+sys.path.insert(0, str(HERE.parent / "python"))
+sys.path.insert(0, str(HERE))
+
+import numpy as np  # noqa: E402
+
+import yasps  # noqa: E402
+from newton_system import build  # noqa: E402
+
+STAGES = ("derivatives", "indices", "assembly", "solve")
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    parser.add_argument("--calls", type=int, default=60)
+    parser.add_argument("--threads", type=int, default=1)
+    parser.add_argument("--preconditioner", default="block-jacobi",
+                        choices=yasps.config.PRECONDITIONERS)
+    args = parser.parse_args()
+    yasps.config.num_threads = args.threads
+    yasps.config.preconditioner = args.preconditioner
+    s = build()
+    for _ in range(3):
+        s.minimizeEnergy(tolerance=1e-4)
+    rows = []
+    for _ in range(args.calls):
+        faults = resource.getrusage(resource.RUSAGE_SELF).ru_minflt
+        start = time.perf_counter()
+        s.minimizeEnergy(tolerance=1e-4)
+        total = time.perf_counter() - start
+        faults = resource.getrusage(resource.RUSAGE_SELF).ru_minflt - faults
+        seconds = s.lastSolve["seconds"]
+        rows.append([total * 1e3] + [seconds[k] * 1e3 for k in STAGES] + [faults])
+    table = np.array(rows)
+    print(f"{args.calls} warm minimizeEnergy calls, {args.threads} thread(s), "
+          f"{args.preconditioner}")
+    print("| stage | median | 90th percentile | slowest |")
+    print("|---|---|---|---|")
+    for column, name in enumerate(("total (ms)",) + tuple(f"{k} (ms)" for k in STAGES)
+                                  + ("page faults",)):
+        values = table[:, column]
+        print(f"| {name} | {np.median(values):.1f} | {np.percentile(values, 90):.1f} | "
+              f"{values.max():.1f} |")
+
+
+if __name__ == "__main__":
+    main()
