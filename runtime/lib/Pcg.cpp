@@ -1,4 +1,4 @@
-//===- Pcg.cpp - block-Jacobi preconditioned conjugate gradient -----------===//
+//===- Pcg.cpp - preconditioned conjugate gradient ------------------------===//
 
 #include "yasps/Runtime/Pcg.h"
 

@@ -92,8 +92,9 @@ class Backend(Protocol):
     def solve(self, system: Any, x: np.ndarray, tolerance: float,
               max_iterations: int, threads: Optional[int],
               fixed: Optional[np.ndarray], stopping: str = "residual") -> Any:
-        """PCG on the assembled system into ``x``; ``stopping`` is
-        "residual" or "energy_norm" (see Scene.minimizeEnergy). Returns the
-        native PcgReport (iterations, relative_residual recomputed from x,
+        """PCG on the assembled system into ``x``, preconditioned as
+        ``config.preconditioner`` says; ``stopping`` is "residual" or
+        "energy_norm" (see Scene.minimizeEnergy). Returns the native
+        PcgReport (iterations, relative_residual recomputed from x,
         converged, stop, energy_error, condition_estimate, diagonal_ratio,
-        residual_replacements)."""
+        residual_replacements, levels)."""

@@ -1,5 +1,6 @@
 """``Scene.minimizeEnergy``: the Newton direction from the assembled system,
-solved by block-Jacobi PCG on the backend (section 8), with what the solve
+solved by PCG on the backend (section 8; block-Jacobi or multilevel,
+``config.preconditioner``), with what the solve
 says about itself (:mod:`.diagnosis`)."""
 
 from __future__ import annotations

@@ -3,8 +3,8 @@
 // The device side of GlobalSystem: the same compressed block-sparse
 // Hessian (static and dynamic parts) and gradient, held in device memory,
 // assembled from device-resident local derivatives with atomic adds, and
-// solved by block-Jacobi PCG on the device (paper sections 7-8, appendices
-// B-D). Only the results asked for are copied back.
+// solved by PCG on the device, block-Jacobi or multilevel (paper sections
+// 7-8, appendices B-D). Only the results asked for are copied back.
 //
 // The structure (which blocks exist and where each instance's entries go)
 // is built on the host by GlobalSystem and uploaded; a GpuSystem mirrors

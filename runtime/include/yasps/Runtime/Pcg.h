@@ -1,9 +1,10 @@
-//===- Pcg.h - block-Jacobi preconditioned conjugate gradient ---*- C++ -*-===//
+//===- Pcg.h - preconditioned conjugate gradient ----------------*- C++ -*-===//
 //
 // The Newton step's linear solve (the paper's appendix D): conjugate
 // gradient on the block-sparse Hessian, preconditioned by the inverses of
-// its diagonal blocks, which capture the strong coupling inside each DoF
-// group at little cost.
+// its diagonal blocks (BlockJacobi.h), which capture the strong coupling
+// inside each DoF group at little cost, or by a V-cycle over coarser
+// levels (Multilevel.h), which carries corrections across the mesh.
 //
 //===----------------------------------------------------------------------===//
 
@@ -116,8 +117,8 @@ struct PcgResult {
 /// or NaN tolerance.
 void checkPcgOptions(const PcgOptions &options, std::int64_t size);
 
-/// Solves H x = b from x = 0 by block-Jacobi preconditioned CG. `b` and `x`
-/// hold H.size() values. H must be symmetric positive definite on the free
+/// Solves H x = b from x = 0 by CG preconditioned as options.preconditioner
+/// says (block-Jacobi by default). `b` and `x` hold H.size() values. H must be symmetric positive definite on the free
 /// DoFs; a diagonal block whose free part has no Cholesky factor (not
 /// positive definite) is preconditioned by the inverses of its diagonal
 /// entries' magnitudes instead, and by 1 where an entry is 0.
