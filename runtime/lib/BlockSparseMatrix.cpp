@@ -396,7 +396,10 @@ void BlockSparseMatrix::multiplyByRows(const T *values, const double *x,
             const BlockGroup &group = groups_[g];
             const std::size_t *cols = &colStart_[g * stride];
             const std::size_t *rows = &rowStart_[g * stride];
-            if (group.rows == 3 && group.cols == 3 && simd) {
+            // Only a vertex row has 3x3 blocks: the SIMD kernel reads and
+            // writes three entries of y at yr, past a shorter row's end.
+            if (group.rows == 3 && group.cols == 3 && simd &&
+                layout_.blockSize(r) == 3) {
               detail::multiplyVertexRowAvx2(
                   blockAt(group.firstBlock), group.firstBlock,
                   colBlocks_.data() + cols[r], cols[r + 1] - cols[r], rows[r],

@@ -270,6 +270,67 @@ TEST(BlockSparseMatrix, VertexBlocksGiveTheSameBitsOnEveryThreadCount) {
   EXPECT_EQ(one, two);
 }
 
+TEST(BlockSparseMatrix, ShortRowsBesideVertexBlocksKeepToTheirRows) {
+  // Vertex blocks with 1-DoF blocks between them and last: the threaded
+  // product gives 3x3 rows to the SIMD kernel, which touches three entries
+  // of y; a 1-DoF row must not be handed to it (the sanitizer run catches
+  // the read and write past y's end).
+  std::mt19937 rng(17);
+  std::vector<std::int64_t> sizes;
+  for (int k = 0; k < 120; ++k)
+    sizes.push_back(k % 3 == 2 ? 1 : 3);
+  sizes.push_back(1);
+  BlockLayout layout = BlockLayout::fromSizes(sizes);
+  const std::int64_t numBlocks = layout.numBlocks(),
+                     n = layout.blockOffset.back();
+  std::uniform_int_distribution<std::int64_t> pick(0, numBlocks - 1);
+  std::uniform_real_distribution<double> value(-1.0, 1.0);
+  std::vector<double> dense(static_cast<std::size_t>(n * n), 0.0);
+  std::vector<std::pair<std::int64_t, std::int64_t>> coords;
+  std::vector<std::vector<double>> locals;
+  for (int k = 0; k < 600; ++k) {
+    std::int64_t i = pick(rng), j = k % 4 == 0 ? i : pick(rng);
+    std::int64_t rows = layout.blockSize(i), cols = layout.blockSize(j);
+    std::vector<double> local(static_cast<std::size_t>(rows * cols));
+    for (double &v : local)
+      v = value(rng);
+    if (i == j)
+      for (std::int64_t r = 0; r < rows; ++r)
+        for (std::int64_t c = 0; c < r; ++c)
+          local[r * cols + c] = local[c * cols + r];
+    for (std::int64_t r = 0; r < rows; ++r)
+      for (std::int64_t c = 0; c < cols; ++c) {
+        std::int64_t gi = layout.blockOffset[i] + r,
+                     gj = layout.blockOffset[j] + c;
+        dense[gi * n + gj] += local[r * cols + c];
+        if (i != j)
+          dense[gj * n + gi] += local[r * cols + c];
+      }
+    coords.push_back({i, j});
+    locals.push_back(std::move(local));
+  }
+  std::vector<BlockSlot> slots;
+  BlockSparseMatrix m(layout, coords, &slots);
+  for (std::size_t k = 0; k < slots.size(); ++k)
+    m.addBlock(slots[k], locals[k].data());
+  std::vector<double> x(static_cast<std::size_t>(n));
+  for (double &v : x)
+    v = value(rng);
+  std::vector<double> expected(static_cast<std::size_t>(n), 0.0);
+  for (std::int64_t i = 0; i < n; ++i)
+    for (std::int64_t j = 0; j < n; ++j)
+      expected[i] += dense[i * n + j] * x[j];
+  std::vector<float> rounded(m.values().begin(), m.values().end());
+  for (unsigned threads : {1u, 3u}) {
+    ThreadPool pool(threads);
+    std::vector<double> y(static_cast<std::size_t>(n), 9.0);
+    m.multiply(x.data(), y.data(), pool);
+    expectNear(y, expected, 1e-12);
+    m.multiplyRounded(rounded, x.data(), y.data(), pool);
+    expectNear(y, expected, 1e-5);
+  }
+}
+
 TEST(BlockSparseMatrix, SingleValuesMultiplyAsTheRoundedMatrix) {
   // The f32 copy is widened exactly and multiplied in the same order, so
   // the product is, to the bit, that of a matrix whose f64 values are the
