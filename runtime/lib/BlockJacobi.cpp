@@ -46,20 +46,26 @@ BlockJacobi::BlockJacobi(const HessianParts &parts, const std::uint8_t *fixed,
                    });
 }
 
+void BlockJacobi::applyBlock(std::int64_t b, const double *r, double *z,
+                             double &rz) const {
+  std::int64_t s = layout_.blockSize(b);
+  std::int64_t o = layout_.blockOffset[b];
+  const double *inv = inverse_.data() + start_[b];
+  for (std::int64_t i = 0; i < s; ++i) {
+    double sum = 0.0;
+    for (std::int64_t j = 0; j < s; ++j)
+      sum += inv[i * s + j] * r[o + j];
+    z[o + i] = sum;
+    rz += r[o + i] * sum;
+  }
+}
+
 void BlockJacobi::apply(const double *r, double *z, ThreadPool &pool) const {
   pool.parallelFor(0, layout_.numBlocks(), kBlocksPerChunk,
                    [&](std::int64_t begin, std::int64_t end) {
-                     for (std::int64_t b = begin; b < end; ++b) {
-                       std::int64_t s = layout_.blockSize(b);
-                       std::int64_t o = layout_.blockOffset[b];
-                       const double *inv = inverse_.data() + start_[b];
-                       for (std::int64_t i = 0; i < s; ++i) {
-                         double sum = 0.0;
-                         for (std::int64_t j = 0; j < s; ++j)
-                           sum += inv[i * s + j] * r[o + j];
-                         z[o + i] = sum;
-                       }
-                     }
+                     double unused = 0.0;
+                     for (std::int64_t b = begin; b < end; ++b)
+                       applyBlock(b, r, z, unused);
                    });
 }
 
@@ -75,19 +81,8 @@ double BlockJacobi::applyDot(const double *r, double *z,
         for (std::int64_t segment = begin; segment < end; ++segment) {
           double rz = 0.0;
           for (std::int64_t b = segment * kBlocksPerSegment;
-               b < std::min(numBlocks, (segment + 1) * kBlocksPerSegment);
-               ++b) {
-            std::int64_t s = layout_.blockSize(b);
-            std::int64_t o = layout_.blockOffset[b];
-            const double *inv = inverse_.data() + start_[b];
-            for (std::int64_t i = 0; i < s; ++i) {
-              double sum = 0.0;
-              for (std::int64_t j = 0; j < s; ++j)
-                sum += inv[i * s + j] * r[o + j];
-              z[o + i] = sum;
-              rz += r[o + i] * sum;
-            }
-          }
+               b < std::min(numBlocks, (segment + 1) * kBlocksPerSegment); ++b)
+            applyBlock(b, r, z, rz);
           partial[segment] = rz;
         }
       });

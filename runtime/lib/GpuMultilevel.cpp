@@ -24,22 +24,6 @@ using namespace yasps::runtime;
 using namespace yasps::runtime::gpu;
 using namespace yasps::runtime::detail;
 
-namespace {
-/// The deterministic start of the damping estimate: the CPU's
-/// (Multilevel.cpp), so that both estimate from the same vector.
-std::vector<double> startVector(std::int64_t n, const std::uint8_t *fixed) {
-  std::vector<double> v(static_cast<std::size_t>(n));
-  std::uint64_t state = 0x9E3779B97F4A7C15ull;
-  for (std::size_t i = 0; i < v.size(); ++i) {
-    state = state * 6364136223846793005ull + 1442695040888963407ull;
-    v[i] = fixed && fixed[i]
-               ? 0.0
-               : static_cast<double>(state >> 11) * 0x1.0p-52 - 1.0;
-  }
-  return v;
-}
-} // namespace
-
 void GpuSystem::prepareLevels(const PcgOptions &options) {
   HessianParts hostParts = host.hessianParts();
   if (!levels || !levels->structure.matches(hostParts) ||
@@ -213,7 +197,7 @@ double GpuSystem::estimateDamping(std::size_t l, const unsigned char *mask,
   Levels::Level &level = levels->levels[l];
   const Jacobi &bj = *level.jacobi;
   const long long n = level.size;
-  std::vector<double> start = startVector(n, hostMask);
+  std::vector<double> start = multilevelStartVector(n, hostMask);
   level.t.upload(start.data(), start.size() * sizeof(double));
   PcgState initial{};
   initial.maxIterations = levels->structure.options().eigenvalueSteps + 1;

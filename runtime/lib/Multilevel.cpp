@@ -93,18 +93,6 @@ bool choleskyInPlace(std::vector<double> &a, std::int64_t n) {
   return true;
 }
 
-/// A deterministic vector with entries in [-1, 1] (zero at fixed DoFs): the
-/// start of the eigenvalue estimate, so that it does not depend on timing.
-void startVector(std::vector<double> &v, const std::uint8_t *fixed) {
-  std::uint64_t state = 0x9E3779B97F4A7C15ull;
-  for (std::size_t i = 0; i < v.size(); ++i) {
-    state = state * 6364136223846793005ull + 1442695040888963407ull;
-    v[i] = fixed && fixed[i]
-               ? 0.0
-               : static_cast<double>(state >> 11) * 0x1.0p-52 - 1.0;
-  }
-}
-
 double dot(const std::vector<double> &a, const std::vector<double> &b) {
   double sum = 0.0;
   for (std::size_t i = 0; i < a.size(); ++i)
@@ -293,8 +281,8 @@ void Multilevel::estimateDamping(std::size_t l, ThreadPool &pool) {
   // w = 4 / (3 lmax(D^-1 A)), lmax from the Lanczos matrix of a few
   // block-Jacobi PCG steps.
   Level &level = *levels_[l];
-  std::vector<double> r(static_cast<std::size_t>(level.size)), z(r), p(r), q(r);
-  startVector(r, level.fixed);
+  std::vector<double> r = multilevelStartVector(level.size, level.fixed), z(r),
+                      p(r), q(r);
   level.smoother->apply(r.data(), z.data(), pool);
   p = z;
   double rz = dot(r, z);
@@ -353,6 +341,20 @@ void Multilevel::factorCoarsest() {
 }
 
 Multilevel::~Multilevel() = default;
+
+std::vector<double>
+yasps::runtime::multilevelStartVector(std::int64_t n,
+                                      const std::uint8_t *fixed) {
+  std::vector<double> v(static_cast<std::size_t>(n));
+  std::uint64_t state = 0x9E3779B97F4A7C15ull;
+  for (std::size_t i = 0; i < v.size(); ++i) {
+    state = state * 6364136223846793005ull + 1442695040888963407ull;
+    v[i] = fixed && fixed[i]
+               ? 0.0
+               : static_cast<double>(state >> 11) * 0x1.0p-52 - 1.0;
+  }
+  return v;
+}
 
 double Multilevel::diagonalRatio() const {
   return levels_.front()->smoother->diagonalRatio();
@@ -438,35 +440,35 @@ void Multilevel::cycle(std::size_t l, const double *r, double *z,
   const BlockLayout &fine = level.parts.front()->layout();
   const BlockLayout &coarseLayout = coarse.parts.front()->layout();
   vectors.parallelFor(0, level.aggregates.count(), kAggregatesPerChunk,
-                   [&](std::int64_t begin, std::int64_t end) {
-                     for (std::int64_t a = begin; a < end; ++a) {
-                       std::int64_t o = coarseLayout.blockOffset[a];
-                       std::int64_t s = level.aggregates.size[a];
-                       for (std::int64_t k = 0; k < s; ++k)
-                         coarse.r[o + k] = 0.0;
-                       for (std::size_t m = level.memberStart[a];
-                            m < level.memberStart[a + 1]; ++m) {
-                         std::int64_t f = fine.blockOffset[level.members[m]];
-                         for (std::int64_t k = 0; k < s; ++k)
-                           coarse.r[o + k] += t[f + k];
-                       }
-                     }
-                   });
+                      [&](std::int64_t begin, std::int64_t end) {
+                        for (std::int64_t a = begin; a < end; ++a) {
+                          std::int64_t o = coarseLayout.blockOffset[a];
+                          std::int64_t s = level.aggregates.size[a];
+                          for (std::int64_t k = 0; k < s; ++k)
+                            coarse.r[o + k] = 0.0;
+                          for (std::size_t m = level.memberStart[a];
+                               m < level.memberStart[a + 1]; ++m) {
+                            std::int64_t f = fine.blockOffset[level.members[m]];
+                            for (std::int64_t k = 0; k < s; ++k)
+                              coarse.r[o + k] += t[f + k];
+                          }
+                        }
+                      });
   cycle(l + 1, coarse.r.data(), coarse.z.data(), pool);
   vectors.parallelFor(0, level.aggregates.count(), kAggregatesPerChunk,
-                   [&](std::int64_t begin, std::int64_t end) {
-                     for (std::int64_t a = begin; a < end; ++a) {
-                       std::int64_t o = coarseLayout.blockOffset[a];
-                       std::int64_t s = level.aggregates.size[a];
-                       for (std::size_t m = level.memberStart[a];
-                            m < level.memberStart[a + 1]; ++m) {
-                         std::int64_t f = fine.blockOffset[level.members[m]];
-                         for (std::int64_t k = 0; k < s; ++k)
-                           if (!level.fixed || !level.fixed[f + k])
-                             z[f + k] += coarse.z[o + k];
-                       }
-                     }
-                   });
+                      [&](std::int64_t begin, std::int64_t end) {
+                        for (std::int64_t a = begin; a < end; ++a) {
+                          std::int64_t o = coarseLayout.blockOffset[a];
+                          std::int64_t s = level.aggregates.size[a];
+                          for (std::size_t m = level.memberStart[a];
+                               m < level.memberStart[a + 1]; ++m) {
+                            std::int64_t f = fine.blockOffset[level.members[m]];
+                            for (std::int64_t k = 0; k < s; ++k)
+                              if (!level.fixed || !level.fixed[f + k])
+                                z[f + k] += coarse.z[o + k];
+                          }
+                        }
+                      });
 
   multiply(l, z, t, pool);
   for (std::int64_t i = 0; i < n; ++i)

@@ -47,6 +47,8 @@ public:
   double diagonalRatio() const { return diagonalRatio_; }
 
 private:
+  /// z = M^-1 r on block b, adding its terms of r . z to `rz` in order.
+  void applyBlock(std::int64_t b, const double *r, double *z, double &rz) const;
   void measureDiagonal(const std::uint8_t *fixed);
 
   BlockLayout layout_;

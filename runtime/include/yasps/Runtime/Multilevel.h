@@ -51,6 +51,12 @@ struct MultilevelOptions {
   }
 };
 
+/// The start of every damping estimate: n entries in [-1, 1] from a fixed
+/// seed, 0 at fixed DoFs, so that the estimate does not depend on timing
+/// and the CPU and the GPU estimate from the same vector.
+std::vector<double> multilevelStartVector(std::int64_t n,
+                                          const std::uint8_t *fixed);
+
 /// The V-cycle preconditioner on the sum of `parts`, restricted to the free
 /// DoFs like BlockJacobi. The levels' structure (aggregates, coarse block
 /// structures) depends only on the parts' block structure and is built
