@@ -18,12 +18,9 @@ using namespace yasps::runtime;
 // each other, few enough to cost nothing per matrix.
 static constexpr std::size_t kNumLocks = 64;
 
-// Block rows per parallelFor chunk in multiply: a block row is a few small
-// dense products, too little work to hand out one at a time.
-static constexpr std::int64_t kRowsPerChunk = 64;
-
-// Threads from which multiply splits the rows instead of one pass.
-static constexpr std::size_t kMinThreadsForThreadedProduct = 3;
+// Fewest block rows in one of rowRanges' ranges: a block row is a few small
+// dense products, too little work to hand to a thread by itself.
+static constexpr std::int64_t kMinRowsPerRange = 64;
 
 static void checkLayout(const BlockLayout &layout) {
   const std::vector<std::int64_t> &offsets = layout.blockOffset;
@@ -52,7 +49,7 @@ BlockSparseMatrix::BlockSparseMatrix(
     const std::vector<std::pair<std::int64_t, std::int64_t>> &coords,
     std::vector<BlockSlot> *positions)
     : layout_(std::move(layout)), structureId_(nextStructureId()),
-      locks_(new std::mutex[kNumLocks]) {
+      locks_(new std::mutex[kNumLocks]), rowRanges_(new RowRangeCache) {
   checkLayout(layout_);
   const std::int64_t n = layout_.numBlocks();
 
@@ -281,50 +278,78 @@ static inline void addTransposedProduct(const T *data, std::int64_t rows,
       y[j] += data[i * cols + j] * x[i];
 }
 
-// Both orders below add the same terms to each entry of y in the same
-// order: group by group, first the transposed blocks (q, r), q < r, by
-// increasing q, then the blocks (r, c) of the row by increasing c. So the
-// result does not depend on the number of threads.
+// Every product adds the terms of an entry of y in the same order: group
+// by group, first the transposed blocks (q, r), q < r, by increasing q, then
+// the blocks (r, c) of the row by increasing c. So the result does not
+// depend on the number of threads.
 
 template <typename T>
-void BlockSparseMatrix::multiplyInStorageOrder(const T *values, const double *x,
-                                               double *y) const {
-  // One pass over the values, each block read once for both of its
-  // products: half the memory traffic of a full (CSR) matrix.
+void BlockSparseMatrix::multiplyRange(const T *values, const RowSplit &split,
+                                      std::int64_t t, const double *x,
+                                      double *y) const {
+  // One pass over the range's values, each block read once for both of its
+  // products: half the memory traffic of a full (CSR) matrix. Only the
+  // blocks above the range in its columns are read a second time.
   const std::vector<std::int64_t> &offset = layout_.blockOffset;
-  std::fill(y, y + size(), 0.0);
-  for (const BlockGroup &group : groups_) {
-    const std::int64_t rows = group.rows, cols = group.cols;
-    const std::size_t end = group.firstBlock + group.size();
-    const T *data = values + valueOffset_[group.firstBlock];
-    if (rows == 3 && cols == 3) {
-      multiply3x3InStorageOrder(values, group.firstBlock, end, x, y);
+  const std::int64_t lo = split.ranges[t], hi = split.ranges[t + 1];
+  const std::size_t stride = static_cast<std::size_t>(numBlocks()) + 1;
+  const bool simd = detail::hasVertexBlockSimd();
+  auto blockAt = [&](std::size_t b) { return values + valueOffset_[b]; };
+  std::fill(y + offset[lo], y + offset[hi], 0.0);
+  for (std::size_t g = 0; g < groups_.size(); ++g) {
+    const BlockGroup &group = groups_[g];
+    const bool vertex = group.rows == 3 && group.cols == 3;
+    // The rows above the range come first in its entries' sums: the
+    // transposes of its blocks above, by increasing row as in storage.
+    const std::size_t *above =
+        split.above.data() + split.aboveStart[t * groups_.size() + g];
+    const std::size_t numAbove = split.aboveStart[t * groups_.size() + g + 1] -
+                                 split.aboveStart[t * groups_.size() + g];
+    if (vertex && simd) {
+      detail::addTransposedVertexBlocksAvx2(
+          blockAt(group.firstBlock), group.firstBlock, above, numAbove,
+          blockRow_.data(), blockCol_.data(), offset.data(), x, y);
+    } else {
+      for (std::size_t k = 0; k < numAbove; ++k) {
+        const std::size_t b = above[k];
+        addTransposedProduct(blockAt(b), group.rows, group.cols,
+                             x + offset[blockRow_[b]],
+                             y + offset[blockCol_[b]]);
+      }
+    }
+    // Then the range's rows in storage order. Transposes into columns at
+    // or past hi belong to later ranges, which add them themselves.
+    const std::size_t *rowStart = &rowStart_[g * stride];
+    const std::size_t first = rowStart[lo], last = rowStart[hi];
+    if (vertex) {
+      multiply3x3InStorageOrder(values, first, last, hi, x, y);
       continue;
     }
-    for (std::size_t b = group.firstBlock; b < end; ++b, data += rows * cols) {
+    const T *data = blockAt(first);
+    for (std::size_t b = first; b < last;
+         ++b, data += group.rows * group.cols) {
       std::int64_t r = blockRow_[b], c = blockCol_[b];
-      addProduct(data, rows, cols, x + offset[c], y + offset[r]);
-      if (r != c)
-        addTransposedProduct(data, rows, cols, x + offset[r], y + offset[c]);
+      addProduct(data, group.rows, group.cols, x + offset[c], y + offset[r]);
+      if (r != c && c < hi)
+        addTransposedProduct(data, group.rows, group.cols, x + offset[r],
+                             y + offset[c]);
     }
   }
 }
 
 template <typename T>
-void BlockSparseMatrix::multiply3x3InStorageOrder(const T *values,
-                                                  std::size_t begin,
-                                                  std::size_t end,
-                                                  const double *x,
-                                                  double *y) const {
+void BlockSparseMatrix::multiply3x3InStorageOrder(
+    const T *values, std::size_t begin, std::size_t end, std::int64_t limit,
+    const double *x, double *y) const {
   // Vertex blocks: the row's partial y stays in registers while the
   // blocks of a row stream by (rows are consecutive in storage); y_r is
   // written once per row. The terms are added in the order of addProduct.
   const std::vector<std::int64_t> &offset = layout_.blockOffset;
   const T *data = values + valueOffset_[begin];
   if (detail::hasVertexBlockSimd())
-    return detail::multiplyVertexBlocksAvx2(data, blockRow_.data() + begin,
-                                            blockCol_.data() + begin,
-                                            offset.data(), end - begin, x, y);
+    return detail::multiplyVertexBlocksAvx2(
+        data, blockRow_.data() + begin, blockCol_.data() + begin, offset.data(),
+        end - begin, limit, x, y);
   std::size_t b = begin;
   while (b < end) {
     const std::int64_t r = blockRow_[b];
@@ -337,7 +362,7 @@ void BlockSparseMatrix::multiply3x3InStorageOrder(const T *values,
       y0 += data[0] * xc[0] + data[1] * xc[1] + data[2] * xc[2];
       y1 += data[3] * xc[0] + data[4] * xc[1] + data[5] * xc[2];
       y2 += data[6] * xc[0] + data[7] * xc[1] + data[8] * xc[2];
-      if (c != r) {
+      if (c != r && c < limit) {
         double *yc = y + offset[c];
         timesTransposedBlock<3, 3, T>(data, xr, yc);
       }
@@ -348,22 +373,26 @@ void BlockSparseMatrix::multiply3x3InStorageOrder(const T *values,
   }
 }
 
+template <typename T>
+void BlockSparseMatrix::multiplyValues(const T *values, const double *x,
+                                       double *y, ThreadPool &pool) const {
+  const RowSplit &split = rowSplit(pool.size());
+  const std::int64_t parts = static_cast<std::int64_t>(split.ranges.size()) - 1;
+  if (parts == 1)
+    return multiplyRange(values, split, 0, x, y);
+  // Each range writes only its rows of y, so no two threads write the same
+  // entry.
+  pool.parallelFor(0, parts, 1, [&](std::int64_t begin, std::int64_t end) {
+    for (std::int64_t t = begin; t < end; ++t)
+      multiplyRange(values, split, t, x, y);
+  });
+}
+
 void BlockSparseMatrix::multiply(const double *x, double *y,
                                  ThreadPool &pool) const {
-  // The threaded path reads every off-diagonal block twice (once for its
-  // row, once through its column's list), the storage-order pass once: on
-  // two threads the single pass is faster (bunny-19k: 0.75 against 0.95
-  // ms). Three or more threads split the rows; that they win there is
-  // expected (half the reads per thread from three on), not yet measured:
-  // the development machine has two cores. Both give the same bits.
-  if (hasSingleValues()) {
-    if (pool.size() < kMinThreadsForThreadedProduct)
-      return multiplyInStorageOrder(singleValues_.data(), x, y);
-    return multiplyByRows(singleValues_.data(), x, y, pool);
-  }
-  if (pool.size() < kMinThreadsForThreadedProduct)
-    return multiplyInStorageOrder(values_.data(), x, y);
-  multiplyByRows(values_.data(), x, y, pool);
+  if (hasSingleValues())
+    return multiplyValues(singleValues_.data(), x, y, pool);
+  multiplyValues(values_.data(), x, y, pool);
 }
 
 void BlockSparseMatrix::multiplyRounded(const std::vector<float> &rounded,
@@ -373,51 +402,100 @@ void BlockSparseMatrix::multiplyRounded(const std::vector<float> &rounded,
     throw std::invalid_argument(
         "multiplyRounded: " + std::to_string(rounded.size()) +
         " rounded values for a matrix of " + std::to_string(values_.size()));
-  if (pool.size() < kMinThreadsForThreadedProduct)
-    return multiplyInStorageOrder(rounded.data(), x, y);
-  multiplyByRows(rounded.data(), x, y, pool);
+  multiplyValues(rounded.data(), x, y, pool);
 }
 
-template <typename T>
-void BlockSparseMatrix::multiplyByRows(const T *values, const double *x,
-                                       double *y, ThreadPool &pool) const {
-  const std::vector<std::int64_t> &offset = layout_.blockOffset;
-  auto blockAt = [&](std::size_t b) { return values + valueOffset_[b]; };
-  const std::size_t stride = static_cast<std::size_t>(numBlocks()) + 1;
-  const bool simd = detail::hasVertexBlockSimd();
-  // Each thread writes only the block rows of its chunk, so no two threads
-  // write the same entry of y.
-  pool.parallelFor(
-      0, numBlocks(), kRowsPerChunk, [&](std::int64_t begin, std::int64_t end) {
-        for (std::int64_t r = begin; r < end; ++r) {
-          double *yr = y + offset[r];
-          std::fill(yr, yr + layout_.blockSize(r), 0.0);
-          for (std::size_t g = 0; g < groups_.size(); ++g) {
-            const BlockGroup &group = groups_[g];
-            const std::size_t *cols = &colStart_[g * stride];
-            const std::size_t *rows = &rowStart_[g * stride];
-            // Only a vertex row has 3x3 blocks: the SIMD kernel reads and
-            // writes three entries of y at yr, past a shorter row's end.
-            if (group.rows == 3 && group.cols == 3 && simd &&
-                layout_.blockSize(r) == 3) {
-              detail::multiplyVertexRowAvx2(
-                  blockAt(group.firstBlock), group.firstBlock,
-                  colBlocks_.data() + cols[r], cols[r + 1] - cols[r], rows[r],
-                  rows[r + 1] - rows[r], blockRow_.data(), blockCol_.data(),
-                  offset.data(), x, yr);
-              continue;
-            }
-            for (std::size_t k = cols[r]; k < cols[r + 1]; ++k) {
-              std::size_t b = colBlocks_[k];
-              addTransposedProduct(blockAt(b), group.rows, group.cols,
-                                   x + offset[blockRow_[b]], yr);
-            }
-            for (std::size_t b = rows[r]; b < rows[r + 1]; ++b)
-              addProduct(blockAt(b), group.rows, group.cols,
-                         x + offset[blockCol_[b]], yr);
-          }
-        }
-      });
+const std::vector<std::int64_t> &
+BlockSparseMatrix::rowRanges(unsigned parts) const {
+  return rowSplit(parts).ranges;
+}
+
+const BlockSparseMatrix::RowSplit &
+BlockSparseMatrix::rowSplit(unsigned parts) const {
+  std::lock_guard<std::mutex> lock(rowRanges_->mutex);
+  auto found = rowRanges_->byParts.find(parts);
+  if (found == rowRanges_->byParts.end())
+    found = rowRanges_->byParts.emplace(parts, splitRows(parts)).first;
+  return found->second;
+}
+
+BlockSparseMatrix::RowSplit BlockSparseMatrix::splitRows(unsigned parts) const {
+  RowSplit split;
+  split.ranges = balanceRowRanges(parts);
+  const std::size_t numRanges = split.ranges.size() - 1;
+  const std::size_t numGroups = groups_.size();
+  auto rangeOf = [&](std::int64_t block) {
+    return static_cast<std::size_t>(
+        std::upper_bound(split.ranges.begin(), split.ranges.end(), block) -
+        split.ranges.begin() - 1);
+  };
+  // Listed in storage order, so each range reads its blocks above forward
+  // through memory, and adds each entry's terms by increasing row.
+  std::vector<std::vector<std::size_t>> lists(numRanges * numGroups);
+  for (std::size_t g = 0; numRanges > 1 && g < numGroups; ++g) {
+    const std::size_t end = groups_[g].firstBlock + groups_[g].size();
+    for (std::size_t b = groups_[g].firstBlock; b < end; ++b) {
+      std::size_t rowRange = rangeOf(blockRow_[b]),
+                  colRange = rangeOf(blockCol_[b]);
+      if (rowRange < colRange)
+        lists[colRange * numGroups + g].push_back(b);
+    }
+  }
+  split.aboveStart.push_back(0);
+  for (const std::vector<std::size_t> &list : lists) {
+    split.above.insert(split.above.end(), list.begin(), list.end());
+    split.aboveStart.push_back(split.above.size());
+  }
+  return split;
+}
+
+std::vector<std::int64_t>
+BlockSparseMatrix::balanceRowRanges(unsigned parts) const {
+  const std::int64_t n = numBlocks();
+  const std::int64_t most = std::max<std::int64_t>(1, n / kMinRowsPerRange);
+  const std::int64_t count = std::clamp<std::int64_t>(parts, 1, most);
+  // Costs in values read: a row's own blocks, and the blocks of its column
+  // that lie above its range (read again by the range's first loop).
+  std::vector<double> own(static_cast<std::size_t>(n), 0.0);
+  for (std::size_t b = 0; b < blockRow_.size(); ++b)
+    own[blockRow_[b]] +=
+        static_cast<double>(valueOffset_[b + 1] - valueOffset_[b]);
+  const std::size_t stride = static_cast<std::size_t>(n) + 1;
+  auto above = [&](std::int64_t r, std::int64_t lo) {
+    double cost = 0.0;
+    for (std::size_t g = 0; g < groups_.size(); ++g)
+      for (std::size_t k = colStart_[g * stride + r];
+           k < colStart_[g * stride + r + 1] && blockRow_[colBlocks_[k]] < lo;
+           ++k)
+        cost += static_cast<double>(groups_[g].rows * groups_[g].cols);
+    return cost;
+  };
+  // Greedy cuts at a target cost per range; the target is first the own
+  // blocks' share, then the share of what those cuts cost in all.
+  auto cut = [&](double target, double &total) {
+    std::vector<std::int64_t> ranges{0};
+    double cost = 0.0;
+    total = 0.0;
+    for (std::int64_t r = 0; r < n; ++r) {
+      double rowCost = own[r] + above(r, ranges.back());
+      cost += rowCost;
+      total += rowCost;
+      if (cost >= target && static_cast<std::int64_t>(ranges.size()) < count &&
+          r + 1 < n) {
+        ranges.push_back(r + 1);
+        cost = 0.0;
+      }
+    }
+    ranges.push_back(n);
+    return ranges;
+  };
+  double ownTotal = 0.0, total = 0.0;
+  for (double c : own)
+    ownTotal += c;
+  if (count == 1 || ownTotal == 0.0)
+    return {0, n};
+  cut(ownTotal / static_cast<double>(count), total);
+  return cut(total / static_cast<double>(count), total);
 }
 
 void BlockSparseMatrix::diagonalBlocks(std::vector<double> &out) const {

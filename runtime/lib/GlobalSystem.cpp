@@ -115,34 +115,9 @@ void GlobalSystem::setZero() {
   std::fill(gradientValues.begin(), gradientValues.end(), 0.0);
 }
 
-// Instances per chunk of a parallel assembly: each adds a few hundred
-// entries, so chunks of this size amortise the scheduling.
-static constexpr std::int64_t kInstancesPerChunk = 256;
-// Threads from which assembly is split between them. Shared, the matrix
-// takes atomic additions, which cost more than a second thread gains:
-// bunny-19k assembles in 25 ms on one thread and 36 ms on two. From three
-// threads on they split it (where that wins is not measured yet: the
-// development machine has two cores).
-static constexpr unsigned kMinThreadsForAtomics = 3;
-
-/// target += value, atomically with respect to other atomicAdds.
-static inline void atomicAdd(double *target, double value) {
-  double expected;
-  __atomic_load(target, &expected, __ATOMIC_RELAXED);
-  double desired;
-  do {
-    desired = expected + value;
-  } while (!__atomic_compare_exchange(target, &expected, &desired,
-                                      /*weak=*/true, __ATOMIC_RELAXED,
-                                      __ATOMIC_RELAXED));
-}
-
-template <bool Atomic> static inline void accumulate(double *target, double v) {
-  if constexpr (Atomic)
-    atomicAdd(target, v);
-  else
-    *target += v;
-}
+// Instances from which an assembly is split between threads: below, the
+// threads would cost more than the few hundred entries each adds.
+static constexpr std::int64_t kMinInstancesToSplit = 256;
 
 std::pair<GlobalSystem::Part *, const GlobalSystem::EnergyMap *>
 GlobalSystem::energyMap(std::size_t energy) {
@@ -160,21 +135,39 @@ GlobalSystem::energyStructure(std::size_t energy) const {
   return *const_cast<GlobalSystem *>(this)->energyMap(energy).second;
 }
 
-/// Runs body(atomic, begin, end) over [0, count): on the pool's threads,
-/// or in order when there is no pool, one thread or little work. `atomic`
-/// (std::true_type when threads share the work) says whether accumulation
-/// must be atomic.
+/// Whether instance i adds to a block row of `rows`: its Hessian's
+/// diagonal blocks lie in its blocks' rows, and every other entry in one of
+/// them too.
+static bool touches(const GlobalSystem::EnergyMap &map, std::int64_t i,
+                    GlobalSystem::RowRange rows) {
+  const std::int64_t *global = &map.globalBlock[i * map.maxBlocks];
+  for (std::int64_t p = 0; p < map.maxBlocks; ++p)
+    if (global[p] >= 0 && rows.owns(global[p]))
+      return true;
+  return false;
+}
+
+/// Runs body(rows) once per range of block rows of `matrix`, ranges on
+/// the pool's threads, or once over all rows when there is no pool, one
+/// thread or little work. A body adds, of every instance in order, only the
+/// entries whose block row is in its range (and the gradient entries of
+/// those blocks): each entry is written by one thread and gets its terms in
+/// instance order, so the sums do not depend on the number of threads and
+/// need no atomics. An instance across ranges is read by each of them.
 template <typename Body>
-static void forInstances(ThreadPool *pool, std::int64_t count, Body body) {
-  if (!pool || pool->size() < kMinThreadsForAtomics ||
-      count <= kInstancesPerChunk) {
-    body(std::false_type{}, 0, count);
-    return;
-  }
-  pool->parallelFor(0, count, kInstancesPerChunk,
-                    [&](std::int64_t begin, std::int64_t end) {
-                      body(std::true_type{}, begin, end);
-                    });
+static void forRowRanges(ThreadPool *pool, const BlockSparseMatrix &matrix,
+                         std::int64_t count, Body body) {
+  const GlobalSystem::RowRange all{0, matrix.numBlocks()};
+  if (!pool || pool->size() < 2 || count < kMinInstancesToSplit)
+    return body(all);
+  const std::vector<std::int64_t> &ranges = matrix.rowRanges(pool->size());
+  const std::int64_t parts = static_cast<std::int64_t>(ranges.size()) - 1;
+  if (parts == 1)
+    return body(all);
+  pool->parallelFor(0, parts, 1, [&](std::int64_t begin, std::int64_t end) {
+    for (std::int64_t t = begin; t < end; ++t)
+      body(GlobalSystem::RowRange{ranges[t], ranges[t + 1]});
+  });
 }
 
 void GlobalSystem::add(std::size_t energy, const double *gradients,
@@ -197,13 +190,12 @@ void GlobalSystem::addLocal(std::size_t energy, const T *gradients,
   // New values: until finishAssembly, products read the f64 ones.
   part->matrix.dropSingleValues();
   const std::int64_t n = map->numParams;
-  forInstances(pool, map->count,
-               [&](auto atomic, std::int64_t begin, std::int64_t end) {
-                 for (std::int64_t i = begin; i < end; ++i)
-                   addInstance<decltype(atomic)::value>(
-                       *part, *map, i, gradients + i * n, hessians + i * n * n,
-                       gradientValues);
-               });
+  forRowRanges(pool, part->matrix, map->count, [&](RowRange rows) {
+    for (std::int64_t i = 0; i < map->count; ++i)
+      if (touches(*map, i, rows))
+        addInstance(*part, *map, i, gradients + i * n, hessians + i * n * n,
+                    gradientValues, rows);
+  });
 }
 
 void GlobalSystem::addFactored(std::size_t energy, const double *gradients,
@@ -216,33 +208,34 @@ void GlobalSystem::addFactored(std::size_t energy, const double *gradients,
   // New values: until finishAssembly, products read the f64 ones.
   part->matrix.dropSingleValues();
   const std::int64_t n = map->numParams;
-  forInstances(
-      pool, map->count, [&](auto atomic, std::int64_t begin, std::int64_t end) {
-        std::vector<double> pj(static_cast<std::size_t>(m * n)),
-            h(static_cast<std::size_t>(n * n));
-        for (std::int64_t i = begin; i < end; ++i) {
-          const double *j = maps + i * m * n;
-          const double *p = inner + i * m * m;
-          // PJ = P J (m x n), then H = J^T (PJ) (n x n, symmetric: the upper
-          // triangle is computed and mirrored).
-          for (std::int64_t r = 0; r < m; ++r)
-            for (std::int64_t c = 0; c < n; ++c) {
-              double sum = 0.0;
-              for (std::int64_t k = 0; k < m; ++k)
-                sum += p[r * m + k] * j[k * n + c];
-              pj[r * n + c] = sum;
-            }
-          for (std::int64_t a = 0; a < n; ++a)
-            for (std::int64_t b = a; b < n; ++b) {
-              double sum = 0.0;
-              for (std::int64_t k = 0; k < m; ++k)
-                sum += j[k * n + a] * pj[k * n + b];
-              h[a * n + b] = h[b * n + a] = sum;
-            }
-          addInstance<decltype(atomic)::value>(
-              *part, *map, i, gradients + i * n, h.data(), gradientValues);
+  forRowRanges(pool, part->matrix, map->count, [&](RowRange rows) {
+    std::vector<double> pj(static_cast<std::size_t>(m * n)),
+        h(static_cast<std::size_t>(n * n));
+    for (std::int64_t i = 0; i < map->count; ++i) {
+      if (!touches(*map, i, rows))
+        continue;
+      const double *j = maps + i * m * n;
+      const double *p = inner + i * m * m;
+      // PJ = P J (m x n), then H = J^T (PJ) (n x n, symmetric: the upper
+      // triangle is computed and mirrored).
+      for (std::int64_t r = 0; r < m; ++r)
+        for (std::int64_t c = 0; c < n; ++c) {
+          double sum = 0.0;
+          for (std::int64_t k = 0; k < m; ++k)
+            sum += p[r * m + k] * j[k * n + c];
+          pj[r * n + c] = sum;
         }
-      });
+      for (std::int64_t a = 0; a < n; ++a)
+        for (std::int64_t b = a; b < n; ++b) {
+          double sum = 0.0;
+          for (std::int64_t k = 0; k < m; ++k)
+            sum += j[k * n + a] * pj[k * n + b];
+          h[a * n + b] = h[b * n + a] = sum;
+        }
+      addInstance(*part, *map, i, gradients + i * n, h.data(), gradientValues,
+                  rows);
+    }
+  });
 }
 
 /// Throws unless every local parameter that is a DoF lies in a slot with a
@@ -285,20 +278,18 @@ void GlobalSystem::addSlotFactored(std::size_t energy,
   const std::int64_t n = map->numParams, m = factors.numInner;
   factors.check(map->count, n);
   requireCovered(*map, factors);
-  forInstances(pool, map->count,
-               [&](auto atomic, std::int64_t begin, std::int64_t end) {
-                 // Per thread, not per instance: only the slots' entries are
-                 // written (padding is skipped by addInstance), so nothing is
-                 // cleared.
-                 std::vector<double> g(n), h(n * n), scratch(m * n);
-                 for (std::int64_t i = begin; i < end; ++i) {
-                   factors.formLocal(i, n, innerGradients + i * m,
-                                     innerHessians + i * m * m, g.data(),
-                                     h.data(), scratch.data());
-                   addInstance<decltype(atomic)::value>(
-                       *part, *map, i, g.data(), h.data(), gradientValues);
-                 }
-               });
+  forRowRanges(pool, part->matrix, map->count, [&](RowRange rows) {
+    // Per range, not per instance: only the slots' entries are written
+    // (padding is skipped by addInstance), so nothing is cleared.
+    std::vector<double> g(n), h(n * n), scratch(m * n);
+    for (std::int64_t i = 0; i < map->count; ++i) {
+      if (!touches(*map, i, rows))
+        continue;
+      factors.formLocal(i, n, innerGradients + i * m, innerHessians + i * m * m,
+                        g.data(), h.data(), scratch.data());
+      addInstance(*part, *map, i, g.data(), h.data(), gradientValues, rows);
+    }
+  });
 }
 
 /// Local parameters a local Hessian is scanned over at once: the DoFs of
@@ -316,11 +307,11 @@ static constexpr std::int64_t kMaxMergedParams = 64;
 /// block's shape per entry: nine times the work, most of an assembly. The
 /// same single addition reaches each matrix entry, so the sums are the
 /// same. False (nothing added) when the instance is not of that shape.
-template <bool Atomic, typename T>
-static bool addVertexBlocks(BlockSparseMatrix &matrix,
-                            const GlobalSystem::EnergyMap &map, std::int64_t i,
-                            const T *g, const T *h,
-                            std::vector<double> &gradient) {
+template <typename T>
+static bool
+addVertexBlocks(BlockSparseMatrix &matrix, const GlobalSystem::EnergyMap &map,
+                std::int64_t i, const T *g, const T *h,
+                std::vector<double> &gradient, GlobalSystem::RowRange rows) {
   const BlockLayout &layout = matrix.layout();
   const std::int64_t n = map.numParams, m = map.maxBlocks;
   if (n != 3 * m)
@@ -340,30 +331,33 @@ static bool addVertexBlocks(BlockSparseMatrix &matrix,
   }
   for (std::int64_t p = 0; p < m; ++p) {
     const std::int64_t gp = global[p];
+    // Block row gp: its gradient and the blocks (gp, gq), gq >= gp.
+    if (!rows.owns(gp))
+      continue;
     double *gradientBlock = &gradient[layout.blockOffset[gp]];
     for (std::int64_t r = 0; r < 3; ++r)
-      accumulate<Atomic>(&gradientBlock[r], g[3 * p + r]);
+      gradientBlock[r] += g[3 * p + r];
     for (std::int64_t q = 0; q < m; ++q) {
       // Upper triangle: (q, p) adds the transpose of the pairs below it.
       if (gp > global[q])
         continue;
       BlockSlot slot = map.pairSlot[(i * m + p) * m + q];
       double *data = matrix.blockData(slot.block);
-      const T *rows = h + 3 * p * n + 3 * q;
+      const T *slice = h + 3 * p * n + 3 * q;
       for (std::int64_t r = 0; r < 3; ++r)
         for (std::int64_t c = 0; c < 3; ++c)
-          accumulate<Atomic>(&data[r * 3 + c], rows[r * n + c]);
+          data[r * 3 + c] += slice[r * n + c];
     }
   }
   return true;
 }
 
-template <bool Atomic, typename T>
+template <typename T>
 void GlobalSystem::addInstance(Part &part, const EnergyMap &map, std::int64_t i,
                                const T *g, const T *h,
-                               std::vector<double> &gradient) {
+                               std::vector<double> &gradient, RowRange rows) {
   BlockSparseMatrix &matrix = part.matrix;
-  if (addVertexBlocks<Atomic>(matrix, map, i, g, h, gradient))
+  if (addVertexBlocks(matrix, map, i, g, h, gradient, rows))
     return;
   const BlockLayout &layout = matrix.layout();
   std::int64_t n = map.numParams, m = map.maxBlocks;
@@ -388,7 +382,7 @@ void GlobalSystem::addInstance(Part &part, const EnergyMap &map, std::int64_t i,
     BlockSlot slot = map.pairSlot[(i * m + local[a]) * m + local[b]];
     double *data = matrix.blockData(slot.block);
     std::int64_t cols = layout.blockSize(gb);
-    accumulate<Atomic>(&data[offset[a] * cols + offset[b]], h[a * n + b]);
+    data[offset[a] * cols + offset[b]] += h[a * n + b];
   };
   if (numActive <= kMaxMergedParams) {
     // Parameters of one DoF (the four vertices of a tet of one affine body:
@@ -417,16 +411,17 @@ void GlobalSystem::addInstance(Part &part, const EnergyMap &map, std::int64_t i,
       }
       for (std::int64_t u = 0; u < k; ++u) {
         std::int64_t a = first[u], ga = global[local[a]];
-        accumulate<Atomic>(&gradient[dofOf[u]], mergedGradient[u]);
+        if (!rows.owns(ga))
+          continue;
+        gradient[dofOf[u]] += mergedGradient[u];
         for (std::int64_t v = 0; v < k; ++v) {
           std::int64_t b = first[v], gb = global[local[b]];
           if (ga > gb)
             continue;
           BlockSlot slot = map.pairSlot[(i * m + local[a]) * m + local[b]];
-          accumulate<Atomic>(
-              &matrix.blockData(
-                  slot.block)[offset[a] * layout.blockSize(gb) + offset[b]],
-              merged[u * k + v]);
+          matrix.blockData(
+              slot.block)[offset[a] * layout.blockSize(gb) + offset[b]] +=
+              merged[u * k + v];
         }
       }
       return;
@@ -435,7 +430,9 @@ void GlobalSystem::addInstance(Part &part, const EnergyMap &map, std::int64_t i,
   if (n <= kMaxGatheredParams) {
     for (std::int64_t x = 0; x < numActive; ++x) {
       std::int64_t a = gathered[x], ga = global[local[a]];
-      accumulate<Atomic>(&gradient[layout.blockOffset[ga] + offset[a]], g[a]);
+      if (!rows.owns(ga))
+        continue;
+      gradient[layout.blockOffset[ga] + offset[a]] += g[a];
       for (std::int64_t y = 0; y < numActive; ++y)
         addPair(a, gathered[y], ga);
     }
@@ -445,7 +442,9 @@ void GlobalSystem::addInstance(Part &part, const EnergyMap &map, std::int64_t i,
     if (local[a] < 0)
       continue;
     std::int64_t ga = global[local[a]];
-    accumulate<Atomic>(&gradient[layout.blockOffset[ga] + offset[a]], g[a]);
+    if (!rows.owns(ga))
+      continue;
+    gradient[layout.blockOffset[ga] + offset[a]] += g[a];
     for (std::int64_t b = 0; b < n; ++b)
       if (local[b] >= 0)
         addPair(a, b, ga);

@@ -24,10 +24,12 @@ static constexpr std::int64_t kSegment = 4096;
 // Elements per chunk for element-wise vector updates.
 static constexpr std::int64_t kElementsPerChunk = 4096;
 // Below this many DoFs the vector steps of an iteration run on the calling
-// thread: each is a few tens of microseconds, about what handing it to the
-// pool costs (bunny-19k, 57,579 DoFs, two threads: 1.36 ms per iteration
-// split, 1.15 on one). The SpMV decides for itself.
-static constexpr std::int64_t kMinParallelVector = 1 << 18;
+// thread, where handing one to the pool (about 18 us on two threads) costs
+// what it saves. Since the steps were fused with their dot products the
+// bunny's (57,579 DoFs) gain from a second thread: its block-Jacobi solve
+// went from 140-147 to 120-126 ms (median) when this was lowered from 2^18
+// (bench/newton_calls.py --threads 2). The SpMV decides for itself.
+static constexpr std::int64_t kMinParallelVector = 1 << 14;
 
 /// The sum of term(i) over [0, n): fixed segments summed in parallel,
 /// then the segment sums in order. `term` may also update entry i of

@@ -5,7 +5,7 @@
 // (for B^T x_r, a sum of rows times broadcast entries of x_r) or, after an
 // in-register transpose, its column (for B x_c). Multiplications and
 // additions stay separate (no FMA) and in the scalar loop's order, so the
-// threaded path, which uses the scalar products, gives the same bits.
+// SIMD and scalar products give the same bits.
 //
 //===----------------------------------------------------------------------===//
 
@@ -69,8 +69,8 @@ timesColumns(__m256d r0, __m256d r1, __m256d r2, const double *xc) {
 template <typename T>
 __attribute__((target("avx2"), always_inline)) static inline void
 vertexBlocks(const T *data, const std::int64_t *row, const std::int64_t *col,
-             const std::int64_t *offset, std::size_t count, const double *x,
-             double *y) {
+             const std::int64_t *offset, std::size_t count, std::int64_t limit,
+             const double *x, double *y) {
   const __m256i three = _mm256_setr_epi64x(-1, -1, -1, 0);
   std::size_t b = 0;
   while (b < count) {
@@ -88,7 +88,7 @@ vertexBlocks(const T *data, const std::int64_t *row, const std::int64_t *col,
       const __m256d r1 = loadRow(data + 3);
       const __m256d r2 = loadLastRow(data + 6);
       acc = _mm256_add_pd(acc, timesColumns(r0, r1, r2, xc));
-      if (c != r) {
+      if (c != r && c < limit) {
         // y_c[j] += B_0j xr0, then B_1j xr1, then B_2j xr2.
         double *yc = y + offset[c];
         __m256d t = _mm256_maskload_pd(yc, three);
@@ -104,63 +104,54 @@ vertexBlocks(const T *data, const std::int64_t *row, const std::int64_t *col,
 
 template <typename T>
 __attribute__((target("avx2"), always_inline)) static inline void
-vertexRow(const T *values, std::size_t first, const std::size_t *transposed,
-          std::size_t numTransposed, std::size_t own, std::size_t numOwn,
-          const std::int64_t *row, const std::int64_t *col,
-          const std::int64_t *offset, const double *x, double *yr) {
+transposedVertexBlocks(const T *values, std::size_t first,
+                       const std::size_t *blocks, std::size_t count,
+                       const std::int64_t *row, const std::int64_t *col,
+                       const std::int64_t *offset, const double *x, double *y) {
   const __m256i three = _mm256_setr_epi64x(-1, -1, -1, 0);
-  __m256d acc = _mm256_maskload_pd(yr, three);
-  for (std::size_t k = 0; k < numTransposed; ++k) {
-    const std::size_t b = transposed[k];
+  for (std::size_t k = 0; k < count; ++k) {
+    const std::size_t b = blocks[k];
     const T *data = values + 9 * (b - first);
-    const double *xq = x + offset[row[b]];
-    acc = _mm256_add_pd(acc,
-                        _mm256_mul_pd(loadRow(data), _mm256_broadcast_sd(xq)));
-    acc = _mm256_add_pd(
-        acc, _mm256_mul_pd(loadRow(data + 3), _mm256_broadcast_sd(xq + 1)));
-    acc = _mm256_add_pd(
-        acc, _mm256_mul_pd(loadLastRow(data + 6), _mm256_broadcast_sd(xq + 2)));
+    const double *xr = x + offset[row[b]];
+    double *yc = y + offset[col[b]];
+    // As vertexBlocks: y_c[j] += B_0j xr0, then B_1j xr1, then B_2j xr2.
+    __m256d t = _mm256_maskload_pd(yc, three);
+    t = _mm256_add_pd(t, _mm256_mul_pd(loadRow(data), _mm256_broadcast_sd(xr)));
+    t = _mm256_add_pd(
+        t, _mm256_mul_pd(loadRow(data + 3), _mm256_broadcast_sd(xr + 1)));
+    t = _mm256_add_pd(
+        t, _mm256_mul_pd(loadLastRow(data + 6), _mm256_broadcast_sd(xr + 2)));
+    _mm256_maskstore_pd(yc, three, t);
   }
-  const T *data = values + 9 * (own - first);
-  for (std::size_t k = 0; k < numOwn; ++k, data += 9) {
-    const double *xc = x + offset[col[own + k]];
-    const __m256d r0 = loadRow(data);
-    const __m256d r1 = loadRow(data + 3);
-    const __m256d r2 = loadLastRow(data + 6);
-    acc = _mm256_add_pd(acc, timesColumns(r0, r1, r2, xc));
-  }
-  _mm256_maskstore_pd(yr, three, acc);
 }
 
 // One body per product for both block types.
 __attribute__((target("avx2"))) void detail::multiplyVertexBlocksAvx2(
     const double *data, const std::int64_t *row, const std::int64_t *col,
-    const std::int64_t *offset, std::size_t count, const double *x, double *y) {
-  vertexBlocks(data, row, col, offset, count, x, y);
+    const std::int64_t *offset, std::size_t count, std::int64_t limit,
+    const double *x, double *y) {
+  vertexBlocks(data, row, col, offset, count, limit, x, y);
 }
 
 __attribute__((target("avx2"))) void detail::multiplyVertexBlocksAvx2(
     const float *data, const std::int64_t *row, const std::int64_t *col,
-    const std::int64_t *offset, std::size_t count, const double *x, double *y) {
-  vertexBlocks(data, row, col, offset, count, x, y);
+    const std::int64_t *offset, std::size_t count, std::int64_t limit,
+    const double *x, double *y) {
+  vertexBlocks(data, row, col, offset, count, limit, x, y);
 }
 
-__attribute__((target("avx2"))) void detail::multiplyVertexRowAvx2(
-    const double *values, std::size_t first, const std::size_t *transposed,
-    std::size_t numTransposed, std::size_t own, std::size_t numOwn,
-    const std::int64_t *row, const std::int64_t *col,
-    const std::int64_t *offset, const double *x, double *yr) {
-  vertexRow(values, first, transposed, numTransposed, own, numOwn, row, col,
-            offset, x, yr);
+__attribute__((target("avx2"))) void detail::addTransposedVertexBlocksAvx2(
+    const double *values, std::size_t first, const std::size_t *blocks,
+    std::size_t count, const std::int64_t *row, const std::int64_t *col,
+    const std::int64_t *offset, const double *x, double *y) {
+  transposedVertexBlocks(values, first, blocks, count, row, col, offset, x, y);
 }
 
-__attribute__((target("avx2"))) void detail::multiplyVertexRowAvx2(
-    const float *values, std::size_t first, const std::size_t *transposed,
-    std::size_t numTransposed, std::size_t own, std::size_t numOwn,
-    const std::int64_t *row, const std::int64_t *col,
-    const std::int64_t *offset, const double *x, double *yr) {
-  vertexRow(values, first, transposed, numTransposed, own, numOwn, row, col,
-            offset, x, yr);
+__attribute__((target("avx2"))) void detail::addTransposedVertexBlocksAvx2(
+    const float *values, std::size_t first, const std::size_t *blocks,
+    std::size_t count, const std::int64_t *row, const std::int64_t *col,
+    const std::int64_t *offset, const double *x, double *y) {
+  transposedVertexBlocks(values, first, blocks, count, row, col, offset, x, y);
 }
 
 #else
@@ -171,22 +162,22 @@ bool detail::hasVertexBlockSimd() { return false; }
 void detail::multiplyVertexBlocksAvx2(const double *, const std::int64_t *,
                                       const std::int64_t *,
                                       const std::int64_t *, std::size_t,
-                                      const double *, double *) {}
+                                      std::int64_t, const double *, double *) {}
 void detail::multiplyVertexBlocksAvx2(const float *, const std::int64_t *,
                                       const std::int64_t *,
                                       const std::int64_t *, std::size_t,
-                                      const double *, double *) {}
-void detail::multiplyVertexRowAvx2(const double *, std::size_t,
-                                   const std::size_t *, std::size_t,
-                                   std::size_t, std::size_t,
-                                   const std::int64_t *, const std::int64_t *,
-                                   const std::int64_t *, const double *,
-                                   double *) {}
-void detail::multiplyVertexRowAvx2(const float *, std::size_t,
-                                   const std::size_t *, std::size_t,
-                                   std::size_t, std::size_t,
-                                   const std::int64_t *, const std::int64_t *,
-                                   const std::int64_t *, const double *,
-                                   double *) {}
+                                      std::int64_t, const double *, double *) {}
+void detail::addTransposedVertexBlocksAvx2(const double *, std::size_t,
+                                           const std::size_t *, std::size_t,
+                                           const std::int64_t *,
+                                           const std::int64_t *,
+                                           const std::int64_t *, const double *,
+                                           double *) {}
+void detail::addTransposedVertexBlocksAvx2(const float *, std::size_t,
+                                           const std::size_t *, std::size_t,
+                                           const std::int64_t *,
+                                           const std::int64_t *,
+                                           const std::int64_t *, const double *,
+                                           double *) {}
 
 #endif

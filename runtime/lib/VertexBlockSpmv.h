@@ -1,7 +1,8 @@
 //===- VertexBlockSpmv.h - SIMD product of 3x3 blocks -----------*- C++ -*-===//
 //
-// Private to BlockSparseMatrix.cpp: the single-thread, storage-order SpMV
-// of a run of 3x3 upper blocks with AVX2 where the CPU has it.
+// Private to BlockSparseMatrix.cpp: the storage-order SpMV of a run of 3x3
+// upper blocks, and the transposed products into one row, with AVX2 where
+// the CPU has it.
 //
 //===----------------------------------------------------------------------===//
 
@@ -16,39 +17,36 @@ namespace yasps::runtime::detail {
 /// Whether this CPU runs multiplyVertexBlocksAvx2.
 bool hasVertexBlockSimd();
 
-/// y_r += B x_c and, off the diagonal, y_c += B^T x_r for the `count` 3x3
-/// row-major blocks at `data` (rows consecutive), block b at (row[b],
-/// col[b]) with DoF offsets `offset`. Adds the same terms in the same
-/// order as the scalar loop, one vector lane per row or column of a block,
-/// so the results are identical to the last bit. T, the blocks' type, is
+/// y_r += B x_c and, off the diagonal and for c < limit, y_c += B^T x_r
+/// for the `count` 3x3 row-major blocks at `data` (rows consecutive),
+/// block b at (row[b], col[b]) with DoF offsets `offset`. Adds the same terms
+/// in the same order as the scalar loop, one vector lane per row or column of a
+/// block, so the results are identical to the last bit. T, the blocks' type, is
 /// double or float (f32 blocks are widened exactly to f64 as they load).
 void multiplyVertexBlocksAvx2(const double *data, const std::int64_t *row,
                               const std::int64_t *col,
                               const std::int64_t *offset, std::size_t count,
-                              const double *x, double *y);
+                              std::int64_t limit, const double *x, double *y);
 void multiplyVertexBlocksAvx2(const float *data, const std::int64_t *row,
                               const std::int64_t *col,
                               const std::int64_t *offset, std::size_t count,
-                              const double *x, double *y);
+                              std::int64_t limit, const double *x, double *y);
 
-/// Row r of the threaded product, 3x3 blocks: y_r += B^T x_q for the
-/// `numTransposed` blocks `transposed` (indices of off-diagonal blocks (q,
-/// r), in order) and then y_r += B x_c for the `numOwn` consecutive blocks
-/// of row r starting at `own`. `values` holds block b at values + 9 b
-/// relative to `first`, the group's first block. Same order as the scalar
-/// products. Blocks in f64 or f32, as above.
-void multiplyVertexRowAvx2(const double *values, std::size_t first,
-                           const std::size_t *transposed,
-                           std::size_t numTransposed, std::size_t own,
-                           std::size_t numOwn, const std::int64_t *row,
-                           const std::int64_t *col, const std::int64_t *offset,
-                           const double *x, double *yr);
-void multiplyVertexRowAvx2(const float *values, std::size_t first,
-                           const std::size_t *transposed,
-                           std::size_t numTransposed, std::size_t own,
-                           std::size_t numOwn, const std::int64_t *row,
-                           const std::int64_t *col, const std::int64_t *offset,
-                           const double *x, double *yr);
+/// y_c += B^T x_r for the `count` 3x3 blocks `blocks` (indices, block b
+/// at values + 9 (b - first), at (row[b], col[b])), in order. Same order
+/// as the scalar products. Blocks in f64 or f32, as above.
+void addTransposedVertexBlocksAvx2(const double *values, std::size_t first,
+                                   const std::size_t *blocks, std::size_t count,
+                                   const std::int64_t *row,
+                                   const std::int64_t *col,
+                                   const std::int64_t *offset, const double *x,
+                                   double *y);
+void addTransposedVertexBlocksAvx2(const float *values, std::size_t first,
+                                   const std::size_t *blocks, std::size_t count,
+                                   const std::int64_t *row,
+                                   const std::int64_t *col,
+                                   const std::int64_t *offset, const double *x,
+                                   double *y);
 
 } // namespace yasps::runtime::detail
 

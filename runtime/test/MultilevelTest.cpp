@@ -265,8 +265,9 @@ TEST(Multilevel, SolvesOnTheFreeDofsOnly) {
   ASSERT_TRUE(multilevel.converged);
   EXPECT_LT(multilevel.iterations, jacobi.iterations);
   for (std::size_t i = 0; i < b.size(); ++i) {
-    if (fixed[i])
+    if (fixed[i]) {
       EXPECT_EQ(multilevelX[i], 0.0);
+    }
     EXPECT_NEAR(multilevelX[i], jacobiX[i], 1e-6);
   }
 }

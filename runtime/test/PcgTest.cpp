@@ -478,3 +478,53 @@ TEST(Pcg, EnergyDelayMustBePositive) {
   EXPECT_THROW(solvePcg(H, b.data(), x.data(), options, pool),
                std::invalid_argument);
 }
+
+TEST(Pcg, LargeSystemsGiveTheSameBitsOnEveryThreadCount) {
+  // 6,000 vertex blocks (18,000 DoFs): enough that the vector steps, the
+  // SpMV and block-Jacobi all split across the threads. Each adds in a
+  // fixed order, so every thread count takes the same iterations to the
+  // same solution, to the last bit.
+  const std::int64_t numBlocks = 6000;
+  BlockLayout layout =
+      BlockLayout::fromSizes(std::vector<std::int64_t>(numBlocks, 3));
+  std::mt19937 rng(21);
+  std::uniform_real_distribution<double> value(-1.0, 1.0);
+  std::vector<Coord> coords;
+  for (std::int64_t i = 0; i < numBlocks; ++i)
+    for (std::int64_t j : {i, i + 1, i + 7, i + 500})
+      if (j < numBlocks)
+        coords.push_back({i, j});
+  std::vector<BlockSlot> slots;
+  BlockSparseMatrix h(layout, coords, &slots);
+  for (std::size_t k = 0; k < coords.size(); ++k) {
+    std::vector<double> local(9);
+    for (double &v : local)
+      v = 0.2 * value(rng);
+    if (coords[k].first == coords[k].second)
+      for (int r = 0; r < 3; ++r) {
+        for (int c = 0; c < r; ++c)
+          local[r * 3 + c] = local[c * 3 + r];
+        local[r * 3 + r] += 3.0; // above the rows' absolute sums
+      }
+    h.addBlock(slots[k], local.data());
+  }
+  std::vector<double> b = randomVector(rng, h.size());
+  PcgOptions options;
+  options.relativeTolerance = 1e-10;
+  std::vector<double> first;
+  std::int64_t firstIterations = -1;
+  for (unsigned threads : {1u, 2u, 3u}) {
+    ThreadPool pool(threads);
+    std::vector<double> x(b.size(), 0.0);
+    PcgResult result = solvePcg(h, b.data(), x.data(), options, pool);
+    ASSERT_TRUE(result.converged) << threads << " threads";
+    if (first.empty()) {
+      first = x;
+      firstIterations = result.iterations;
+      EXPECT_GT(firstIterations, 5);
+      continue;
+    }
+    EXPECT_EQ(result.iterations, firstIterations) << threads << " threads";
+    EXPECT_EQ(x, first) << threads << " threads";
+  }
+}

@@ -20,6 +20,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <map>
 #include <memory>
 #include <mutex>
 #include <utility>
@@ -125,10 +126,13 @@ public:
   void addBlockConcurrent(BlockSlot slot, const double *local);
 
   /// y = H x over all scalar DoFs, using both triangles. `x` and `y` hold
-  /// size() values and must not overlap. On one thread, one pass over the
-  /// stored blocks does both products of each; on more, each block row of y
-  /// is computed by one thread. Both add the terms of every entry in the
-  /// same order, so the result does not depend on the number of threads.
+  /// size() values and must not overlap. One pass over the stored blocks
+  /// does both products of each. On several threads each thread takes one
+  /// range of block rows (rowRanges) and writes only its rows of y: it
+  /// first adds the transposes of the blocks above the range that reach its
+  /// columns, then passes over its own rows. Every entry's terms are added
+  /// in the one-thread order, so the result does not depend on the number
+  /// of threads.
   void multiply(const double *x, double *y, ThreadPool &pool) const;
 
   /// multiply() of the matrix whose values are `rounded` (values().size()
@@ -136,6 +140,14 @@ public:
   /// them): for a preconditioner's products, which need not be exact.
   void multiplyRounded(const std::vector<float> &rounded, const double *x,
                        double *y, ThreadPool &pool) const;
+
+  /// Splits the block rows into at most `parts` consecutive ranges, range t
+  /// being [ranges[t], ranges[t + 1]), that cost a product about the same:
+  /// a range reads its rows' blocks and the blocks above it in its
+  /// columns. Small matrices get fewer ranges (one at least). Computed once
+  /// per number of parts and kept; safe to call from several threads. What
+  /// multiply and a threaded assembly (GlobalSystem) split the work by.
+  const std::vector<std::int64_t> &rowRanges(unsigned parts) const;
 
   /// Writes the diagonal blocks to `out`, concatenated in block order, each
   /// row-major (size(i) x size(i)); blocks that are not stored are zero.
@@ -182,15 +194,28 @@ private:
   // The products, over the values (f64) or their f32 copy (`values` is
   // either's first entry; blocks sit at valueOffset_ in both).
   template <typename T>
-  void multiplyInStorageOrder(const T *values, const double *x,
-                              double *y) const;
+  void multiplyValues(const T *values, const double *x, double *y,
+                      ThreadPool &pool) const;
+  /// rowRanges' ranges, and per range t and group g the group's blocks
+  /// above range t in its columns: above[aboveStart[t * numGroups + g]
+  /// .. aboveStart[t * numGroups + g + 1]), in storage order.
+  struct RowSplit {
+    std::vector<std::int64_t> ranges;
+    std::vector<std::size_t> above, aboveStart;
+  };
+  const RowSplit &rowSplit(unsigned parts) const;
+  RowSplit splitRows(unsigned parts) const;
+  /// Range t's rows of y = H x (see multiply).
+  template <typename T>
+  void multiplyRange(const T *values, const RowSplit &split, std::int64_t t,
+                     const double *x, double *y) const;
+  /// Stored 3x3 blocks [begin, end) in storage order; transposes reach only
+  /// block columns below `limit`.
   template <typename T>
   void multiply3x3InStorageOrder(const T *values, std::size_t begin,
-                                 std::size_t end, const double *x,
-                                 double *y) const;
-  template <typename T>
-  void multiplyByRows(const T *values, const double *x, double *y,
-                      ThreadPool &pool) const;
+                                 std::size_t end, std::int64_t limit,
+                                 const double *x, double *y) const;
+  std::vector<std::int64_t> balanceRowRanges(unsigned parts) const;
 
   BlockLayout layout_;
   std::uint64_t structureId_;
@@ -215,6 +240,13 @@ private:
   // Striped locks for addBlockConcurrent; behind a pointer because mutexes
   // cannot move.
   std::unique_ptr<std::mutex[]> locks_;
+  // rowSplit's results by number of parts (a map: references stay valid as
+  // entries are added).
+  struct RowRangeCache {
+    std::mutex mutex;
+    std::map<unsigned, RowSplit> byParts;
+  };
+  std::unique_ptr<RowRangeCache> rowRanges_;
 };
 
 } // namespace yasps::runtime

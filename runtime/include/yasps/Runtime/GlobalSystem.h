@@ -67,11 +67,11 @@ public:
 
   /// Adds energy `energy`'s local gradients (count x n) and local Hessians
   /// (count x n x n, each row-major) to the global system. With a pool of
-  /// more than one thread, the instances are split across the threads,
-  /// which accumulate with atomic adds (paper appendix B): the sums are then
-  /// exact to rounding but their order, and so the last bits, may change
-  /// from run to run. Without a pool, or with one thread, the instances are
-  /// added in order.
+  /// more than one thread, each thread writes one range of block rows
+  /// (BlockSparseMatrix::rowRanges) and the gradient of those blocks, taking
+  /// from every instance that reaches them the entries that fall there.
+  /// No atomics: every entry gets its terms in instance order, so the
+  /// result is that of one thread to the last bit.
   void add(std::size_t energy, const double *gradients, const double *hessians,
            ThreadPool *pool = nullptr);
   /// add() of f32 local derivatives (an f32 scene's kernels store them as
@@ -125,6 +125,12 @@ public:
     std::vector<std::int64_t> globalBlock; // count x maxBlocks, -1 padded
     std::vector<BlockSlot> pairSlot;       // count x maxBlocks x maxBlocks
   };
+  /// Block rows [lo, hi): what one thread of a split assembly writes, the
+  /// stored blocks of those rows and the gradient entries of those blocks.
+  struct RowRange {
+    std::int64_t lo, hi;
+    bool owns(std::int64_t block) const { return lo <= block && block < hi; }
+  };
   /// The structure of energy `energy` (throws std::out_of_range).
   const EnergyMap &energyStructure(std::size_t energy) const;
 
@@ -146,11 +152,12 @@ private:
                         std::size_t firstEnergy);
   /// The part and map of energy `energy` (throws std::out_of_range).
   std::pair<Part *, const EnergyMap *> energyMap(std::size_t energy);
-  /// Adds instance i's gradient g (n) and Hessian h (n x n).
-  template <bool Atomic, typename T>
+  /// Adds instance i's gradient g (n) and Hessian h (n x n): the entries
+  /// in the block rows `rows`, and the gradient entries of those blocks.
+  template <typename T>
   static void addInstance(Part &part, const EnergyMap &map, std::int64_t i,
-                          const T *g, const T *h,
-                          std::vector<double> &gradient);
+                          const T *g, const T *h, std::vector<double> &gradient,
+                          RowRange rows);
   /// add() for local derivatives of type T.
   template <typename T>
   void addLocal(std::size_t energy, const T *gradients, const T *hessians,
