@@ -25,9 +25,13 @@ echo "== pytest under the sanitizers: inputs, values and errors"
 # The extensions of the sanitizer build need the ASan runtime loaded first;
 # allocator_may_return_null lets a refused huge allocation reach numpy as
 # MemoryError, as without ASan (test_errors checks what yasps makes of it).
+# use_sigaltstack=0: LLVM gives a thread that compiles its own, larger
+# signal stack where CPUs need more room for the signal frame (seen on AMD
+# EPYC hosts), and ASan then fails to unmap it, as its own, when that
+# thread exits ("failed to deallocate ... unable to unmmap").
 YASPS_BUILD_DIR="$sanitize" YASPS_CACHE_DIR=off \
   LD_PRELOAD="$("${LLVM_PREFIX:-/usr/lib/llvm-22}/bin/clang" -print-file-name=libclang_rt.asan-x86_64.so)" \
-  ASAN_OPTIONS=allow_user_poisoning=0:detect_leaks=0:allocator_may_return_null=1:halt_on_error=1 \
+  ASAN_OPTIONS=allow_user_poisoning=0:detect_leaks=0:allocator_may_return_null=1:halt_on_error=1:use_sigaltstack=0 \
   UBSAN_OPTIONS=halt_on_error=1:print_stacktrace=1 \
   python3 -m pytest -q -p no:cacheprovider "$root/python/tests/test_errors.py" \
   "$root/python/tests/test_values.py" "$root/python/tests/test_compute.py"
