@@ -322,7 +322,9 @@ void BlockSparseMatrix::multiplyRange(const T *values, const RowSplit &split,
     const std::size_t *rowStart = &rowStart_[g * stride];
     const std::size_t first = rowStart[lo], last = rowStart[hi];
     if (vertex) {
-      multiply3x3InStorageOrder(values, first, last, hi, x, y);
+      // The last range's transposes all stay in it.
+      multiply3x3InStorageOrder(
+          values, first, last, hi == numBlocks() ? detail::kNoLimit : hi, x, y);
       continue;
     }
     const T *data = blockAt(first);

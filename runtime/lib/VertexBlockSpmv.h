@@ -9,10 +9,14 @@
 #ifndef YASPS_RUNTIME_LIB_VERTEXBLOCKSPMV_H
 #define YASPS_RUNTIME_LIB_VERTEXBLOCKSPMV_H
 
+#include <climits>
 #include <cstddef>
 #include <cstdint>
 
 namespace yasps::runtime::detail {
+
+/// A `limit` of multiplyVertexBlocksAvx2 that no column reaches.
+constexpr std::int64_t kNoLimit = INT64_MAX;
 
 /// Whether this CPU runs multiplyVertexBlocksAvx2.
 bool hasVertexBlockSimd();
