@@ -22,9 +22,17 @@ COMPILER_MODULE = "_yasps_compiler"
 RUNTIME_MODULE = "_yasps_runtime"
 
 
+#: The build tree named by ``YASPS_BUILD_DIR``, resolved when yasps is
+#: imported: a relative path names a folder of the working directory then,
+#: not of whatever folder a later call runs in (a sweep's worker runs each
+#: simulation in the run's own folder).
+BUILD_DIR = (Path(os.environ["YASPS_BUILD_DIR"]).resolve()
+              if os.environ.get("YASPS_BUILD_DIR") else
+              Path(__file__).resolve().parent.parent.parent / "build")
+
+
 def _from_build_tree(name: str) -> ModuleType | None:
-    repo = Path(__file__).resolve().parent.parent.parent
-    build = Path(os.environ.get("YASPS_BUILD_DIR", repo / "build"))
+    build = BUILD_DIR
     for candidate in sorted((build / "python" / "yasps").glob(name + "*")):
         spec = importlib.util.spec_from_file_location("yasps." + name,
                                                       candidate)

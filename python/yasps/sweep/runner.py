@@ -16,6 +16,7 @@ from pathlib import Path
 from typing import Any, Callable, Dict, List, Optional, Sequence
 
 from .. import config
+from .._native import BUILD_DIR
 from .manifest import Manifest, plain, run_id
 from .worker import execute
 
@@ -59,7 +60,9 @@ class SweepResult:
 
 def _worker_environment(simulate: Callable) -> Dict[str, str]:
     """PYTHONPATH for the workers: this yasps and the folder of the module
-    that defines ``simulate`` (so that they import both as here)."""
+    that defines ``simulate`` (so that they import both as here); and the
+    build tree this yasps loads its extensions from, as an absolute path
+    (workers start in other folders)."""
     paths = [str(Path(__file__).resolve().parents[2])]
     module = sys.modules.get(getattr(simulate, "__module__", ""))
     source = getattr(module, "__file__", None)
@@ -67,7 +70,10 @@ def _worker_environment(simulate: Callable) -> Dict[str, str]:
         paths.append(str(Path(source).resolve().parent))
     if os.environ.get("PYTHONPATH"):
         paths.append(os.environ["PYTHONPATH"])
-    return {"PYTHONPATH": os.pathsep.join(paths)}
+    environment = {"PYTHONPATH": os.pathsep.join(paths)}
+    if os.environ.get("YASPS_BUILD_DIR"):
+        environment["YASPS_BUILD_DIR"] = str(BUILD_DIR)
+    return environment
 
 
 def run(simulate: Callable[..., Dict[str, Any]],
