@@ -8,10 +8,10 @@
 // with random positive definite local Hessians and times, on the CPU and,
 // where there is one, on the GPU: assembly, the block-sparse SpMV, and
 // block-Jacobi and multilevel PCG solves; on the GPU also a device-to-device
-// copy, for the bandwidth bound of the SpMV's bytes. Results are checked against the CPU
-// before they are timed. `--export DIR` writes the whole matrix as CSR,
-// a vector and its product as .npy files for bench/gpu_cusparse.py, which
-// times cuSPARSE on the same matrix.
+// copy, for the bandwidth bound of the SpMV's bytes. Results are checked
+// against the CPU before they are timed. `--export DIR` writes the whole matrix
+// as CSR, a vector and its product as .npy files for bench/gpu_cusparse.py,
+// which times cuSPARSE on the same matrix.
 //
 // Needs no MLIR or Python: the binary can be carried to a GPU machine.
 //
@@ -264,6 +264,17 @@ int run(int argc, char **argv) {
   start = Clock::now();
   PcgResult cpuSolve = system.solve(solution.data(), options, all);
   double solveAll = secondsSince(start);
+  // One thread, per iteration, beside the one-thread SpMV: what the rest
+  // of an iteration (preconditioner, vector steps) adds to it. A fixed 100
+  // iterations (a tolerance never met), so that the solve's setup is a
+  // small part.
+  PcgOptions hundred = options;
+  hundred.relativeTolerance = 0.0;
+  hundred.maxIterations = 100;
+  std::vector<double> scratch(n);
+  start = Clock::now();
+  PcgResult oneSolve = system.solve(scratch.data(), hundred, one);
+  double solveOne = secondsSince(start);
   // The multilevel preconditioner: a first solve builds the levels'
   // structure, the second (timed) reuses it, as Newton iterations do.
   PcgOptions multilevel = options;
@@ -284,6 +295,9 @@ int run(int argc, char **argv) {
               assembleOne * 1e3, cores, assembleAll * 1e3);
   std::printf("  CPU SpMV        1 thread %9.3f ms, %u threads %9.3f ms\n",
               spmvOne * 1e3, cores, spmvAll * 1e3);
+  std::printf("  CPU PCG 1 thread: %9.3f ms per iteration (%lld iterations)\n",
+              solveOne * 1e3 / std::max<std::int64_t>(oneSolve.iterations, 1),
+              (long long)oneSolve.iterations);
   std::printf("  CPU PCG (%u threads) %lld iterations to %.1e: %9.3f ms\n",
               cores, (long long)cpuSolve.iterations, cpuSolve.relativeResidual,
               solveAll * 1e3);

@@ -8,6 +8,7 @@
 
 #include <algorithm>
 #include <atomic>
+#include <climits>
 #include <map>
 #include <stdexcept>
 #include <string>
@@ -147,6 +148,11 @@ BlockSparseMatrix::BlockSparseMatrix(
     previous = &e;
   }
   values_.assign(valueOffset_.back(), 0.0);
+  if (layout_.blockOffset.back() <= INT32_MAX) {
+    colDof_.resize(blockCol_.size());
+    for (std::size_t b = 0; b < blockCol_.size(); ++b)
+      colDof_[b] = static_cast<std::int32_t>(layout_.blockOffset[blockCol_[b]]);
+  }
 
   // For multiply, per group: the block range of each row (blocks of a row
   // are consecutive within a group) and the list of off-diagonal blocks of
@@ -319,14 +325,14 @@ void BlockSparseMatrix::multiplyRange(const T *values, const RowSplit &split,
     }
     // Then the range's rows in storage order. Transposes into columns at
     // or past hi belong to later ranges, which add them themselves.
-    const std::size_t *rowStart = &rowStart_[g * stride];
-    const std::size_t first = rowStart[lo], last = rowStart[hi];
     if (vertex) {
       // The last range's transposes all stay in it.
       multiply3x3InStorageOrder(
-          values, first, last, hi == numBlocks() ? detail::kNoLimit : hi, x, y);
+          values, g, lo, hi, hi == numBlocks() ? detail::kNoLimit : hi, x, y);
       continue;
     }
+    const std::size_t *rowStart = &rowStart_[g * stride];
+    const std::size_t first = rowStart[lo], last = rowStart[hi];
     const T *data = blockAt(first);
     for (std::size_t b = first; b < last;
          ++b, data += group.rows * group.cols) {
@@ -341,17 +347,20 @@ void BlockSparseMatrix::multiplyRange(const T *values, const RowSplit &split,
 
 template <typename T>
 void BlockSparseMatrix::multiply3x3InStorageOrder(
-    const T *values, std::size_t begin, std::size_t end, std::int64_t limit,
-    const double *x, double *y) const {
+    const T *values, std::size_t g, std::int64_t rowBegin, std::int64_t rowEnd,
+    std::int64_t limit, const double *x, double *y) const {
   // Vertex blocks: the row's partial y stays in registers while the
   // blocks of a row stream by (rows are consecutive in storage); y_r is
   // written once per row. The terms are added in the order of addProduct.
   const std::vector<std::int64_t> &offset = layout_.blockOffset;
+  const std::size_t *rowStart =
+      &rowStart_[g * (static_cast<std::size_t>(numBlocks()) + 1)];
+  const std::size_t begin = rowStart[rowBegin], end = rowStart[rowEnd];
   const T *data = values + valueOffset_[begin];
-  if (detail::hasVertexBlockSimd())
+  if (detail::hasVertexBlockSimd() && !colDof_.empty())
     return detail::multiplyVertexBlocksAvx2(
-        data, blockRow_.data() + begin, blockCol_.data() + begin, offset.data(),
-        end - begin, limit, x, y);
+        data, rowStart, rowBegin, rowEnd, colDof_.data(), offset.data(),
+        limit == detail::kNoLimit ? detail::kNoLimit : offset[limit], x, y);
   std::size_t b = begin;
   while (b < end) {
     const std::int64_t r = blockRow_[b];

@@ -87,28 +87,32 @@ timesColumns(__m256d r0, __m256d r1, __m256d r2, const double *xc) {
 
 template <bool Limited, typename T>
 __attribute__((target("avx2"), always_inline)) static inline void
-vertexBlocks(const T *data, const std::int64_t *row, const std::int64_t *col,
-             const std::int64_t *offset, std::size_t count, std::int64_t limit,
-             const double *x, double *y) {
-  std::size_t b = 0;
-  while (b < count) {
-    const std::int64_t r = row[b];
-    double *yr = y + offset[r];
-    const double *xr = x + offset[r];
+vertexBlocks(const T *data, const std::size_t *rowStart, std::int64_t rowBegin,
+             std::int64_t rowEnd, const std::int32_t *colDof,
+             const std::int64_t *offset, std::int64_t limitDof, const double *x,
+             double *y) {
+  for (std::int64_t r = rowBegin; r < rowEnd; ++r) {
+    std::size_t b = rowStart[r];
+    const std::size_t end = rowStart[r + 1];
+    if (b == end)
+      continue;
+    const std::int64_t rowDof = offset[r];
+    double *yr = y + rowDof;
+    const double *xr = x + rowDof;
     const __m256d xr0 = _mm256_broadcast_sd(xr),
                   xr1 = _mm256_broadcast_sd(xr + 1),
                   xr2 = _mm256_broadcast_sd(xr + 2);
     __m256d acc = loadThree(yr);
-    for (; b < count && row[b] == r; ++b, data += 9) {
-      const std::int64_t c = col[b];
-      const double *xc = x + offset[c];
+    for (; b < end; ++b, data += 9) {
+      const std::int64_t c = colDof[b];
+      const double *xc = x + c;
       const __m256d r0 = loadRow(data);
       const __m256d r1 = loadRow(data + 3);
       const __m256d r2 = loadLastRow(data + 6);
       acc = _mm256_add_pd(acc, timesColumns(r0, r1, r2, xc));
-      if (c != r && (!Limited || c < limit)) {
+      if (c != rowDof && (!Limited || c < limitDof)) {
         // y_c[j] += B_0j xr0, then B_1j xr1, then B_2j xr2.
-        double *yc = y + offset[c];
+        double *yc = y + c;
         __m256d t = loadThree(yc);
         t = _mm256_add_pd(t, _mm256_mul_pd(r0, xr0));
         t = _mm256_add_pd(t, _mm256_mul_pd(r1, xr1));
@@ -143,26 +147,35 @@ transposedVertexBlocks(const T *values, std::size_t first,
 }
 
 // One body per product for both block types.
-__attribute__((target("avx2"))) void detail::multiplyVertexBlocksAvx2(
-    const double *data, const std::int64_t *row, const std::int64_t *col,
-    const std::int64_t *offset, std::size_t count, std::int64_t limit,
-    const double *x, double *y) {
+template <typename T>
+__attribute__((target("avx2"), always_inline)) static inline void
+vertexBlocksUpTo(const T *data, const std::size_t *rowStart,
+                 std::int64_t rowBegin, std::int64_t rowEnd,
+                 const std::int32_t *colDof, const std::int64_t *offset,
+                 std::int64_t limitDof, const double *x, double *y) {
   // Without a limit the loop keeps one test per block: the one-thread
   // product took 35% longer with both.
-  if (limit == kNoLimit)
-    return vertexBlocks<false>(data, row, col, offset, count, limit, x, y);
-  vertexBlocks<true>(data, row, col, offset, count, limit, x, y);
+  if (limitDof == detail::kNoLimit)
+    return vertexBlocks<false>(data, rowStart, rowBegin, rowEnd, colDof, offset,
+                               limitDof, x, y);
+  vertexBlocks<true>(data, rowStart, rowBegin, rowEnd, colDof, offset, limitDof,
+                     x, y);
 }
 
 __attribute__((target("avx2"))) void detail::multiplyVertexBlocksAvx2(
-    const float *data, const std::int64_t *row, const std::int64_t *col,
-    const std::int64_t *offset, std::size_t count, std::int64_t limit,
-    const double *x, double *y) {
-  // Without a limit the loop keeps one test per block: the one-thread
-  // product took 35% longer with both.
-  if (limit == kNoLimit)
-    return vertexBlocks<false>(data, row, col, offset, count, limit, x, y);
-  vertexBlocks<true>(data, row, col, offset, count, limit, x, y);
+    const double *data, const std::size_t *rowStart, std::int64_t rowBegin,
+    std::int64_t rowEnd, const std::int32_t *colDof, const std::int64_t *offset,
+    std::int64_t limitDof, const double *x, double *y) {
+  vertexBlocksUpTo(data, rowStart, rowBegin, rowEnd, colDof, offset, limitDof,
+                   x, y);
+}
+
+__attribute__((target("avx2"))) void detail::multiplyVertexBlocksAvx2(
+    const float *data, const std::size_t *rowStart, std::int64_t rowBegin,
+    std::int64_t rowEnd, const std::int32_t *colDof, const std::int64_t *offset,
+    std::int64_t limitDof, const double *x, double *y) {
+  vertexBlocksUpTo(data, rowStart, rowBegin, rowEnd, colDof, offset, limitDof,
+                   x, y);
 }
 
 __attribute__((target("avx2"))) void detail::addTransposedVertexBlocksAvx2(
@@ -184,14 +197,16 @@ __attribute__((target("avx2"))) void detail::addTransposedVertexBlocksAvx2(
 bool detail::hasVertexBlockSimd() { return false; }
 
 // Never called: hasVertexBlockSimd() is false.
-void detail::multiplyVertexBlocksAvx2(const double *, const std::int64_t *,
-                                      const std::int64_t *,
-                                      const std::int64_t *, std::size_t,
-                                      std::int64_t, const double *, double *) {}
-void detail::multiplyVertexBlocksAvx2(const float *, const std::int64_t *,
-                                      const std::int64_t *,
-                                      const std::int64_t *, std::size_t,
-                                      std::int64_t, const double *, double *) {}
+void detail::multiplyVertexBlocksAvx2(const double *, const std::size_t *,
+                                      std::int64_t, std::int64_t,
+                                      const std::int32_t *,
+                                      const std::int64_t *, std::int64_t,
+                                      const double *, double *) {}
+void detail::multiplyVertexBlocksAvx2(const float *, const std::size_t *,
+                                      std::int64_t, std::int64_t,
+                                      const std::int32_t *,
+                                      const std::int64_t *, std::int64_t,
+                                      const double *, double *) {}
 void detail::addTransposedVertexBlocksAvx2(const double *, std::size_t,
                                            const std::size_t *, std::size_t,
                                            const std::int64_t *,

@@ -209,12 +209,14 @@ private:
   template <typename T>
   void multiplyRange(const T *values, const RowSplit &split, std::int64_t t,
                      const double *x, double *y) const;
-  /// Stored 3x3 blocks [begin, end) in storage order; transposes reach only
-  /// block columns below `limit`.
+  /// The stored 3x3 blocks of block rows [rowBegin, rowEnd) in group g
+  /// (a 3x3 group), in storage order; transposes reach only block columns
+  /// below `limit`.
   template <typename T>
-  void multiply3x3InStorageOrder(const T *values, std::size_t begin,
-                                 std::size_t end, std::int64_t limit,
-                                 const double *x, double *y) const;
+  void multiply3x3InStorageOrder(const T *values, std::size_t g,
+                                 std::int64_t rowBegin, std::int64_t rowEnd,
+                                 std::int64_t limit, const double *x,
+                                 double *y) const;
   std::vector<std::int64_t> balanceRowRanges(unsigned parts) const;
 
   BlockLayout layout_;
@@ -225,6 +227,10 @@ private:
   std::vector<std::int64_t> blockRow_;
   std::vector<std::int64_t> blockCol_;
   std::vector<std::size_t> valueOffset_;
+  // Per stored block, the first DoF of its column, for the SIMD product of
+  // 3x3 blocks: one sequential 4-byte read in place of the column and a
+  // dependent look-up of its offset. Empty when the DoFs exceed int32.
+  std::vector<std::int32_t> colDof_;
   std::vector<double> values_;
   // roundValuesForProduct's copy; empty when multiply reads values_.
   std::vector<float> singleValues_;
