@@ -47,7 +47,7 @@ BlockJacobi::BlockJacobi(const HessianParts &parts, const std::uint8_t *fixed,
 }
 
 void BlockJacobi::applyBlock(std::int64_t b, const double *r, double *z,
-                             double &rz) const {
+                             double *rz) const {
   std::int64_t o = layout_.blockOffset[b];
   std::int64_t s = layout_.blockOffset[b + 1] - o;
   const double *inv = inverse_.data() + start_[b];
@@ -62,9 +62,9 @@ void BlockJacobi::applyBlock(std::int64_t b, const double *r, double *z,
     z[o] = z0;
     z[o + 1] = z1;
     z[o + 2] = z2;
-    rz += r0 * z0;
-    rz += r1 * z1;
-    rz += r2 * z2;
+    rz[0] += r0 * z0;
+    rz[1] += r1 * z1;
+    rz[2] += r2 * z2;
     return;
   }
   for (std::int64_t i = 0; i < s; ++i) {
@@ -72,14 +72,14 @@ void BlockJacobi::applyBlock(std::int64_t b, const double *r, double *z,
     for (std::int64_t j = 0; j < s; ++j)
       sum += inv[i * s + j] * r[o + j];
     z[o + i] = sum;
-    rz += r[o + i] * sum;
+    rz[i % 3] += r[o + i] * sum;
   }
 }
 
 void BlockJacobi::apply(const double *r, double *z, ThreadPool &pool) const {
   pool.parallelFor(0, layout_.numBlocks(), kBlocksPerChunk,
                    [&](std::int64_t begin, std::int64_t end) {
-                     double unused = 0.0;
+                     double unused[3] = {0.0, 0.0, 0.0};
                      for (std::int64_t b = begin; b < end; ++b)
                        applyBlock(b, r, z, unused);
                    });
@@ -95,11 +95,14 @@ double BlockJacobi::applyDot(const double *r, double *z,
   pool.parallelFor(
       0, numSegments, 1, [&](std::int64_t begin, std::int64_t end) {
         for (std::int64_t segment = begin; segment < end; ++segment) {
-          double rz = 0.0;
+          // Three running sums, the DoFs of a block spread over them: one
+          // made every term wait for the previous addition. Fixed by the
+          // segment, so the same on every thread count.
+          double rz[3] = {0.0, 0.0, 0.0};
           for (std::int64_t b = segment * kBlocksPerSegment;
                b < std::min(numBlocks, (segment + 1) * kBlocksPerSegment); ++b)
             applyBlock(b, r, z, rz);
-          partial[segment] = rz;
+          partial[segment] = (rz[0] + rz[1]) + rz[2];
         }
       });
   double sum = 0.0;

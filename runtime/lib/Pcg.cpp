@@ -34,21 +34,35 @@ static constexpr std::int64_t kMinParallelVector = 1 << 14;
 /// The sum of term(i) over [0, n): fixed segments summed in parallel,
 /// then the segment sums in order. `term` may also update entry i of
 /// vectors, fusing a vector step with the dot product it feeds.
+///
+/// Within a segment, four sums of every fourth term, added pairwise at the
+/// end: with one running sum each term waits for the previous addition.
+/// With this and applyDot's three sums the bunny's one-thread PCG iteration
+/// took 0.755-0.887 ms against 0.786-0.932 ms (best of 15 solves, 5 runs
+/// each, yasps-spmv-bench). The order is fixed by the segment, so the
+/// result still does not depend on the number of threads.
 template <typename Term>
 static double sumBySegments(std::int64_t n, std::vector<double> &partial,
                             ThreadPool &pool, Term term) {
   std::int64_t numSegments = (n + kSegment - 1) / kSegment;
   partial.assign(static_cast<std::size_t>(numSegments), 0.0);
-  pool.parallelFor(0, numSegments, 1,
-                   [&](std::int64_t begin, std::int64_t end) {
-                     for (std::int64_t s = begin; s < end; ++s) {
-                       double sum = 0.0;
-                       for (std::int64_t i = s * kSegment;
-                            i < std::min(n, (s + 1) * kSegment); ++i)
-                         sum += term(i);
-                       partial[s] = sum;
-                     }
-                   });
+  pool.parallelFor(
+      0, numSegments, 1, [&](std::int64_t begin, std::int64_t end) {
+        for (std::int64_t s = begin; s < end; ++s) {
+          const std::int64_t last = std::min(n, (s + 1) * kSegment);
+          double s0 = 0.0, s1 = 0.0, s2 = 0.0, s3 = 0.0;
+          std::int64_t i = s * kSegment;
+          for (; i + 4 <= last; i += 4) {
+            s0 += term(i);
+            s1 += term(i + 1);
+            s2 += term(i + 2);
+            s3 += term(i + 3);
+          }
+          for (; i < last; ++i)
+            s0 += term(i);
+          partial[s] = (s0 + s1) + (s2 + s3);
+        }
+      });
   double sum = 0.0;
   for (double p : partial)
     sum += p;

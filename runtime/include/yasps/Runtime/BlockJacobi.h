@@ -47,8 +47,9 @@ public:
   double diagonalRatio() const { return diagonalRatio_; }
 
 private:
-  /// z = M^-1 r on block b, adding its terms of r . z to `rz` in order.
-  void applyBlock(std::int64_t b, const double *r, double *z, double &rz) const;
+  /// z = M^-1 r on block b, adding the term of its i-th DoF to r . z to
+  /// rz[i % 3] (three running sums, see applyDot).
+  void applyBlock(std::int64_t b, const double *r, double *z, double *rz) const;
   void measureDiagonal(const std::uint8_t *fixed);
 
   BlockLayout layout_;
