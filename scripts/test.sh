@@ -38,7 +38,8 @@ YASPS_BUILD_DIR="$sanitize" YASPS_CACHE_DIR=off \
   LD_PRELOAD="$("${LLVM_PREFIX:-/usr/lib/llvm-22}/bin/clang" -print-file-name=libclang_rt.asan-x86_64.so)" \
   ASAN_OPTIONS=allow_user_poisoning=0:detect_leaks=0:allocator_may_return_null=1:halt_on_error=1:use_sigaltstack=0 \
   UBSAN_OPTIONS=halt_on_error=1:print_stacktrace=1 \
-  python3 -m pytest -q -p no:cacheprovider "$root/python/tests/test_errors.py" \
+  python3 -m pytest -q -p no:cacheprovider -n "${PYTEST_WORKERS:-$(nproc)}" \
+  "$root/python/tests/test_errors.py" \
   "$root/python/tests/test_values.py" "$root/python/tests/test_compute.py"
 
 if [ "${FUZZ_SECONDS:-120}" != 0 ]; then
