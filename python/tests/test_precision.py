@@ -8,6 +8,8 @@ The runtime keeps its buffers in f64: an f32 kernel rounds what it loads to
 f32, computes in f32 and stores f64, so the bounds below are those of f32
 arithmetic on f32-rounded inputs."""
 
+import os
+import subprocess
 import sys
 
 import ipctk
@@ -203,6 +205,31 @@ def test_f32_kernels_store_f32_local_derivatives():
     d = s.energyDerivatives(s.m.t["snh"])
     assert d.gradient.dtype == np.float32 and d.hessian.dtype == np.float32
     assert d.value.dtype == np.float64   # values are f64: compute()
+
+
+def test_a_second_process_finds_f32_kernels_as_f32(tmp_path):
+    """The disk cache's record of an f32 scene's kernels keeps their f32
+    output: a later process that loads them by the record alone (nothing
+    parsed) reads the same f32 derivatives. Before the record held the
+    output type, that process read f32 kernels' output as f64 (garbage)."""
+    script = f"""
+import sys, numpy as np
+sys.path[:0] = [{str(REPO / 'python')!r}, {str(REPO / 'python' / 'tests')!r}]
+from test_precision import tet_scene
+s = tet_scene("f32", count=4)
+d = s.energyDerivatives(s.m.t["snh"])
+sys.stdout.buffer.write(d.hessian.dtype.str.encode() + b" " + d.hessian.tobytes())
+"""
+    env = dict(os.environ, YASPS_CACHE_DIR=str(tmp_path / "cache"))
+
+    def run() -> bytes:
+        return subprocess.run([sys.executable, "-c", script], env=env,
+                              check=True, capture_output=True).stdout
+
+    first = run()
+    assert first.startswith(b"<f4 ")
+    assert list((tmp_path / "cache").glob("*.source.json"))
+    assert run() == first
 
 
 def test_f32_hessian_storage_solves_near_the_f64_system(f64_default):

@@ -64,6 +64,7 @@ json::Value describe(const CpuKernel &kernel) {
                       {"rows", kernel.rows},
                       {"cols", kernel.cols},
                       {"projection", kernel.projection},
+                      {"out_type", kernel.outType},
                       {"params", std::move(params)},
                       {"op_counts", std::move(counts)}};
 }
@@ -86,18 +87,23 @@ std::optional<CpuKernel> kernelOf(const json::Value &value) {
   auto symbol = text(object->get("symbol"));
   auto objectKey = text(object->get("object"));
   auto projection = text(object->get("projection"));
+  // The output buffer's type: without it an f32 scene's kernels, found by
+  // a later process, were read as writing f64.
+  auto outType = text(object->get("out_type"));
   auto rows = object->getInteger("rows");
   auto cols = object->getInteger("cols");
   const json::Array *arguments = object->getArray("arguments");
   const json::Array *params = object->getArray("params");
   const json::Object *counts = object->getObject("op_counts");
-  if (!attribute || !symbol || !objectKey || !projection || !rows || !cols ||
-      !arguments || !params || !counts)
+  if (!attribute || !symbol || !objectKey || !projection || !outType || !rows ||
+      !cols || !arguments || !params || !counts ||
+      (*outType != "f64" && *outType != "f32"))
     return std::nullopt;
   kernel.objectKey = *objectKey;
   kernel.attribute = *attribute;
   kernel.symbol = *symbol;
   kernel.projection = *projection;
+  kernel.outType = *outType;
   kernel.rows = *rows;
   kernel.cols = *cols;
   for (const json::Value &arg : *arguments) {
