@@ -321,13 +321,23 @@ PcgResult PcgSolve::run() {
       return finish(PcgStop::Breakdown,
                     std::isfinite(pq) ? rNorm / bNorm : nan);
     double alpha = rz / pq;
-    // x += alpha p, r -= alpha q and r . r in one pass.
-    double *rr = r.data(), *xx = x_;
-    double rr2 = sumBySegments(n_, partial_, vectors_, [&](std::int64_t i) {
-      xx[i] += alpha * pp[i];
-      rr[i] -= alpha * qq[i];
-      return rr[i] * rr[i];
-    });
+    // x += alpha p, r -= alpha q, r . r, and with block-Jacobi z = M^-1 r
+    // and r . z, in one pass.
+    double rr2, rzNext;
+    if (jacobi) {
+      BlockJacobi::StepDots dots = jacobi->stepApplyDots(
+          alpha, pp, qq, x_, r.data(), z.data(), partial_, vectors_);
+      rr2 = dots.rr;
+      rzNext = dots.rz;
+    } else {
+      double *rr = r.data(), *xx = x_;
+      rr2 = sumBySegments(n_, partial_, vectors_, [&](std::int64_t i) {
+        xx[i] += alpha * pp[i];
+        rr[i] -= alpha * qq[i];
+        return rr[i] * rr[i];
+      });
+      rzNext = precondition(r.data(), z.data());
+    }
     ++result_.iterations;
     terms_.push_back(alpha * rz);
     termSum_ += alpha * rz;
@@ -335,7 +345,6 @@ PcgResult PcgSolve::run() {
       alphas_.push_back(alpha);
     rNorm = std::sqrt(rr2);
 
-    double rzNext = precondition(r.data(), z.data());
     double beta = rzNext / rz;
     if (!restarted_)
       betas_.push_back(beta);

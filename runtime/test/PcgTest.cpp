@@ -528,3 +528,69 @@ TEST(Pcg, LargeSystemsGiveTheSameBitsOnEveryThreadCount) {
     EXPECT_EQ(x, first) << threads << " threads";
   }
 }
+
+TEST(BlockJacobi, StepApplyDotsMatchesTheStepsDoneApart) {
+  // PCG's fused step (x += alpha p, r -= alpha q, z = M^-1 r, r.r, r.z)
+  // against the same steps one at a time: on vertex blocks only (its own
+  // loop) and with 12x12 blocks among them (the general one).
+  using yasps::runtime::BlockJacobi;
+  for (bool vertexOnly : {true, false}) {
+    std::mt19937 rng(vertexOnly ? 5 : 6);
+    BlockSparseMatrix h = randomSpd(rng);
+    if (vertexOnly) {
+      // randomSpd's layout has 12x12 blocks; this one 3x3 only.
+      const std::int64_t numBlocks = 2500; // a few segments of blocks
+      BlockLayout layout =
+          BlockLayout::fromSizes(std::vector<std::int64_t>(numBlocks, 3));
+      std::vector<Coord> coords;
+      for (std::int64_t i = 0; i < numBlocks; ++i)
+        coords.push_back({i, i});
+      std::vector<BlockSlot> slots;
+      h = BlockSparseMatrix(layout, coords, &slots);
+      std::uniform_real_distribution<double> value(-1.0, 1.0);
+      for (const BlockSlot &slot : slots) {
+        double local[9];
+        for (int r = 0; r < 3; ++r)
+          for (int c = 0; c <= r; ++c)
+            local[r * 3 + c] = local[c * 3 + r] = 0.3 * value(rng);
+        for (int r = 0; r < 3; ++r)
+          local[r * 3 + r] += 2.0;
+        h.addBlock(slot, local);
+      }
+    }
+    const std::int64_t n = h.size();
+    ThreadPool pool(2);
+    BlockJacobi jacobi({&h}, nullptr, pool);
+    const double alpha = 0.37;
+    std::vector<double> p = randomVector(rng, n), q = randomVector(rng, n),
+                        x = randomVector(rng, n), r = randomVector(rng, n);
+    std::vector<double> xApart = x, rApart = r, zApart(n), z(n), partial;
+    double rrApart = 0.0;
+    for (std::int64_t i = 0; i < n; ++i) {
+      xApart[i] += alpha * p[i];
+      rApart[i] -= alpha * q[i];
+      rrApart += rApart[i] * rApart[i];
+    }
+    jacobi.apply(rApart.data(), zApart.data(), pool);
+    double rzApart = 0.0;
+    for (std::int64_t i = 0; i < n; ++i)
+      rzApart += rApart[i] * zApart[i];
+
+    const std::vector<double> x0 = x, r0 = r;
+    BlockJacobi::StepDots dots = jacobi.stepApplyDots(
+        alpha, p.data(), q.data(), x.data(), r.data(), z.data(), partial, pool);
+    EXPECT_EQ(x, xApart);
+    EXPECT_EQ(r, rApart);
+    EXPECT_EQ(z, zApart);
+    EXPECT_NEAR(dots.rr, rrApart, 1e-13 * rrApart);
+    EXPECT_NEAR(dots.rz, rzApart, 1e-13 * std::fabs(rzApart));
+    // The sums' order is fixed by the blocks: one thread, the same bits.
+    ThreadPool one(1);
+    std::vector<double> x1 = x0, r1 = r0, z1(n);
+    BlockJacobi::StepDots oneThread =
+        jacobi.stepApplyDots(alpha, p.data(), q.data(), x1.data(), r1.data(),
+                             z1.data(), partial, one);
+    EXPECT_EQ(oneThread.rr, dots.rr);
+    EXPECT_EQ(oneThread.rz, dots.rz);
+  }
+}

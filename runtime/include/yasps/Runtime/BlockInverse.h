@@ -37,7 +37,9 @@ YASPS_HD inline void invertDiagonalBlock(long long s, double *block,
   for (long long i = 0; i < s * s; ++i)
     block[i] = 0.0;
 
-  // Cholesky A = L L^T, lower triangle of l.
+  // Cholesky A = L L^T, lower triangle of l, but with 1 / L_jj on the
+  // diagonal: the substitutions below multiply by it. With divisions, the
+  // 3x3 blocks' inversion took about 6% of a bunny solve of 55 iterations.
   for (long long i = 0; i < m * m; ++i)
     l[i] = 0.0;
   bool ok = true;
@@ -50,13 +52,13 @@ YASPS_HD inline void invertDiagonalBlock(long long s, double *block,
       ok = false;
       break;
     }
-    double ljj = hdSqrt(d);
-    l[j * m + j] = ljj;
+    double inverseLjj = 1.0 / hdSqrt(d);
+    l[j * m + j] = inverseLjj;
     for (long long i = j + 1; i < m; ++i) {
       double v = a[i * m + j];
       for (long long k = 0; k < j; ++k)
         v -= l[i * m + k] * l[j * m + k];
-      l[i * m + j] = v / ljj;
+      l[i * m + j] = v * inverseLjj;
     }
   }
   if (!ok) {
@@ -74,13 +76,13 @@ YASPS_HD inline void invertDiagonalBlock(long long s, double *block,
       double v = i == col ? 1.0 : 0.0;
       for (long long k = 0; k < i; ++k)
         v -= l[i * m + k] * y[k];
-      y[i] = v / l[i * m + i];
+      y[i] = v * l[i * m + i];
     }
     for (long long i = m - 1; i >= 0; --i) {
       double v = y[i];
       for (long long k = i + 1; k < m; ++k)
         v -= l[k * m + i] * y[k];
-      y[i] = v / l[i * m + i];
+      y[i] = v * l[i * m + i];
     }
     for (long long i = 0; i < m; ++i)
       block[freeDofs[i] * s + freeDofs[col]] = y[i];

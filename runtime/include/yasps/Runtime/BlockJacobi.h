@@ -12,6 +12,7 @@
 
 #include "yasps/Runtime/BlockSparseMatrix.h"
 
+#include <array>
 #include <cstdint>
 #include <limits>
 #include <vector>
@@ -42,6 +43,18 @@ public:
   double applyDot(const double *r, double *z, std::vector<double> &partial,
                   ThreadPool &pool) const;
 
+  /// r . r and r . z after a CG step.
+  struct StepDots {
+    double rr, rz;
+  };
+  /// PCG's step and preconditioner in one pass over the blocks: on each
+  /// block x += alpha p and r -= alpha q, then z = M^-1 r. The dots are sums
+  /// of fixed segments of blocks added in order, as in applyDot. One pass
+  /// instead of two over r, and no second hand-off to the pool.
+  StepDots stepApplyDots(double alpha, const double *p, const double *q,
+                         double *x, double *r, double *z,
+                         std::vector<double> &partial, ThreadPool &pool) const;
+
   /// The largest over the smallest diagonal entry of H on the free DoFs
   /// (inf if one is <= 0, NaN if there is none), taken before inverting.
   double diagonalRatio() const { return diagonalRatio_; }
@@ -50,11 +63,20 @@ private:
   /// z = M^-1 r on block b, adding the term of its i-th DoF to r . z to
   /// rz[i % 3] (three running sums, see applyDot).
   void applyBlock(std::int64_t b, const double *r, double *z, double *rz) const;
+  /// body(begin, end, sums) on each fixed segment [begin, end) of blocks,
+  /// `sums` being NumSums x 3 running sums of the segment; returns the
+  /// NumSums totals, each the segments' sums added in order.
+  template <int NumSums, typename Body>
+  std::array<double, NumSums> sumOverBlockRanges(std::vector<double> &partial,
+                                                 ThreadPool &pool,
+                                                 Body body) const;
   void measureDiagonal(const std::uint8_t *fixed);
 
   BlockLayout layout_;
   std::vector<double> inverse_;
   std::vector<std::size_t> start_;
+  /// Whether every block is 3x3 (vertices only), for stepApplyDots.
+  bool allVertexBlocks_ = false;
   double diagonalRatio_ = std::numeric_limits<double>::quiet_NaN();
 };
 
