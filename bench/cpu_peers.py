@@ -5,7 +5,9 @@ The work is bench/newton_system.py's: stable Neo-Hookean (yasps.energies'
 formula: dt2 = 1e-4, mu = 1e4, lambda = 4e4, alpha = 1 + 3 mu / (4 lambda))
 plus inertia (mass 1e-3) on the tets of ../shared/data/bunny-<mesh>.msh,
 the vertices moved by normal noise of 1e-3 (seed 0). Three stages are timed
-(median of --repeat rounds, wall time, one thread each):
+(wall time, one thread each; the median of --repeat runs, in each of --rounds
+rounds that run every tool in turn, and the median over rounds; with several
+rounds, each round's ratios are printed too):
 
 1. per tet: gradient + Hessian of the elastic energy, into per-tet buffers;
 2. per tet: gradient + PSD-projected Hessian (eigenvalues clamped at 0);
@@ -24,7 +26,7 @@ and the code it generates are built once) and runs them. Before timing, it
 checks every peer's per-tet gradients and unprojected Hessians against
 yasps' on the first --check tets and stops if they disagree.
 
-    python3 bench/cpu_peers.py --tinyad DIR --symx DIR [--repeat 5] [--mesh 19k]
+    python3 bench/cpu_peers.py --tinyad DIR --symx DIR [--repeat 5] [--rounds 3] [--mesh 19k]
 
 Either peer may be left out (its columns are then skipped). TinyAD needs
 Eigen 3: --eigen DIR, else /usr/include/eigen3, else the copy bundled with
@@ -282,45 +284,12 @@ def table(results: Dict[str, Results], count: int) -> List[str]:
     return lines
 
 
-def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    parser.add_argument("--tinyad", type=Path, default=None, help="TinyAD checkout")
-    parser.add_argument("--symx", type=Path, default=None, help="SymX checkout")
-    parser.add_argument("--eigen", type=Path, default=None,
-                        help="Eigen 3 include directory for TinyAD")
-    parser.add_argument("--repeat", type=int, default=5)
-    parser.add_argument("--mesh", default="19k", help="bunny-<mesh>.msh of ../shared/data")
-    parser.add_argument("--check", type=int, default=300,
-                        help="tets whose derivatives are compared")
-    parser.add_argument("--build-dir", type=Path,
-                        default=Path(tempfile.gettempdir()) / "yasps-cpu-peers-build")
-    parser.add_argument("--build-wrapper", default="",
-                        help="command prefixed to every compile, e.g. 'flock LOCK'")
-    parser.add_argument("--jobs", type=int, default=2, help="parallel build jobs")
-    args = parser.parse_args()
-    given = {"TinyAD": args.tinyad, "SymX": args.symx}
-    for name, path in given.items():
-        if path is not None and not path.is_dir():
-            raise SystemExit(f"cpu_peers: --{name.lower()} {path} is not a directory")
-    wrapper = shlex.split(args.build_wrapper)
-
-    work = Work(args.mesh)
-    count = len(work.tets)
-    check = min(args.check, count)
-    print(f"bunny-{args.mesh}: {len(work.x):,} vertices, {count:,} tets; stable "
-          f"Neo-Hookean (dt2 {DT2:g}, mu {MU:g}, lambda {LAM:g}) + inertia (mass "
-          f"{MASS:g}); one thread, median of {args.repeat}")
-    for name, path in given.items():
-        if path is None:
-            print(f"{name} skipped: no --{name.lower()} DIR given")
-
+def one_round(args: argparse.Namespace, work: Work, check: int,
+              wrapper: List[str]) -> Tuple[Dict[str, Results], Optional[Results]]:
+    """One round: each peer's driver (--repeat runs of each stage), then
+    yasps, and where yasps projects in F, yasps with the 12x12 projection."""
     results: Dict[str, Results] = {}
     if args.tinyad or args.symx:
-        eigen = find_eigen(args.eigen, args.symx) if args.tinyad else None
-        if eigen is not None:
-            print(f"Eigen for TinyAD: {eigen}")
-        print(f"building the peers' drivers in {args.build_dir}")
-        build_drivers(args.build_dir, args.tinyad, args.symx, eigen, wrapper, args.jobs)
         with tempfile.TemporaryDirectory(prefix="yasps-cpu-peers-") as tmp:
             inputs = Path(tmp) / "inputs"
             work.write(inputs, args.repeat, check)
@@ -350,6 +319,102 @@ def main() -> None:
             full = yasps_results(Work(args.mesh), args.repeat)
         finally:
             yasps.config.linear_map_projection = True
+    return results, full
+
+
+def combine(rounds: List[Results]) -> Results:
+    """One tool's results over rounds: the median of each time (and of each
+    stage of a split), everything else (check values, names, iteration
+    counts, the same in every round) from the first round."""
+    combined = dict(rounds[0])
+    for key, value in rounds[0].items():
+        if key.endswith("_s"):
+            combined[key] = float(np.median([r[key] for r in rounds]))
+        elif key == "split":
+            combined[key] = {stage: float(np.median([r[key][stage] for r in rounds]))
+                             for stage in value}
+    combined["rounds"] = rounds
+    return combined
+
+
+def per_round_ratios(results: Dict[str, Results]) -> List[str]:
+    """Each round's ratio peer / yasps of the stages the acceptance names,
+    from times taken in the same round."""
+    ours = results["yasps"]["rounds"]
+    measures = (
+        ("+PSD projection", lambda r: r["grad_hess_proj_s"]),
+        ("Newton direction", lambda r: r["newton_s"]),
+        ("PCG per iteration", lambda r: r["solve_s"] / r["iterations"]),
+    )
+    lines = []
+    for name in PEERS:
+        if name not in results:
+            continue
+        theirs = results[name]["rounds"]
+        for label, value in measures:
+            ratios = [value(t) / value(o) for t, o in zip(theirs, ours)]
+            lines.append(f"{label}, yasps vs {name}, each round: "
+                         + " ".join(f"{x:.2f}x" for x in ratios)
+                         + f" (lowest {min(ratios):.2f}x, median "
+                         f"{float(np.median(ratios)):.2f}x)")
+    return lines
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    parser.add_argument("--tinyad", type=Path, default=None, help="TinyAD checkout")
+    parser.add_argument("--symx", type=Path, default=None, help="SymX checkout")
+    parser.add_argument("--eigen", type=Path, default=None,
+                        help="Eigen 3 include directory for TinyAD")
+    parser.add_argument("--repeat", type=int, default=5,
+                        help="runs of each stage per round (their median)")
+    parser.add_argument("--rounds", type=int, default=3,
+                        help="rounds, each running every tool in turn; the "
+                        "table shows the median over rounds")
+    parser.add_argument("--mesh", default="19k", help="bunny-<mesh>.msh of ../shared/data")
+    parser.add_argument("--check", type=int, default=300,
+                        help="tets whose derivatives are compared")
+    parser.add_argument("--build-dir", type=Path,
+                        default=Path(tempfile.gettempdir()) / "yasps-cpu-peers-build")
+    parser.add_argument("--build-wrapper", default="",
+                        help="command prefixed to every compile, e.g. 'flock LOCK'")
+    parser.add_argument("--jobs", type=int, default=2, help="parallel build jobs")
+    args = parser.parse_args()
+    given = {"TinyAD": args.tinyad, "SymX": args.symx}
+    for name, path in given.items():
+        if path is not None and not path.is_dir():
+            raise SystemExit(f"cpu_peers: --{name.lower()} {path} is not a directory")
+    wrapper = shlex.split(args.build_wrapper)
+
+    work = Work(args.mesh)
+    count = len(work.tets)
+    check = min(args.check, count)
+    print(f"bunny-{args.mesh}: {len(work.x):,} vertices, {count:,} tets; stable "
+          f"Neo-Hookean (dt2 {DT2:g}, mu {MU:g}, lambda {LAM:g}) + inertia (mass "
+          f"{MASS:g}); one thread, median of {args.repeat} runs per round, "
+          f"median over {args.rounds} rounds")
+    for name, path in given.items():
+        if path is None:
+            print(f"{name} skipped: no --{name.lower()} DIR given")
+
+    if args.tinyad or args.symx:
+        eigen = find_eigen(args.eigen, args.symx) if args.tinyad else None
+        if eigen is not None:
+            print(f"Eigen for TinyAD: {eigen}")
+        print(f"building the peers' drivers in {args.build_dir}")
+        build_drivers(args.build_dir, args.tinyad, args.symx, eigen, wrapper, args.jobs)
+    # Rounds alternate the tools: this host's speed drifts by up to 2x within
+    # minutes, so each round's ratios compare times taken close together.
+    rounds: List[Dict[str, Results]] = []
+    fulls: List[Results] = []
+    for number in range(1, args.rounds + 1):
+        print(f"round {number} of {args.rounds}", flush=True)
+        results, full = one_round(args, work, check, wrapper)
+        rounds.append(results)
+        if full is not None:
+            fulls.append(full)
+    results = {name: combine([r[name] for r in rounds]) for name in rounds[0]}
+    full = combine(fulls) if fulls else None
     for name in PEERS:
         if name in results:
             g, h = check_agrees(name, results[name], results["yasps"], check)
@@ -366,6 +431,8 @@ def main() -> None:
         print("\n".join(table({**results, "yasps": full}, count)))
         print()
     print("ratios: peer / yasps (above 1: yasps takes less time or fewer iterations)")
+    if len(rounds) > 1:
+        print("\n".join(per_round_ratios(results)))
     for name, path in given.items():
         if path is None:
             print(f"{name} skipped (no --{name.lower()} DIR)")
