@@ -3,9 +3,11 @@
 the scene of the sweep example (docs/sweeps.md).
 
 ``simulate(params)`` takes ``angle`` (degrees), ``mu`` (friction),
-``youngs`` (Pa) and ``steps`` (of 0.01 s) and returns how far the block's
-centre slid down the slope, the closest any vertex came to the plane (by
-ipctk, independently of yasps) and the block's final vertex positions.
+``youngs`` (Pa), ``steps`` (of 0.01 s), ``velocity_tolerance`` (m/s,
+Newton's; default 1e-2) and ``friction_iterations`` (lags per step;
+default 1) and returns how far the block's centre slid down the slope, the
+closest any vertex came to the plane (by ipctk, independently of yasps)
+and the block's final vertex positions.
 
     python3 -m yasps.sweep examples/sweep_slope.py --grid grid.json \\
         --workers 2 --output out/sweep_slope
@@ -43,6 +45,8 @@ def simulate(params: Dict[str, Any]) -> Dict[str, Any]:
     mu = float(params.get("mu", 0.3))
     youngs = float(params.get("youngs", 1e7))
     steps = int(params.get("steps", 20))
+    lags = int(params.get("friction_iterations", 1))
+    velocity_tolerance = float(params.get("velocity_tolerance", 1e-2))
     normal = np.array([-np.sin(theta), 0.0, np.cos(theta)])
     down = np.array([-np.cos(theta), 0.0, -np.sin(theta)])
     verts, tets = box_tet_mesh(1, 0.1)
@@ -66,7 +70,9 @@ def simulate(params: Dict[str, Any]) -> Dict[str, Any]:
     contact = Contact(s, v, faces=surface_of(tets), dhat=DHAT,
                       average_mass=mass, halfspaces=[((0, 0, 0), normal)],
                       friction=mu, eps_v=1e-3)
-    stepper = ImplicitEuler(s, x, x_hat, dt=DT, contact=contact)
+    stepper = ImplicitEuler(s, x, x_hat, dt=DT, contact=contact,
+                            friction_iterations=lags,
+                            velocity_tolerance=velocity_tolerance)
     t0, t1 = tangent_basis(normal).T
     lowest = np.inf
     for _ in range(steps):

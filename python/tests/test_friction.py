@@ -2,8 +2,10 @@
 ipctk's FrictionPotential on the same tangential set; the half-space
 barrier, its CCD and its friction equal ipctk's point-plane functions and a
 vertex-triangle pair on a large static triangle; a block on a slope sticks
-below the friction angle and slides above it, every frame checked against
-the plane by ipctk."""
+below the friction angle and slides above it, and with lagged friction
+iterations slides as far as implicit Euler under Coulomb's law, every frame
+checked against the plane by ipctk; Newton's stopping rule measures the
+whole direction, not a step that CCD cut short."""
 
 import ipctk
 import numpy as np
@@ -11,6 +13,7 @@ import pytest
 
 import yasps
 from yasps import energies as E
+from yasps import sim
 from yasps.contact import Contact, surface_of
 from yasps.contact.halfspace import tangent_basis
 from yasps.sim import ImplicitEuler, add_elastic_tets, box_tet_mesh
@@ -175,11 +178,13 @@ def test_halfspace_friction_equals_a_static_triangle():
         assert relative(H[:2, :2], fH[:2, :2]) < 1e-10
 
 
-def block_on_slope(angle_degrees: float, mu: float, steps: int):
+def block_on_slope(angle_degrees: float, mu: float, steps: int,
+                   on_report=None, **stepping):
     """A stiff soft block resting on a slope of ``angle_degrees`` with
-    friction ``mu``, stepped by implicit Euler: the distance its centre slid
-    down the slope, and the smallest height of a vertex above the plane in
-    any frame (by ipctk's point-plane distance)."""
+    friction ``mu``, stepped by implicit Euler (``stepping``: more of its
+    options; ``on_report``: called with each step's report): the distance
+    its centre slid down the slope, and the smallest height of a vertex
+    above the plane in any frame (by ipctk's point-plane distance)."""
     theta = np.radians(angle_degrees)
     normal = np.array([-np.sin(theta), 0.0, np.cos(theta)])
     down = np.array([-np.cos(theta), 0.0, -np.sin(theta)])
@@ -202,12 +207,14 @@ def block_on_slope(angle_degrees: float, mu: float, steps: int):
     contact = Contact(s, v, faces=surface_of(tets), dhat=dhat,
                       average_mass=mass, halfspaces=[((0, 0, 0), normal)],
                       friction=mu, eps_v=1e-3)
-    stepper = ImplicitEuler(s, x, x_hat, dt=dt, contact=contact)
+    stepper = ImplicitEuler(s, x, x_hat, dt=dt, contact=contact, **stepping)
     lowest = np.inf
     # The plane as a triangle for ipctk: (0, t0, t1) with t0 x t1 = normal.
     t0, t1 = tangent_basis(normal).T
     for _ in range(steps):
         report = stepper.step()
+        if on_report is not None:
+            on_report(report)
         assert all(after <= before for before, after in report.stepEnergies)
         assert np.isfinite(x.value).all()
         lowest = min(lowest, min(
@@ -230,6 +237,90 @@ def test_block_sticks_below_the_friction_angle_and_slides_above():
     free = 0.5 * 9.81 * (np.sin(theta) - mu * np.cos(theta)) * t * t
     assert 0.6 * free < slid < 1.2 * free
     assert min(low_stuck, low_slid) > 0.0
+
+
+def test_lagged_friction_iterations_follow_the_sliding_law():
+    """A stiff block sliding down a 30-degree slope with mu = 0.2: with
+    IPC's lagged friction iterations (normal forces and bases re-lagged at
+    each solution until a solve after a lag converges at once) and a
+    velocity tolerance of 1e-3 m/s, the distance slid in N steps is
+    implicit Euler's under the constant acceleration a = g (sin - mu cos),
+    a dt^2 N (N + 1) / 2, to 0.5% (one lag per step: 2.6% too far, and
+    12% too short at 1e-2 m/s); every step is lagged more than once."""
+    steps, mu, dt = 20, 0.2, 0.01
+    theta = np.radians(30.0)
+    law = 0.5 * 9.81 * (np.sin(theta) - mu * np.cos(theta)) * dt * dt * \
+        steps * (steps + 1)
+    reports = []
+    slid, lowest = block_on_slope(30.0, mu, steps, friction_iterations=4,
+                                  velocity_tolerance=1e-3,
+                                  on_report=reports.append)
+    assert abs(slid / law - 1) < 5e-3
+    assert lowest > 0.0
+    assert len(reports) == steps
+    assert all(2 <= r.frictionLags <= 4 for r in reports)
+
+
+def test_contact_update_measures_friction_from_the_step_start():
+    """A lag later in a step (``step_start`` given) takes the normal forces
+    and bases where the vertex is now, and measures its tangential motion
+    from where the step started: the friction energy equals ipctk's
+    vertex-triangle FrictionPotential on the displacement from the start,
+    with the tangential set built at the current position."""
+    dhat, kappa, mu, eps_v, dt = 1e-2, 5.0, 0.4, 0.05, 0.01
+    start = np.array([[0.1, -0.05, 4e-3]])
+    now = start + [[2e-3, 1e-3, 2e-3]]
+    s, v, x = single_vertices("relag", now)
+    contact = Contact(s, v, dhat=dhat, kappa=kappa, projection="none",
+                      halfspaces=[((0, 0, 0), (0, 0, 1))], friction=mu,
+                      eps_v=eps_v)
+    with pytest.raises(ValueError, match="step_start has shape"):
+        contact.update(lag=True, dt=dt, step_start=start[:, :2])
+    assert contact.update(lag=True, dt=dt,
+                          step_start=start)["friction1"] == 1
+    big = np.array([[-10.0, -10.0, 0.0], [10.0, -10.0, 0.0], [0.0, 10.0, 0.0]])
+    V_now, V_start = np.vstack([now, big]), np.vstack([start, big])
+    mesh = ipctk.CollisionMesh(V_now, ipctk.edges(np.array([[1, 2, 3]])),
+                               np.array([[1, 2, 3]], dtype=np.int32))
+    collisions = ipctk.NormalCollisions()
+    collisions.build(mesh, V_now, dhat)
+    tangential = ipctk.TangentialCollisions()
+    tangential.build(mesh, V_now, collisions,
+                     ipctk.BarrierPotential(dhat, kappa), mu)
+    friction = ipctk.FrictionPotential(eps_v * dt)
+    barrier_only = kappa * ipctk.barrier(float(now[0, 2]) ** 2, dhat * dhat)
+    want = friction(tangential, mesh, V_now - V_start)
+    assert want > 1e-3 * barrier_only  # the motion since the start counts
+    assert abs(s.evaluateEnergy() - barrier_only - want) <= \
+        1e-10 * want + 1e-14 * barrier_only
+
+
+def test_newton_stops_on_the_whole_direction_not_the_step_taken():
+    """A vertex 5e-5 m above a plane, pulled 0.1 m below it (dhat 1e-5 m,
+    the barrier's stiffness balancing the pull at dhat / 2): CCD cuts the
+    first step to 0.04% of its direction, a move of 4e-5 m, under the
+    tolerance of 1e-4 m. That is no convergence (IPC measures the whole
+    direction): Newton goes on until the barrier holds the vertex, within
+    dhat, with a force of the pull's order (ipctk's barrier derivative)."""
+    dhat, pull = 1e-5, 0.1
+
+    def barrier_force(d: float) -> float:
+        return -2 * d * ipctk.barrier_first_derivative(d * d, dhat * dhat)
+
+    kappa = pull / barrier_force(0.5 * dhat)
+    s, v, x = single_vertices("cut", np.array([[0.0, 0.0, 5e-5]]))
+    x_hat = v.addConstant("x_hat", rows=3)
+    x_hat.updateValue([[0.0, 0.0, -pull]])
+    s.addEnergy(v.addAttribute("inertia", computed_attribute=E.inertia(
+        x, x_hat, 1.0)))
+    contact = Contact(s, v, dhat=dhat, kappa=kappa,
+                      halfspaces=[((0, 0, 0), (0, 0, 1))])
+    report = sim.newton(s, x, tolerance=1e-4, contact=contact)
+    assert report.converged and report.iterations > 1
+    assert report.stepBounds[0] < 1e-3
+    height = float(x.value[0, 2, 0])
+    assert 0.0 < height < 0.9 * dhat
+    assert 0.3 < kappa * barrier_force(height) / (pull + height) < 3.0
 
 
 def test_step_bound_follows_a_curved_motion():

@@ -138,14 +138,25 @@ class Contact:
         kernels."""
         return np.ascontiguousarray(self.positions.compute().value[:, :, 0])
 
-    def update(self, lag: bool = False,
-               dt: Optional[float] = None) -> Dict[str, int]:
+    def update(self, lag: bool = False, dt: Optional[float] = None,
+               step_start: Optional[np.ndarray] = None) -> Dict[str, int]:
         """Rebuilds the pairs from ipctk's collision set (and the
         half-spaces) at the current positions; returns the number of pairs
-        of each type. With ``lag`` (once per time step, at its start) also
-        the friction pairs: ipctk's tangential set here, with the normal
-        forces at the current stiffness and the threshold eps_v * ``dt``."""
+        of each type. With ``lag`` also the friction pairs: ipctk's
+        tangential set here, with the normal forces at the current
+        stiffness and the threshold eps_v * ``dt``. Tangential motion is
+        measured from ``step_start`` (the world positions (N, 3) at the
+        time step's start; default: now, the lag at a step's start). A lag
+        later in the step, with the step's start given, is one of IPC's
+        lagged friction iterations (:class:`yasps.sim.ImplicitEuler`'s
+        ``friction_iterations``)."""
         V = self.world()
+        if step_start is not None:
+            step_start = np.asarray(step_start, dtype=float)
+            if step_start.shape != V.shape:
+                raise ValueError(f"Contact.update: step_start has shape "
+                                 f"{step_start.shape}; the world positions "
+                                 f"are {V.shape}")
         counts = self._normal_pairs(V)
         counts["plane"] = self.halfspaces.update(V)
         if lag and self.friction > 0:
@@ -154,18 +165,22 @@ class Contact:
                                  "step dt (friction's threshold is eps_v dt)")
             if self.adaptive is not None and self.adaptive.kappa is None:
                 self.adaptStiffness()
-            counts.update(self._lag_friction(V, float(dt)))
+            counts.update(self._lag_friction(
+                V, float(dt), V if step_start is None else step_start))
         return counts
 
-    def _lag_friction(self, V: np.ndarray, dt: float) -> Dict[str, int]:
-        """The friction pairs at positions V (whose normal pairs are built)."""
+    def _lag_friction(self, V: np.ndarray, dt: float,
+                      start: np.ndarray) -> Dict[str, int]:
+        """The friction pairs at positions V (whose normal pairs are
+        built), with tangential motion measured from ``start``."""
         self.eps_u.updateValue([self.eps_v * dt])
         barrier = ipctk.BarrierPotential(self.dhat, self.kappa)
         tangential = ipctk.TangentialCollisions()
         tangential.build(self.mesh, V, self.collisions, barrier, self.friction)
         pairs = {arity: FrictionPairs(arity) for arity in ARITIES}
-        tangential_pairs(tangential, self.mesh, V, pairs)
-        self.halfspaces.friction_pairs(V, barrier, self.friction, pairs[1])
+        tangential_pairs(tangential, self.mesh, V, start, pairs)
+        self.halfspaces.friction_pairs(V, start, barrier, self.friction,
+                                       pairs[1])
         for arity, found in pairs.items():
             found.store(self.friction_primitives[arity])
         return {f"friction{a}": len(f.vertices) for a, f in pairs.items()}
@@ -196,6 +211,25 @@ class Contact:
             p["eps_x"].updateValue(np.asarray(eps[kind]).reshape(-1, 1))
             p["weight"].updateValue(np.asarray(weights[kind]).reshape(-1, 1))
         return {kind: len(pairs) for kind, pairs in found.items()}
+
+    def stepLength(self, steps: Sequence[np.ndarray]) -> float:
+        """The largest distance a vertex's world position moves when the
+        targets take the whole step ``steps`` (one array per minimisation
+        target, as for :meth:`stepBound`): the size of a Newton direction
+        in world space, what IPC's stopping rule measures."""
+        targets = self.scene.minimizeTargets
+        if len(steps) != len(targets):
+            raise ValueError(f"stepLength: {len(steps)} steps for "
+                             f"{len(targets)} targets")
+        before = [t.value for t in targets]
+        try:
+            V0 = self.world()
+            for t, x, p in zip(targets, before, steps):
+                t.updateValue(x + np.asarray(p).reshape(x.shape))
+            return float(np.abs(self.world() - V0).max())
+        finally:
+            for t, x in zip(targets, before):
+                t.updateValue(x)
 
     def stepBound(self, steps: Sequence[np.ndarray],
                   pieces: int = CURVED_PIECES) -> float:

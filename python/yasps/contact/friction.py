@@ -117,12 +117,13 @@ def add_friction_primitives(mesh: Mesh, vertices, positions: Attribute,
     return primitives
 
 
-def tangential_pairs(collisions, mesh, V: np.ndarray,
+def tangential_pairs(collisions, mesh, V: np.ndarray, start: np.ndarray,
                      pairs: Dict[int, FrictionPairs]) -> None:
     """Adds every collision of ipctk's tangential set ``collisions`` (built
     on ``mesh`` at positions ``V``) to ``pairs`` by its stencil size, with
     ipctk's coefficients (the relative-velocity Jacobian's blocks), basis,
-    weight, mu and normal force."""
+    weight, mu and normal force, and the positions ``start`` that
+    tangential motion is measured from."""
     edges, faces = mesh.edges, mesh.faces
     for group in (collisions.vv_collisions, collisions.ev_collisions,
                   collisions.ee_collisions, collisions.fv_collisions):
@@ -133,5 +134,5 @@ def tangential_pairs(collisions, mesh, V: np.ndarray,
             coef = collision.relative_velocity_jacobian()[0, ::3]
             scale = (collision.weight * collision.mu_k
                      * collision.normal_force_magnitude)
-            pairs[arity].add(ids, coef, collision.tangent_basis, V[ids],
-                             scale)
+            pairs[arity].add(ids, coef, collision.tangent_basis,
+                             start[ids], scale)

@@ -51,6 +51,9 @@ class NewtonReport:
         self.cgIterations: List[int] = []
         #: directions taken from PCG's last iterate (it hit its limit)
         self.inexactDirections = 0
+        #: friction lags taken (ImplicitEuler: one per step, more with
+        #: friction_iterations)
+        self.frictionLags = 0
         self.seconds: Dict[str, float] = dict.fromkeys(STAGES, 0.0)
 
     def add(self, other: "NewtonReport") -> None:
@@ -58,6 +61,7 @@ class NewtonReport:
         self.iterations += other.iterations
         self.stepEnergies += other.stepEnergies
         self.inexactDirections += other.inexactDirections
+        self.frictionLags += other.frictionLags
         self.cgIterations += other.cgIterations
         for stage, seconds in other.seconds.items():
             self.seconds[stage] = self.seconds.get(stage, 0.0) + seconds
@@ -104,11 +108,12 @@ def newton(scene, x: Targets, tolerance: float,
     every iterate and every candidate of the line search. ``fixed`` (a
     boolean mask of a single target's instances or entries, or a list with
     one mask or None per target) excludes DoFs, which keep their values.
-    Stops when the largest change of a world position (with contact) or of
-    a target entry is below ``tolerance``. A direction whose PCG stops at
-    ``cg_max_iterations`` before ``cg_tolerance`` is used as it is (counted
-    in ``inexactDirections``). ``cg_stopping``: minimizeEnergy's stopping
-    rule ("residual" or "energy_norm")."""
+    Stops after a step whose whole direction (before the step bounds and
+    the line search) moves no world position (with contact) or target
+    entry by ``tolerance`` or more (IPC's rule). A direction whose PCG
+    stops at ``cg_max_iterations`` before ``cg_tolerance`` is used as it is
+    (counted in ``inexactDirections``). ``cg_stopping``: minimizeEnergy's
+    stopping rule ("residual" or "energy_norm")."""
     targets = _as_list(x)
     _check_targets(scene, targets)
     if fixed is not None and isinstance(x, Attribute):
@@ -163,14 +168,19 @@ def newton(scene, x: Targets, tolerance: float,
         if step_bound is not None:
             alpha = min(alpha, step_bound(current[0], steps[0]) if
                         len(targets) == 1 else step_bound(current, steps))
-        world = None
+        # IPC's stopping rule measures the whole direction, not the step
+        # taken: a step that CCD or the line search cuts short is no sign
+        # of convergence (a vertex thrown at a plane stopped that way before
+        # the barrier held it).
         if contact is not None:
             start = clock()
+            length = contact.stepLength(steps)
             bound = contact.stepBound(steps)
             report.seconds["ccd"] += clock() - start
             report.stepBounds.append(bound)
             alpha = min(alpha, bound)
-            world = contact.world()
+        else:
+            length = max(float(np.abs(p).max()) for p in steps)
         while alpha > 1e-10:
             for t, value, p in zip(targets, current, steps):
                 t.updateValue(value + alpha * p)
@@ -190,9 +200,7 @@ def newton(scene, x: Targets, tolerance: float,
         report.energies.append(current_energy)
         if contact is not None:
             current_energy = adapt()
-        change = (np.abs(contact.world() - world).max() if world is not None
-                  else max(np.abs(alpha * p).max() for p in steps))
-        if change < tolerance:
+        if length < tolerance:
             report.converged = True
             break
     return report
@@ -210,7 +218,16 @@ class ImplicitEuler:
     ``v = (x_new - x_old) / dt``. ``fixed`` (as for :func:`newton`) keeps
     DoFs where they are; ``cg_stopping`` is PCG's stopping rule (see
     :func:`newton`). Several targets may also be given as
-    ``targets=[x, A, t], predicted=[x_hat, A_hat, t_hat]``."""
+    ``targets=[x, A, t], predicted=[x_hat, A_hat, t_hat]``.
+
+    With friction, the normal forces, tangent bases and closest points of
+    friction are lagged at the step's start, and the step is solved once
+    (IPC's default). ``friction_iterations`` > 1 re-lags them at the
+    solution (tangential motion still measured from the step's start) and
+    solves again, up to that many lags in all or until a solve after a lag
+    converges at once (IPC's lagged iterations): the friction force then
+    follows the step's own normal force, which matters for stiff bodies
+    that bounce in contact."""
 
     def __init__(self, scene, x: Optional[Targets] = None,
                  x_hat: Optional[Targets] = None, dt: Optional[float] = None,
@@ -220,6 +237,7 @@ class ImplicitEuler:
                  fixed=None, max_iterations: int = 20, contact=None,
                  cg_tolerance: float = 1e-4, cg_max_iterations: int = 1000,
                  cg_stopping: str = "residual",
+                 friction_iterations: int = 1,
                  *, targets: Optional[Sequence[Attribute]] = None,
                  predicted: Optional[Sequence[Attribute]] = None):
         # targets= and predicted= are the multi-target spelling of x, x_hat.
@@ -260,6 +278,11 @@ class ImplicitEuler:
         self.max_iterations, self.cg_tolerance = max_iterations, cg_tolerance
         self.cg_max_iterations = cg_max_iterations
         self.cg_stopping = cg_stopping
+        if int(friction_iterations) != friction_iterations or \
+                friction_iterations < 1:
+            raise SceneError(f"ImplicitEuler: friction_iterations must be a "
+                             f"whole number >= 1, got {friction_iterations!r}")
+        self.friction_iterations = int(friction_iterations)
         self.velocities = [np.zeros_like(t.value) for t in self.targets]
 
     def run(self, frames: int, on_frame: Optional[Callable[[int, NewtonReport],
@@ -298,22 +321,41 @@ class ImplicitEuler:
                 pull[mask] = 0.0
             hat.updateValue(value + self.dt * v + self.dt * self.dt * pull)
         fixed = None if all(m is None for m in self.fixed) else self.fixed
-        lag_seconds = 0.0
-        if self.contact is not None and self.contact.friction > 0:
-            # Friction's normal forces, bases and closest points are those
-            # of the step's start (IPC's lagging).
-            start = time.perf_counter()
-            self.contact.update(lag=True, dt=self.dt)
-            lag_seconds = time.perf_counter() - start
-        report = newton(self.scene, self.targets,
-                        tolerance=self.velocity_tolerance * self.dt,
-                        step_bound=self.step_bound,
-                        max_iterations=self.max_iterations,
-                        cg_tolerance=self.cg_tolerance, fixed=fixed,
-                        contact=self.contact,
-                        cg_max_iterations=self.cg_max_iterations,
-                        cg_stopping=self.cg_stopping)
-        report.seconds["collisions"] += lag_seconds
+        friction = self.contact is not None and self.contact.friction > 0
+        start_world = (self.contact.world() if friction
+                       and self.friction_iterations > 1 else None)
+        report = None
+        for lag in range(self.friction_iterations if friction else 1):
+            lag_seconds = 0.0
+            if friction:
+                # Friction's normal forces, bases and closest points: those
+                # of the step's start, then of the last solution (IPC's
+                # lagging); tangential motion counts from the step's start.
+                clock = time.perf_counter()
+                self.contact.update(lag=True, dt=self.dt,
+                                    step_start=start_world if lag else None)
+                lag_seconds = time.perf_counter() - clock
+            solve = newton(self.scene, self.targets,
+                           tolerance=self.velocity_tolerance * self.dt,
+                           step_bound=self.step_bound,
+                           max_iterations=self.max_iterations,
+                           cg_tolerance=self.cg_tolerance, fixed=fixed,
+                           contact=self.contact,
+                           cg_max_iterations=self.cg_max_iterations,
+                           cg_stopping=self.cg_stopping)
+            solve.seconds["collisions"] += lag_seconds
+            solve.frictionLags = int(friction)
+            if report is None:
+                report = solve
+            else:
+                report.add(solve)
+                report.energies += solve.energies
+                report.stepBounds += solve.stepBounds
+                report.stiffness += solve.stiffness
+                report.converged = solve.converged
+            # Consistent: the solution did not move after the last lag.
+            if lag and solve.converged and solve.iterations <= 1:
+                break
         self.velocities = [(t.value - p) / self.dt
                            for t, p in zip(self.targets, previous)]
         return report
