@@ -5,7 +5,8 @@ and output (ParaView series, pictures, videos)."""
 from .bodies import (AffineBody, FreeVertices, add_affine_body,
                      add_affine_inertia, add_caged_surface, add_cloth,
                      add_elastic_tets, add_free_vertices,
-                     add_hex8_neo_hookean, hex8_gauss_points, lumped_masses)
+                     add_hex8_neo_hookean, hex8_gauss_points, lumped_masses,
+                     material_constant)
 from .meshes import (HEX_CORNERS, Cage, box_tet_mesh, cage_grid,
                      cloth_corners, cloth_grid, hex_tets, hinges_of,
                      orient_tets, polyline_segments, read_tet_mesh,
@@ -19,6 +20,7 @@ from .run import Body, RunSummary, simulate
 __all__ = ["AffineBody", "Body", "Cage", "FreeVertices", "HEX_CORNERS",
            "add_caged_surface", "add_free_vertices", "add_hex8_neo_hookean",
            "cage_grid", "hex8_gauss_points", "hex_tets", "lumped_masses",
+           "material_constant",
            "trilinear_weights", "tube_mesh", "polyline_segments", "zigzag_spring", "RunSummary", "simulate", "ImplicitEuler", "NewtonReport", "RecordedFrame",
            "SurfaceRecorder", "add_affine_body", "add_affine_inertia",
            "add_cloth", "add_elastic_tets",

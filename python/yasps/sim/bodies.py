@@ -1,5 +1,10 @@
 """Bodies for simulations: a soft tet mesh with stable Neo-Hookean
-elasticity on its vertices' positions, and an affine body's inertia."""
+elasticity on its vertices' positions, and an affine body's inertia.
+
+Material parameters and time-step scales are stored values of the body's
+mesh (1x1 constants), not numbers in the IR: a scene built again with other
+values (a parameter sweep) reuses the compiled kernels, and
+``mesh["<name>_mu"].updateValue(...)`` changes one in place."""
 
 from __future__ import annotations
 
@@ -8,21 +13,35 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..frontend import energies as E
+from ..frontend.energies import Number
 from ..frontend.attribute import Attribute
 from ..frontend.scene import Mesh, Primitive
 from .meshes import HEX_CORNERS, hinges_of
 
 
+def material_constant(mesh: Mesh, name: str, value: Number) -> Attribute:
+    """``value`` as a 1x1 constant ``name`` of ``mesh``, visible to all its
+    primitives; an attribute is returned as it is (a value shared by
+    several bodies, or one per instance)."""
+    if isinstance(value, Attribute):
+        return value
+    constant = mesh.addConstant(name, rows=1)
+    constant.updateValue([float(value)])
+    return constant
+
+
 def add_elastic_tets(mesh: Mesh, positions: Attribute, rest: np.ndarray,
-                     tets: np.ndarray, mu: float, lam: float,
-                     scale: float = 1.0, name: str = "t",
+                     tets: np.ndarray, mu: Number, lam: Number,
+                     scale: Number = 1.0, name: str = "t",
                      projection: str = "clamp") -> Attribute:
     """Adds a primitive ``name`` of the tets (M, 4) of the vertices that
     ``positions`` belongs to, with their rest shape (the inverse of the rest
     edge matrix and the volume, from ``rest`` (N, 3)) and registers
     ``scale`` times stable Neo-Hookean (``mu``, ``lam``, per unit volume) on
     them as an energy (``scale``: dt^2 for implicit Euler), PSD-projected
-    by ``projection`` (as ``addEnergy``). Returns it."""
+    by ``projection`` (as ``addEnergy``). ``mu``, ``lam`` and ``scale``
+    are the mesh's constants ``name + "_mu"``, ``"_lam"``, ``"_scale"``
+    (:func:`material_constant`). Returns it."""
     tets = np.asarray(tets, dtype=np.int64).reshape(-1, 4)
     corners = np.asarray(rest, dtype=float)[tets]
     edges = np.stack([corners[:, k] - corners[:, 0] for k in (1, 2, 3)], axis=2)
@@ -32,6 +51,9 @@ def add_elastic_tets(mesh: Mesh, positions: Attribute, rest: np.ndarray,
         np.abs(np.linalg.det(edges))[:, None] / 6)
     gathered = t.addAttribute("c", through=t.addConnectivity(
         "t2v", positions.owner, tets, 4), source=positions)
+    mu, lam, scale = (material_constant(mesh, f"{name}_{what}", value)
+                      for what, value in (("mu", mu), ("lam", lam),
+                                          ("scale", scale)))
     energy = t.addAttribute("elastic", computed_attribute=scale *
                             E.stable_neo_hookean(E.deformation_gradient(
                                 gathered, t["inv"]), mu, lam, t["vol"]))
@@ -85,8 +107,8 @@ def _triangle_rest_frames(rest: np.ndarray, faces: np.ndarray):
 
 
 def add_cloth(mesh: Mesh, positions: Attribute, rest: np.ndarray,
-              faces: np.ndarray, stretch: float, shear: float,
-              bending: float, scale: float = 1.0,
+              faces: np.ndarray, stretch: Number, shear: Number,
+              bending: Number, scale: Number = 1.0,
               name: str = "cloth", projection: str = "clamp") -> Attribute:
     """Registers a cloth on the triangles ``faces`` (M, 3) of the vertices
     ``positions`` belongs to, at rest ``rest`` (N, 3): Baraff-Witkin
@@ -95,9 +117,17 @@ def add_cloth(mesh: Mesh, positions: Attribute, rest: np.ndarray,
     0, dihedral bending on every interior edge (its rest length times
     ``bending``; zero when flat), all times ``scale`` (dt^2 for implicit
     Euler), PSD-projected by ``projection`` (as ``addEnergy``). Primitives
-    ``name`` and ``name + "_hinges"``. Returns the stretch energy."""
+    ``name`` and ``name + "_hinges"``; the four parameters are the mesh's
+    constants ``name + "_stretch"``, ``"_shear"``, ``"_bending"``,
+    ``"_scale"`` (:func:`material_constant`). Returns the stretch
+    energy."""
     rest = np.asarray(rest, dtype=float).reshape(-1, 3)
     faces = np.asarray(faces, dtype=np.int64).reshape(-1, 3)
+    bends = isinstance(bending, Attribute) or bending > 0
+    stretch, shear, bending, scale = (
+        material_constant(mesh, f"{name}_{what}", value) for what, value in
+        (("stretch", stretch), ("shear", shear), ("bending", bending),
+         ("scale", scale)))
     inverse, areas = _triangle_rest_frames(rest, faces)
     tri = mesh.addPrimitive(name, numInstances=len(faces))
     tri.addConstant("uv_inv", rows=2, cols=2).updateValue(inverse)
@@ -109,7 +139,7 @@ def add_cloth(mesh: Mesh, positions: Attribute, rest: np.ndarray,
                                               tri["area"], stretch, shear))
     mesh.scene.addEnergy(energy, projection=projection)
     hinges = hinges_of(faces)
-    if bending > 0 and len(hinges):
+    if bends and len(hinges):
         h = mesh.addPrimitive(name + "_hinges", numInstances=len(hinges))
         h.addConstant("length", rows=1).updateValue(np.linalg.norm(
             rest[hinges[:, 1]] - rest[hinges[:, 0]], axis=1)[:, None])
@@ -134,15 +164,20 @@ class AffineBody:
 
 
 def add_affine_body(mesh: Mesh, rest: np.ndarray, masses: np.ndarray,
-                    stiffness: float, scale: float = 1.0,
+                    stiffness: Number, scale: Number = 1.0,
                     translation=(0.0, 0.0, 0.0)) -> AffineBody:
     """An affine body (ABD) on ``mesh``: one instance ``body`` with A = I and
     t = ``translation``, vertices ``v`` at ``A rest + t`` (``rest`` (N, 3),
     relative to the body's origin), the inertia of their ``masses`` on A
     and t (:func:`add_affine_inertia`) and ``scale`` times the
     orthogonality energy with ``stiffness`` (dt^2 times a stiffness like
-    the material's Young's modulus times the volume, as ABD does)."""
+    the material's Young's modulus times the volume, as ABD does);
+    ``stiffness`` and ``scale`` are the mesh's constants
+    ``"orthogonality_stiffness"`` and ``"orthogonality_scale"``
+    (:func:`material_constant`)."""
     rest = np.asarray(rest, dtype=float).reshape(-1, 3)
+    stiffness = material_constant(mesh, "orthogonality_stiffness", stiffness)
+    scale = material_constant(mesh, "orthogonality_scale", scale)
     body = mesh.addPrimitive("body", numInstances=1)
     A = body.addAttribute("A", rows=3, cols=3)
     A.updateValue(np.eye(3)[None])
@@ -247,13 +282,19 @@ def hex8_gauss_points(rest: np.ndarray, hexes: np.ndarray):
 
 
 def add_hex8_neo_hookean(mesh: Mesh, positions: Attribute, rest: np.ndarray,
-                         hexes: np.ndarray, mu: float, lam: float,
-                         scale: float = 1.0, name: str = "gauss") -> Attribute:
+                         hexes: np.ndarray, mu: Number, lam: Number,
+                         scale: Number = 1.0,
+                         name: str = "gauss") -> Attribute:
     """Stable Neo-Hookean on trilinear hexahedra (paper appendix G, Hex8):
     a primitive ``name`` of their 2x2x2 Gauss points, each joined to its
     cell's 8 corners with F = x^T G and its share of the volume (see
-    :func:`hex8_gauss_points`), times ``scale``. Returns the energy."""
+    :func:`hex8_gauss_points`), times ``scale``; ``mu``, ``lam`` and
+    ``scale`` are the mesh's constants ``name + "_mu"``, ``"_lam"``,
+    ``"_scale"`` (:func:`material_constant`). Returns the energy."""
     G, w = hex8_gauss_points(rest, hexes)
+    mu, lam, scale = (material_constant(mesh, f"{name}_{what}", value)
+                      for what, value in (("mu", mu), ("lam", lam),
+                                          ("scale", scale)))
     corners = np.repeat(np.asarray(hexes, dtype=np.int64), 8, axis=0)
     q = mesh.addPrimitive(name, numInstances=len(w))
     q.addConstant("G", rows=8, cols=3).updateValue(G)
