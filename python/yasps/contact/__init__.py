@@ -24,7 +24,7 @@ parameterisations it follows the curved motion in straight pieces.
 
 from __future__ import annotations
 
-from typing import Dict, List, Optional, Sequence, Union
+from typing import Dict, List, Optional, Sequence, Tuple, Union
 
 import ipctk
 import numpy as np
@@ -212,30 +212,20 @@ class Contact:
             p["weight"].updateValue(np.asarray(weights[kind]).reshape(-1, 1))
         return {kind: len(pairs) for kind, pairs in found.items()}
 
-    def stepLength(self, steps: Sequence[np.ndarray]) -> float:
-        """The largest distance a vertex's world position moves when the
-        targets take the whole step ``steps`` (one array per minimisation
-        target, as for :meth:`stepBound`): the size of a Newton direction
-        in world space, what IPC's stopping rule measures."""
-        targets = self.scene.minimizeTargets
-        if len(steps) != len(targets):
-            raise ValueError(f"stepLength: {len(steps)} steps for "
-                             f"{len(targets)} targets")
-        before = [t.value for t in targets]
-        try:
-            V0 = self.world()
-            for t, x, p in zip(targets, before, steps):
-                t.updateValue(x + np.asarray(p).reshape(x.shape))
-            return float(np.abs(self.world() - V0).max())
-        finally:
-            for t, x in zip(targets, before):
-                t.updateValue(x)
-
     def stepBound(self, steps: Sequence[np.ndarray],
                   pieces: int = CURVED_PIECES) -> float:
-        """The largest fraction in [0, 1] of the step ``steps`` (one array
-        per minimisation target, as minimizeEnergy returns them, negated)
-        along which no surface primitives cross, by ipctk's CCD (and the
+        """The bound of :meth:`stepBoundAndLength`, alone."""
+        return self.stepBoundAndLength(steps, pieces)[0]
+
+    def stepBoundAndLength(self, steps: Sequence[np.ndarray],
+                           pieces: int = CURVED_PIECES) -> Tuple[float, float]:
+        """The step bound, and the largest distance a world position moves
+        over the whole step (the size of a Newton direction in world
+        space, what IPC's stopping rule measures).
+
+        The bound is the largest fraction in [0, 1] of the step ``steps``
+        (one array per minimisation target, as minimizeEnergy returns them,
+        negated) along which no surface primitives cross, by ipctk's CCD (and the
         half-spaces' closed form) on the world positions' motion. Where the
         world positions move in a straight line (linear parameterisations:
         free, affine, caged), one CCD from now to the full step is exact.
@@ -260,10 +250,11 @@ class Contact:
         try:
             V0 = self.world()
             V1, middle = world_at(1.0), world_at(0.5)
-            scale = max(float(np.abs(V1 - V0).max()), 1e-300)
+            length = float(np.abs(V1 - V0).max())
+            scale = max(length, 1e-300)
             straight = np.abs(middle - 0.5 * (V0 + V1)).max() <= 1e-9 * scale
             if straight:
-                return self._bound(V0, V1)
+                return self._bound(V0, V1), length
             previous = V0
             for k in range(pieces):
                 following = world_at((k + 1) / pieces)
@@ -271,9 +262,9 @@ class Contact:
                 margin = 2.0 * float(np.linalg.norm(bend, axis=1).max())
                 bound = self._bound(previous, following, margin)
                 if bound < 1.0:
-                    return (k + bound) / pieces
+                    return (k + bound) / pieces, length
                 previous = following
-            return 1.0
+            return 1.0, length
         finally:
             for t, x in zip(targets, before):
                 t.updateValue(x)

@@ -174,8 +174,7 @@ def newton(scene, x: Targets, tolerance: float,
         # the barrier held it).
         if contact is not None:
             start = clock()
-            length = contact.stepLength(steps)
-            bound = contact.stepBound(steps)
+            bound, length = contact.stepBoundAndLength(steps)
             report.seconds["ccd"] += clock() - start
             report.stepBounds.append(bound)
             alpha = min(alpha, bound)
