@@ -20,6 +20,8 @@
 #include "mlir/Pass/PassManager.h"
 #include "mlir/Pass/PassRegistry.h"
 #include "mlir/Transforms/Passes.h"
+#include "llvm/ADT/StringExtras.h"
+#include "llvm/Support/SHA256.h"
 #include "llvm/Support/SourceMgr.h"
 #include "llvm/Support/raw_ostream.h"
 
@@ -44,6 +46,7 @@
 #include <nanobind/stl/tuple.h>
 #include <nanobind/stl/vector.h>
 
+#include <list>
 #include <map>
 #include <memory>
 
@@ -175,17 +178,79 @@ struct CpuLibrary {
   }
 };
 
-/// Parses and verifies `ir`, then returns `compile(module)`'s library; its
-/// error, with the diagnostics collected meanwhile, becomes an IRError.
+/// Scenes after their pre-pipeline (the differentiation pipeline), by the
+/// hash of their IR text (without its location definitions) and the
+/// pipeline. Every request for a scene's kernels, and every question about
+/// its parameters, starts from one parse and one run of the pipeline
+/// instead of repeating both (a scene's energies are requested one by one).
+/// The caller holds getLock(); the few newest scenes are kept.
+class PreparedScenes {
+public:
+  static constexpr size_t kCapacity = 16;
+
+  static std::string key(const std::string &ir, const std::string &pipeline) {
+    std::string text = ir + '\0' + pipeline;
+    std::array<uint8_t, 32> hash = llvm::SHA256::hash(llvm::ArrayRef(
+        reinterpret_cast<const uint8_t *>(text.data()), text.size()));
+    return llvm::toHex(hash, /*LowerCase=*/true);
+  }
+
+  /// The prepared scene of `key`, or null.
+  ModuleOp find(const std::string &key) {
+    for (auto it = entries.begin(); it != entries.end(); ++it)
+      if (it->first == key) {
+        entries.splice(entries.begin(), entries, it);
+        return *entries.front().second;
+      }
+    return nullptr;
+  }
+
+  ModuleOp insert(const std::string &key, OwningOpRef<ModuleOp> module) {
+    entries.emplace_front(key, std::move(module));
+    if (entries.size() > kCapacity)
+      entries.pop_back();
+    return *entries.front().second;
+  }
+
+private:
+  std::list<std::pair<std::string, OwningOpRef<ModuleOp>>> entries;
+};
+
+PreparedScenes &preparedScenes() {
+  static auto *scenes = new PreparedScenes();
+  return *scenes;
+}
+
+/// Returns `compile(scene)`'s library, `scene` being `ir` (parsed with the
+/// location definitions `locations` and verified) after `pipeline`, from
+/// the prepared scenes or prepared now; a failure, with the diagnostics
+/// collected meanwhile, becomes an IRError (MissingAttribute for an
+/// attribute that does not exist).
 template <typename Compile>
-auto compileVerified(const std::string &ir, const std::string &bufferName,
+auto compilePrepared(const std::string &ir, const std::string &locations,
+                     const std::string &pipeline, const std::string &bufferName,
                      Compile compile) {
   std::lock_guard<std::mutex> guard(getLock());
   llvm::SourceMgr sourceMgr;
   DiagnosticCollector diagnostics(getContext(), sourceMgr);
-  OwningOpRef<ModuleOp> module =
-      parseVerified(ir, bufferName, sourceMgr, diagnostics);
-  auto library = compile(*module);
+  std::string key = PreparedScenes::key(ir, pipeline);
+  using Result = decltype(compile(ModuleOp()));
+  auto prepareAndCompile = [&]() -> Result {
+    ModuleOp scene = preparedScenes().find(key);
+    if (!scene) {
+      OwningOpRef<ModuleOp> parsed =
+          parseVerified(ir + locations, bufferName, sourceMgr, diagnostics);
+      if (!pipeline.empty())
+        if (llvm::Error err = mlir::yasps::runPasses(
+                *parsed, "kernel generation failed", [&](PassManager &pm) {
+                  return parsePassPipeline(pipeline, pm);
+                }))
+          return std::move(err);
+      scene = preparedScenes().insert(key, std::move(parsed));
+    }
+    return compile(scene);
+  };
+  Result library = prepareAndCompile();
   if (!library) {
     std::string message, missing;
     llvm::handleAllErrors(
@@ -203,15 +268,33 @@ auto compileVerified(const std::string &ir, const std::string &bufferName,
   return *library;
 }
 
+/// `ir` names what is compiled and is the request's key; `locations` (the
+/// definitions of the location aliases `ir` refers to) is parsed after it
+/// for diagnostics but is no part of any key.
 CpuLibrary compileCpu(const std::string &ir,
                       const std::vector<std::string> &attributes,
                       const std::string &cacheDir, unsigned optLevel,
                       const std::string &bufferName,
-                      const std::string &prePipeline, int64_t lanes) {
+                      const std::string &prePipeline, int64_t lanes,
+                      const std::string &locations,
+                      std::optional<nb::callable> onKernelCompiled) {
   mlir::yasps::CpuCompileOptions options;
   options.cacheDir = cacheDir;
   options.optLevel = optLevel;
   options.lanes = lanes;
+  if (onKernelCompiled)
+    options.onKernelCompiled = [&](const std::string &attribute) {
+      nb::gil_scoped_acquire acquire;
+      try {
+        (*onKernelCompiled)(attribute);
+      } catch (nb::python_error &error) {
+        // A failing progress display does not fail the compilation.
+        error.discard_as_unraisable("yasps progress callback");
+      }
+    };
+  // The callback runs on the compiler's threads: they need the GIL, so
+  // this thread lets go of it while compiling.
+  nb::gil_scoped_release release;
   CpuLibrary result;
   // A request met before (in this or an earlier process) loads its object
   // without parsing or lowering anything.
@@ -220,13 +303,14 @@ CpuLibrary compileCpu(const std::string &ir,
   if ((result.library =
            mlir::yasps::lookupCpuSource(source, options, result.stats)))
     return result;
-  result.library = compileVerified(ir, bufferName, [&](ModuleOp module) {
-    auto library = mlir::yasps::compileCpuKernels(module, attributes, options,
-                                                  &result.stats, prePipeline);
-    if (library)
-      mlir::yasps::recordCpuSource(source, **library, options);
-    return library;
-  });
+  result.library = compilePrepared(
+      ir, locations, prePipeline, bufferName, [&](ModuleOp scene) {
+        auto library = mlir::yasps::compileCpuKernels(
+            scene, attributes, options, &result.stats, /*prePipeline=*/"");
+        if (library)
+          mlir::yasps::recordCpuSource(source, **library, options);
+        return library;
+      });
   return result;
 }
 
@@ -236,21 +320,22 @@ struct GpuLibrary {
   mlir::yasps::GpuCompileStats stats;
 };
 
-GpuLibrary compileGpu(const std::string &ir,
-                      const std::vector<std::string> &attributes,
-                      const std::vector<std::string> &chips, bool keepPtx,
-                      const std::string &cacheDir,
-                      const std::string &bufferName,
-                      const std::string &prePipeline) {
+GpuLibrary
+compileGpu(const std::string &ir, const std::vector<std::string> &attributes,
+           const std::vector<std::string> &chips, bool keepPtx,
+           const std::string &cacheDir, const std::string &bufferName,
+           const std::string &prePipeline, const std::string &locations) {
   mlir::yasps::GpuCompileOptions options;
   options.chips = chips;
   options.keepPtx = keepPtx;
   options.cacheDir = cacheDir;
   GpuLibrary result;
-  result.library = compileVerified(ir, bufferName, [&](ModuleOp module) {
-    return mlir::yasps::compileGpuKernels(module, attributes, options,
-                                          &result.stats, prePipeline);
-  });
+  result.library = compilePrepared(
+      ir, locations, prePipeline, bufferName, [&](ModuleOp scene) {
+        return mlir::yasps::compileGpuKernels(scene, attributes, options,
+                                              &result.stats,
+                                              /*prePipeline=*/"");
+      });
   return result;
 }
 
@@ -293,28 +378,26 @@ void launchCpu(const CpuLibrary &self, const std::string &attribute,
 std::vector<std::vector<std::vector<std::string>>>
 attributeParams(const std::string &ir, const std::string &pipeline,
                 const std::vector<std::string> &paths,
-                const std::string &bufferName) {
-  std::lock_guard<std::mutex> guard(getLock());
-  MLIRContext &context = getContext();
-  llvm::SourceMgr sourceMgr;
-  DiagnosticCollector diagnostics(context, sourceMgr);
-  OwningOpRef<ModuleOp> module =
-      parseVerified(ir, bufferName, sourceMgr, diagnostics);
-  applyPipeline(*module, pipeline, diagnostics);
-  std::vector<std::vector<std::vector<std::string>>> result;
-  auto scenes = module->getOps<mlir::yasps::SceneOp>();
-  for (const std::string &text : paths) {
-    auto path = dyn_cast_or_null<SymbolRefAttr>(parseAttribute(text, &context));
-    Operation *decl = path && !scenes.empty()
-                          ? mlir::yasps::lookupInScene(*scenes.begin(), path)
-                          : nullptr;
-    auto params =
-        decl ? decl->getAttrOfType<ArrayAttr>("yasps.params") : ArrayAttr();
-    std::vector<std::vector<std::string>> slots =
-        mlir::yasps::describeParams(params);
-    result.push_back(slots);
-  }
-  return result;
+                const std::string &bufferName, const std::string &locations) {
+  using Slots = std::vector<std::vector<std::vector<std::string>>>;
+  return compilePrepared(
+      ir, locations, pipeline, bufferName,
+      [&](ModuleOp scene) -> llvm::Expected<Slots> {
+        Slots result;
+        auto scenes = scene.getOps<mlir::yasps::SceneOp>();
+        for (const std::string &text : paths) {
+          auto path = dyn_cast_or_null<SymbolRefAttr>(
+              parseAttribute(text, scene.getContext()));
+          Operation *decl =
+              path && !scenes.empty()
+                  ? mlir::yasps::lookupInScene(*scenes.begin(), path)
+                  : nullptr;
+          auto params = decl ? decl->getAttrOfType<ArrayAttr>("yasps.params")
+                             : ArrayAttr();
+          result.push_back(mlir::yasps::describeParams(params));
+        }
+        return result;
+      });
 }
 
 } // namespace
@@ -479,6 +562,7 @@ NB_MODULE(_yasps_compiler, m) {
   m.def("compile_gpu", &compileGpu, nb::arg("ir"), nb::arg("attributes"),
         nb::arg("chips"), nb::arg("keep_ptx") = true, nb::arg("cache_dir") = "",
         nb::arg("name") = "<yasps>", nb::arg("pre_pipeline") = "",
+        nb::arg("locations") = "",
         "Compiles GPU kernels (cubins per chip, PTX of the newest) for the "
         "attributes of the IR's scene; needs the CUDA toolkit's ptxas, not "
         "a GPU. Raises MissingAttributeError (.symbol) for an attribute that "
@@ -486,9 +570,14 @@ NB_MODULE(_yasps_compiler, m) {
   m.def("compile_cpu", &compileCpu, nb::arg("ir"), nb::arg("attributes"),
         nb::arg("cache_dir") = "", nb::arg("opt_level") = 3,
         nb::arg("name") = "<yasps>", nb::arg("pre_pipeline") = "",
-        nb::arg("lanes") = 0,
+        nb::arg("lanes") = 0, nb::arg("locations") = "",
+        nb::arg("on_kernel_compiled") = nb::none(),
         "Compiles CPU kernels for the attributes (scene-relative paths) of "
-        "the IR's scene, reusing in-memory and on-disk caches. "
+        "the IR's scene, reusing in-memory and on-disk caches keyed by the "
+        "IR; locations: the definitions of the location aliases it refers "
+        "to (parsed after it, for diagnostics, and in no key); "
+        "on_kernel_compiled(attribute): called as each kernel's machine "
+        "code is made (for progress; not for kernels found in a cache). "
         "lanes: instances evaluated together in SIMD lanes (0: the host's "
         "vector width in doubles; 1: one at a time). Raises "
         "MissingAttributeError (.symbol) for an attribute that does not exist "
@@ -500,8 +589,11 @@ NB_MODULE(_yasps_compiler, m) {
         "f64 lanes of the host's widest vector registers");
   m.def("attribute_params", &attributeParams, nb::arg("ir"),
         nb::arg("pipeline"), nb::arg("paths"), nb::arg("name") = "<yasps>",
+        nb::arg("locations") = "",
         "yasps.params of the attributes (e.g. derivative attributes) after "
-        "running a pass pipeline; empty lists for attributes without them.");
+        "running a pass pipeline; empty lists for attributes without them. "
+        "The scene after the pipeline is kept for the kernel requests that "
+        "follow (keyed by ir and pipeline, not locations).");
   m.def(
       "cpu_lowering_pipeline",
       [] { return mlir::yasps::getCpuLoweringPipeline().str(); },

@@ -217,17 +217,6 @@ def test_dynamic_primitive_updates():
     assert "yasps.primitive @pp(1) dynamic" in s.ir()
 
 
-def test_add_minimize_target_differentiates_and_reports():
-    s = yasps.scene("p")
-    prim = s.addMesh("m").addPrimitive("p", numInstances=1)
-    h = prim.addAttribute("h", rows=2, cols=2)
-    e = prim.addAttribute("e", computed_attribute=h.project().trace())
-    s.addEnergy(e)
-    with pytest.raises(yasps.IRError, match="PSD projection applies to derivatives"):
-        s.addMinimizeTarget([h])
-    assert s.minimizeTargets == []
-
-
 def test_stale_connectivity_into_a_shrunk_dynamic_primitive():
     s = yasps.scene("stale")
     m = s.addMesh("m")

@@ -19,7 +19,6 @@ docs/architecture.md for the layers.
 """
 
 from . import compiler, config, ir, runtime, solve
-from .compiler.pipelines import DIFFERENTIATION_PIPELINE
 from .frontend import energies
 from .frontend.attribute import (Attribute, concat, constant, hstack,
                                  identity, select, vstack, zeros)
@@ -29,13 +28,9 @@ from .frontend.scene import (Connectivity, Entity, Mesh, Primitive,
                              PrimitiveUnion, Scene, scene)
 from .frontend.services import Services, install
 from .runtime import BackendError, backend, gpu_status
-from .solve import SolverError
+from .solve import CompileSummary, SolverError
+from .solve import compile_scene as compile
 from .solve.diagnosis import IllConditionedSolve, PrecisionWarning
-
-
-def _differentiate(s: Scene) -> None:
-    compiler.run_pipeline(ir.emit_scene(s, locations=True),
-                          DIFFERENTIATION_PIPELINE, s.name)
 
 
 # The frontend's methods that need IR, kernels or a solver run on the
@@ -44,7 +39,6 @@ install(Services(
     emit=lambda s, locations: ir.emit_scene(s, locations=locations),
     verify=lambda s: compiler.verify(ir.emit_scene(s, locations=True),
                                      name=s.name),
-    differentiate=_differentiate,
     compute=lambda attr, threads: runtime.compute(attr, runtime.current(),
                                                   threads),
     energy_derivatives=lambda s, energy, threads: solve.energy_derivatives(
@@ -54,7 +48,8 @@ install(Services(
 ))
 
 __all__ = [
-    "Attribute", "BackendError", "backend", "Connectivity", "config",
+    "Attribute", "BackendError", "backend", "CompileSummary", "compile",
+    "Connectivity", "config",
     "Entity", "IRError", "IllConditionedSolve", "LineageError", "Mesh",
     "PrecisionWarning", "Primitive", "PrimitiveUnion", "Scene", "SceneError", "ShapeError", "SolverError",
     "ValueUpdateError", "YaspsError", "concat", "constant", "energies",

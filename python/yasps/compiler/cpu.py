@@ -4,11 +4,12 @@ on disk); this module keeps the compiled libraries of this process."""
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Dict, List, Sequence
+from typing import Callable, Dict, List, Optional, Sequence
 
 import numpy as np
 
 from .. import config
+from ..ir import text_and_locations
 from .errors import native, translated
 from .params import KernelArgument, Param, decode_params, kernel_arguments
 
@@ -61,7 +62,19 @@ def kernels_compiled() -> int:
     return native().cpu_kernels_compiled()
 
 
-#: Compiled libraries by (IR text, attributes, pipeline, settings): a scene
+#: Requests of this process that parsed and lowered their scene.
+_lowered = 0
+
+
+def requests_lowered() -> int:
+    """How many CPU compile requests this process served by parsing and
+    lowering the scene (the rest were found in memory, or on disk by their
+    record, without parsing anything). A warm start lowers nothing."""
+    return _lowered
+
+
+#: Compiled libraries by (IR text, attributes, pipeline, settings; the IR
+#: without its location definitions, see ir.KernelIR): a scene
 #: evaluated again with the same structure skips parsing, passes and the
 #: kernel cache lookup. The IR is ir.kernel_ir's, without the counts of
 #: dynamic primitives, so new numbers of collision pairs find their library
@@ -69,20 +82,49 @@ def kernels_compiled() -> int:
 _libraries: Dict[tuple, object] = {}
 
 
+def _key(ir: str, paths: Sequence[str], pipeline: str) -> tuple:
+    return (ir, tuple(paths), pipeline, config.cache_dir, config.opt_level,
+            config.simd_lanes)
+
+
 def compile_cpu(ir: str, paths: Sequence[str], name: str,
-                pipeline: str = "") -> CpuKernels:
+                pipeline: str = "",
+                on_kernel: Optional[Callable[[str], None]] = None
+                ) -> CpuKernels:
     """The CPU kernels of ``paths`` (scene-relative attribute paths) of the
-    scene in ``ir``, after ``pipeline``; compiled once per process."""
-    key = (ir, tuple(paths), pipeline, config.cache_dir, config.opt_level,
-           config.simd_lanes)
+    scene in ``ir``, after ``pipeline``; compiled once per process.
+    ``on_kernel(path)`` is called as each kernel's machine code is made
+    (not for kernels found in a cache), from the compiler's threads."""
+    key = _key(ir, paths, pipeline)
     library = _libraries.get(key)
     if library is not None:
         return CpuKernels(library, dict(library.stats, from_memory=True,
                                         from_disk=False, lower_seconds=0.0,
                                         codegen_seconds=0.0))
+    text, locations = text_and_locations(ir)
     with translated("compile_cpu"):
-        library = native().compile_cpu(ir, list(paths), config.cache_dir or "",
-                                       config.opt_level, name, pipeline,
-                                       config.simd_lanes)
+        library = native().compile_cpu(
+            text, list(paths), config.cache_dir or "", config.opt_level,
+            name, pipeline, config.simd_lanes, locations, on_kernel)
     _libraries[key] = library
-    return CpuKernels(library, dict(library.stats))
+    stats = dict(library.stats)
+    if not stats.get("from_source"):
+        global _lowered
+        _lowered += 1
+    return CpuKernels(library, stats)
+
+
+def compile_cpu_together(ir: str, requests: Sequence[Sequence[str]],
+                         name: str, pipeline: str = "",
+                         on_kernel: Optional[Callable[[str], None]] = None
+                         ) -> CpuKernels:
+    """Compiles the kernels of several requests on one scene as one: one
+    parse, one lowering, and code generation of all of them spread over
+    every core (a request per energy would lower the scene again for each,
+    and leave cores idle behind its largest kernel). Each request's later
+    ``compile_cpu`` is answered from the result."""
+    union = list(dict.fromkeys(p for paths in requests for p in paths))
+    kernels = compile_cpu(ir, union, name, pipeline, on_kernel)
+    for paths in requests:
+        _libraries.setdefault(_key(ir, paths, pipeline), kernels.library)
+    return kernels

@@ -20,10 +20,12 @@ _invocations: Counter = Counter()
 
 
 def invocations() -> Dict[str, int]:
-    """How often this process asked the C++ compiler to parse IR and run
-    passes on it, by request (compile_cpu, compile_gpu, attribute_params,
-    run_pipeline, verify): each one is a parse and a pass pipeline, even
-    when the disk cache then has the kernels."""
+    """How often this process asked the C++ compiler for something, by
+    request (compile_cpu, compile_gpu, attribute_params, run_pipeline,
+    verify). A compile request found by its disk record parses nothing, and
+    the requests on a scene the compiler has differentiated already start
+    from that (``compiler.cpu.requests_lowered`` counts the CPU requests
+    that parsed and lowered their scene)."""
     return dict(_invocations)
 
 

@@ -18,9 +18,9 @@ from dataclasses import dataclass, field
 from typing import Dict, List, Optional, Sequence, Tuple
 
 from .. import config
-from ..ir import kernel_ir
+from ..ir import kernel_ir, text_and_locations
 from .errors import native, translated
-from .params import KernelArgument, Param, decode_params, kernel_arguments
+from .params import KernelArgument, Param, attribute_params, kernel_arguments
 from .pipelines import differentiation_pipeline
 from .specs import scene_kernel_paths
 
@@ -74,9 +74,7 @@ class GpuKernels:
         """The local parameter groups of a derivative kernel (asked of the
         compiler: the binaries do not carry them)."""
         ir, pipeline, name = self.source
-        with translated("attribute_params"):
-            return decode_params(native().attribute_params(
-                ir, pipeline, [attribute], name)[0])
+        return attribute_params(ir, pipeline, [attribute], name)[0]
 
 
 def compile_scene(scene, attributes: Optional[Sequence[str]] = None,
@@ -99,8 +97,10 @@ def compile_ir(ir: str, paths: Sequence[str], name: str, pipeline: str = "",
     """``compile_scene`` for IR that is already emitted (``name`` labels
     diagnostics)."""
     with translated("compile_gpu"):
-        library = native().compile_gpu(ir, list(paths), list(chips), keep_ptx,
-                                       config.cache_dir or "", name, pipeline)
+        text, locations = text_and_locations(ir)
+        library = native().compile_gpu(text, list(paths), list(chips),
+                                       keep_ptx, config.cache_dir or "",
+                                       name, pipeline, locations)
     kernels = [GpuKernel(k["attribute"], k["name"], k["threads_per_block"],
                          kernel_arguments(k["arguments"]),
                          [tuple(p) for p in k["launch_params"]],

@@ -4,8 +4,16 @@ This module is the one decoder of the bindings' records."""
 
 from __future__ import annotations
 
+import hashlib
+import json
+import os
 from dataclasses import dataclass
-from typing import List, Sequence, Tuple, Union
+from pathlib import Path
+from typing import List, Optional, Sequence, Tuple, Union
+
+from .. import config
+from ..ir import text_and_locations
+from .errors import native, translated
 
 #: Kinds of kernel arguments: a stored attribute's values, a connectivity's
 #: indices, a union's member offsets, the targets' first DoFs, the output.
@@ -70,3 +78,44 @@ def decode_param(fields: Sequence[str]) -> Param:
 def decode_params(records: Sequence[Sequence[str]]) -> List[Param]:
     """Every parameter group of a derivative kernel, in order."""
     return [decode_param(r) for r in records]
+
+
+def _record_path(ir: str, pipeline: str, paths: Sequence[str]
+                 ) -> Optional[Path]:
+    """Where the answer to an attribute_params request is kept on disk:
+    named by the request and by this build of the compiler (a rebuilt one
+    may differentiate otherwise), as the kernels' records are; None without
+    a cache directory."""
+    if not config.cache_dir:
+        return None
+    library = Path(native().__file__)
+    built = library.stat()
+    text = "\0".join([ir, pipeline, *paths, str(library), str(built.st_size),
+                      str(built.st_mtime_ns)])
+    key = hashlib.sha256(text.encode()).hexdigest()
+    return Path(config.cache_dir) / f"{key}.params.json"
+
+
+def attribute_params(ir: str, pipeline: str, paths: Sequence[str],
+                     name: str) -> List[List[Param]]:
+    """The local parameter groups of each of ``paths`` in the scene ``ir``
+    (a ``kernel_ir``) after ``pipeline``; an empty list for an attribute
+    without them. Answers are kept on disk, so that a warm start parses
+    nothing; the compiler keeps the scene after the pipeline for the kernel
+    requests that follow."""
+    text, locations = text_and_locations(ir)
+    record = _record_path(text, pipeline, paths)
+    if record is not None and record.exists():
+        try:
+            return [decode_params(r) for r in json.loads(record.read_text())]
+        except (OSError, ValueError, TypeError):
+            pass  # a damaged record is made again
+    with translated("attribute_params"):
+        records = native().attribute_params(text, pipeline, list(paths),
+                                            name, locations)
+    if record is not None:
+        record.parent.mkdir(parents=True, exist_ok=True)
+        temporary = record.with_suffix(f".tmp.{os.getpid()}")
+        temporary.write_text(json.dumps(records))
+        os.replace(temporary, record)
+    return [decode_params(r) for r in records]

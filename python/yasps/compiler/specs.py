@@ -5,16 +5,38 @@ simulation."""
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Dict, List, Optional, Set, Tuple
+from typing import Dict, List, Optional, Sequence, Set, Tuple
 
 from .. import config
 from ..frontend.attribute import Attribute
 from ..frontend.errors import SceneError
 from ..frontend.scene import Scene
 from ..ir import kernel_ir, symbol_path
-from .errors import native, translated
-from .params import Param, decode_params
+from .params import Param, attribute_params
 from .pipelines import differentiation_pipeline
+
+
+@dataclass(frozen=True)
+class KernelRequest:
+    """One request to the compiler: the kernels of ``paths`` (scene-relative
+    attribute paths) of the scene ``ir`` (a ``kernel_ir``) after
+    ``pipeline``; ``name`` labels diagnostics."""
+    ir: str
+    paths: Tuple[str, ...]
+    name: str
+    pipeline: str = ""
+
+
+def grouped_requests(requests: Sequence[KernelRequest]
+                     ) -> Dict[Tuple[str, str, str], List[Tuple[str, ...]]]:
+    """``requests`` by what one compiler request can serve together: the
+    same scene IR, pipeline and name; each group the path lists of its
+    requests, in order."""
+    groups: Dict[Tuple[str, str, str], List[Tuple[str, ...]]] = {}
+    for request in requests:
+        key = (request.ir, request.pipeline, request.name)
+        groups.setdefault(key, []).append(tuple(request.paths))
+    return groups
 
 
 @dataclass
@@ -79,12 +101,10 @@ def scene_params(scene: Scene, ir: str, pipeline: str) -> SceneParams:
                    if a.kind in ("computed", "join")]
         paths = [b + "__grad" for b in bases] + \
             [b + "__hess_inner_proj" for b in bases] + sources
-        with translated("attribute_params"):
-            params = native().attribute_params(ir, pipeline, paths,
-                                               scene.name)
+        params = attribute_params(ir, pipeline, paths, scene.name)
         k = len(bases)
         _scene_params[key] = SceneParams(
-            {b: decode_params(p) for b, p in zip(bases, params)},
+            dict(zip(bases, params)),
             {b for b, p in zip(bases, params[k:2 * k]) if p},
             {path: bool(p) for path, p in zip(sources, params[2 * k:])})
     return _scene_params[key]

@@ -300,10 +300,12 @@ class Scene(Entity):
 
     def addMinimizeTarget(self, targets: Union[Attribute, Sequence[Attribute]]) -> None:
         """Declares the data attributes the energy is minimised over, in the
-        order ``minimizeEnergy`` returns their solutions, and differentiates
-        the registered energies with respect to them (raising
-        :class:`~yasps.errors.IRError` if one cannot be). Further calls
-        append."""
+        order ``minimizeEnergy`` returns their solutions, and verifies the
+        scene (raising :class:`~yasps.errors.IRError`). Further calls
+        append. The energies are differentiated with the first compilation
+        (``yasps.compile(scene)``, or the first ``minimizeEnergy``), which
+        raises IRError for an energy that cannot be (differentiating here
+        took seconds per call on contact scenes)."""
         if isinstance(targets, Attribute):
             targets = [targets]
         new: List[Attribute] = []
@@ -323,14 +325,11 @@ class Scene(Entity):
                                  "listed twice")
             new.append(target)
         self._targets.extend(new)
-        if self._energies:
-            # Differentiate now (paper 4.7), so that an energy the compiler
-            # cannot differentiate is reported here; kernels come later.
-            try:
-                services().differentiate(self)
-            except Exception:
-                self._targets = self._targets[:len(self._targets) - len(new)]
-                raise
+        try:
+            services().verify(self)
+        except Exception:
+            self._targets = self._targets[:len(self._targets) - len(new)]
+            raise
 
     # ---------------------------------------------------------- evaluation
 

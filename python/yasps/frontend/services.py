@@ -23,8 +23,6 @@ class Services:
     emit: Callable[[Any, bool], str]
     #: Parses and verifies a scene's IR; raises IRError.
     verify: Callable[[Any], None]
-    #: Runs the differentiation pipeline on a scene; raises IRError.
-    differentiate: Callable[[Any], None]
     #: ``Attribute.compute``: (attribute, threads) -> ComputedValue.
     compute: Callable[[Any, Optional[int]], Any]
     #: ``Scene.energyDerivatives``: (scene, energy, threads).

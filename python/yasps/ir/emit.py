@@ -56,18 +56,38 @@ def dense_literal(array: np.ndarray, element: str = "f64") -> str:
     return f"dense<{body}> : tensor<{rows}x{cols}x{element}>"
 
 
-def _loc(attr: Attribute, locations: bool) -> str:
-    if not locations or attr._loc is None:
-        return ""
-    filename, line = attr._loc
-    escaped = filename.replace("\\", "\\\\").replace('"', '\\"')
-    return f' loc("{escaped}":{line}:0)'
+class _Locations:
+    """Source locations of the ops printed, as MLIR location aliases:
+    each op refers to ``#locN`` (numbered in the order printed, which
+    depends only on the scene's structure) and the aliases are defined
+    after the scene, so the text above the definitions names what is
+    compiled and nothing of where the script that built it stands.
+    Without locations nothing is printed."""
+
+    def __init__(self, enabled: bool):
+        self.enabled = enabled
+        self.definitions: List[str] = []
+
+    def of(self, attr: Attribute) -> str:
+        """`` loc(#locN)`` for ``attr``'s source location, or ""."""
+        if not self.enabled or attr._loc is None:
+            return ""
+        filename, line = attr._loc
+        escaped = filename.replace("\\", "\\\\").replace('"', '\\"')
+        alias = f"#loc{len(self.definitions)}"
+        self.definitions.append(f'{alias} = loc("{escaped}":{line}:0)')
+        return f" loc({alias})"
+
+    def table(self) -> str:
+        """The alias definitions (MLIR resolves them at the end of the
+        file)."""
+        return "".join(line + "\n" for line in self.definitions)
 
 
 class _RegionPrinter:
     """Prints one computed attribute's region, numbering SSA values."""
 
-    def __init__(self, locations: bool, element: str):
+    def __init__(self, locations: _Locations, element: str):
         self.locations = locations
         self.element = element
         self.names: Dict[int, str] = {}
@@ -94,7 +114,7 @@ class _RegionPrinter:
     def _emit(self, node: Attribute) -> str:
         name = f"%{len(self.names)}"
         self.lines.append(f"{name} = {self._op_text(node)}"
-                          f"{_loc(node, self.locations)}")
+                          f"{self.locations.of(node)}")
         return name
 
     def _op_text(self, node: Attribute) -> str:
@@ -141,11 +161,11 @@ class _RegionPrinter:
         raise AssertionError(f"no IR spelling for op {op!r}")
 
 
-def _emit_attribute(attr: Attribute, depth: int, locations: bool,
+def _emit_attribute(attr: Attribute, depth: int, locations: _Locations,
                     element: str) -> List[str]:
     pad = _INDENT * depth
     t = mat_type(attr, element)
-    loc = _loc(attr, locations)
+    loc = locations.of(attr)
     decl = {"data": "yasps.data_attr", "constant": "yasps.const_attr"}
     if attr.kind in decl:
         return [f"{pad}{decl[attr.kind]} @{attr.name} : {t}{loc}"]
@@ -166,7 +186,7 @@ def _emit_attribute(attr: Attribute, depth: int, locations: bool,
             [f"{pad}{_INDENT}yasps.yield {result} : {t}", f"{pad}}}{loc}"])
 
 
-def _emit_members(entity: Entity, depth: int, locations: bool,
+def _emit_members(entity: Entity, depth: int, locations: _Locations,
                   extra: Dict[Entity, List[Tuple[str, Attribute]]],
                   dynamic_counts: bool, element: str) -> List[str]:
     lines: List[str] = []
@@ -207,16 +227,38 @@ def _emit_members(entity: Entity, depth: int, locations: bool,
     return lines
 
 
-def emit_scene(scene: Scene, locations: bool = False,
-               extra: Optional[Dict[Entity, List[Tuple[str, Attribute]]]] = None,
-               dynamic_counts: bool = True,
-               precision: Optional[str] = None) -> str:
-    """The scene as IR text (one `yasps.scene` op). ``extra`` adds computed
-    attributes (name, expression) to entities without changing the scene.
-    ``dynamic_counts=False`` writes 0 instances for dynamic primitives: the
-    text then describes what does not change from step to step. Matrices
-    have the element type ``precision``, else the scene's
-    (``config.precision`` unless the scene sets its own)."""
+class KernelIR(str):
+    """A scene's IR as kernels are compiled from it. The text itself is
+    what caches are keyed by: ops refer to their source locations by
+    aliases (``loc(#locN)``) whose definitions, ``locations``, are kept
+    apart, so inserting lines above the scene code, renaming the script or
+    running it under a profiler changes no key, while diagnostics still
+    name the user's file and line. ``parseable()`` is what the compiler
+    parses."""
+
+    locations: str
+
+    def __new__(cls, text: str, locations: str = "") -> "KernelIR":
+        ir = super().__new__(cls, text)
+        ir.locations = locations
+        return ir
+
+    def parseable(self) -> str:
+        """The text with its location definitions."""
+        return str(self) + self.locations
+
+
+def text_and_locations(ir: str) -> Tuple[str, str]:
+    """``ir`` as the compiler takes it: the text that keys its caches and
+    the location definitions parsed after it ("" for plain IR text)."""
+    if isinstance(ir, KernelIR):
+        return str(ir), ir.locations
+    return str(ir), ""
+
+
+def _emit(scene: Scene, locations: _Locations,
+          extra: Optional[Dict[Entity, List[Tuple[str, Attribute]]]],
+          dynamic_counts: bool, precision: Optional[str]) -> str:
     element = config.resolve_precision(
         precision if precision is not None else scene.precision)
     lines = [f"yasps.scene @{scene.name} {{"]
@@ -234,14 +276,33 @@ def emit_scene(scene: Scene, locations: bool = False,
     return "\n".join(lines) + "\n"
 
 
+def emit_scene(scene: Scene, locations: bool = False,
+               extra: Optional[Dict[Entity, List[Tuple[str, Attribute]]]] = None,
+               dynamic_counts: bool = True,
+               precision: Optional[str] = None) -> str:
+    """The scene as IR text (one `yasps.scene` op). ``locations`` adds
+    the Python file and line that created each attribute (as location
+    aliases defined after the scene). ``extra`` adds computed attributes
+    (name, expression) to entities without changing the scene.
+    ``dynamic_counts=False`` writes 0 instances for dynamic primitives: the
+    text then describes what does not change from step to step. Matrices
+    have the element type ``precision``, else the scene's
+    (``config.precision`` unless the scene sets its own)."""
+    located = _Locations(locations)
+    text = _emit(scene, located, extra, dynamic_counts, precision)
+    return text + located.table()
+
+
 def kernel_ir(scene: Scene,
               extra: Optional[Dict[Entity, List[Tuple[str, Attribute]]]] = None,
-              precision: Optional[str] = None) -> str:
-    """The IR that kernels are compiled from: the scene with source
-    locations, and without what changes between Newton iterations. Kernels
-    take instance counts at launch and read connectivities, union offsets
-    and values from buffers, so dynamic primitives are written with 0
-    instances: a new number of collision pairs gives the same text, which
-    the compiled libraries are cached by."""
-    return emit_scene(scene, locations=True, extra=extra, dynamic_counts=False,
-                      precision=precision)
+              precision: Optional[str] = None) -> KernelIR:
+    """The IR that kernels are compiled from: the scene with its source
+    locations kept apart (:class:`KernelIR`), and without what changes
+    between Newton iterations. Kernels take instance counts at launch and
+    read connectivities, union offsets and values from buffers, so dynamic
+    primitives are written with 0 instances: a new number of collision
+    pairs gives the same text, which the compiled libraries are cached
+    by."""
+    located = _Locations(True)
+    text = _emit(scene, located, extra, False, precision)
+    return KernelIR(text, located.table())

@@ -11,7 +11,7 @@ given and never checks which one it is.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Any, Optional, Protocol, Sequence, Tuple
+from typing import Any, Callable, Optional, Protocol, Sequence, Tuple
 
 import numpy as np
 
@@ -61,6 +61,13 @@ class Backend(Protocol):
         """Kernels of ``paths`` for this processor, compiled once; the
         result has ``kernel(path)`` (a KernelInfo-like record), ``params``
         and ``stats``."""
+
+    def compile_ahead(self, requests: Sequence[Any],
+                      progress: Callable[[int], None]) -> int:
+        """Compiles ``requests`` (``compiler.specs.KernelRequest``) before
+        they are made, so that later ``compile`` calls with them find their
+        kernels; ``progress(n)`` is called as n more kernels are ready.
+        Returns how many kernels were compiled (not found in a cache)."""
 
     def run(self, kernels: Any, scene: Any, path: str, count: int,
             threads: Optional[int] = None, reuse: object = None) -> Any:

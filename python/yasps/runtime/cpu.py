@@ -4,12 +4,13 @@ the stored NumPy values; the Newton system is the runtime's GlobalSystem."""
 from __future__ import annotations
 
 import weakref
-from typing import Optional, Sequence
+from typing import Callable, Optional, Sequence
 
 import numpy as np
 
 from .. import config
-from ..compiler.cpu import CpuKernels, compile_cpu
+from ..compiler.cpu import CpuKernels, compile_cpu, compile_cpu_together
+from ..compiler.specs import KernelRequest, grouped_requests
 from ..frontend.errors import SceneError
 from ..frontend.values import from_column_major
 from .base import LocalInputs, Shape
@@ -60,6 +61,25 @@ class CpuBackend:
     def compile(self, ir: str, paths: Sequence[str], name: str,
                 pipeline: str = "") -> CpuKernels:
         return compile_cpu(ir, paths, name, pipeline)
+
+    def compile_ahead(self, requests: Sequence[KernelRequest],
+                      progress: Callable[[int], None]) -> int:
+        # The requests on one scene IR and pipeline compile as one: one
+        # lowering, and code generation over every core.
+        compiled = 0
+        for (ir, pipeline, name), groups in grouped_requests(requests).items():
+            made = 0
+
+            def on_kernel(path: str) -> None:
+                nonlocal made
+                made += 1
+                progress(1)
+
+            kernels = compile_cpu_together(ir, groups, name, pipeline,
+                                           on_kernel)
+            progress(len(kernels.library.kernels) - made)
+            compiled += made
+        return compiled
 
     def run(self, kernels: CpuKernels, scene, path: str, count: int,
             threads: Optional[int] = None, reuse: object = None) -> np.ndarray:

@@ -16,6 +16,7 @@ import numpy as np
 from ..frontend.attribute import Attribute
 from ..frontend.errors import SceneError
 from ..frontend.scene import Entity
+from ..compiler.specs import KernelRequest
 from ..ir import kernel_ir
 from .base import Backend, Shape
 
@@ -65,28 +66,42 @@ class ComputedValue:
                 f"{self._backend.name.upper()}: {self._shape}>")
 
 
-def compute(attr: Attribute, backend: Backend,
-            threads: Optional[int] = None) -> ComputedValue:
-    """Evaluates ``attr`` on every instance of its owner on ``backend``, in
-    f64 (``config.precision`` applies to derivatives only)."""
+def _target(attr: Attribute) -> Tuple[Dict[Entity, List[Tuple[str, Attribute]]],
+                                      str]:
+    """The attributes to add to the scene's IR for ``attr`` (an unnamed
+    expression is evaluated under a temporary name) and the path of its
+    kernel."""
     owner = attr.owner
     if owner is None:
         raise SceneError(f"{attr.describe()} belongs to no entity; add it to "
                          "one with addAttribute(name, computed_attribute=...)")
-    scene = owner.scene
-    extra: Dict[Entity, List[Tuple[str, Attribute]]] = {}
     if not attr.isNamed:
-        extra = {owner: [(_TEMPORARY, attr)]}
-        path = "::".join("@" + n for n in owner.path + [_TEMPORARY])
-    else:
-        path = "::".join("@" + n for n in owner.path + [attr.name])
-    # Values are f64 whatever the scene's precision: the line search
-    # compares energies whose decrease near convergence is below f32's
-    # round-off of them, and collision detection reads world positions.
-    # Only the derivatives (the Newton system) are computed in f32.
-    ir = kernel_ir(scene, extra, precision="f64")
+        return ({owner: [(_TEMPORARY, attr)]},
+                "::".join("@" + n for n in owner.path + [_TEMPORARY]))
+    return {}, "::".join("@" + n for n in owner.path + [attr.name])
+
+
+def compute_request(attr: Attribute) -> KernelRequest:
+    """The compiler request that ``compute(attr)`` makes. Values are f64
+    whatever the scene's precision: the line search compares energies whose
+    decrease near convergence is below f32's round-off of them, and
+    collision detection reads world positions. Only the derivatives (the
+    Newton system) are computed in f32."""
+    extra, path = _target(attr)
+    scene = attr.owner.scene
+    return KernelRequest(kernel_ir(scene, extra, precision="f64"), (path,),
+                         scene.name)
+
+
+def compute(attr: Attribute, backend: Backend,
+            threads: Optional[int] = None) -> ComputedValue:
+    """Evaluates ``attr`` on every instance of its owner on ``backend``, in
+    f64 (``config.precision`` applies to derivatives only)."""
+    request = compute_request(attr)
+    owner = attr.owner
     count = owner.numInstances
-    kernels = backend.compile(ir, [path], scene.name)
-    output = backend.run(kernels, scene, path, count, threads)
+    kernels = backend.compile(request.ir, request.paths, request.name)
+    output = backend.run(kernels, owner.scene, request.paths[0], count,
+                         threads)
     return ComputedValue(attr, output, (count, attr.rows, attr.cols),
                          backend.stats(kernels), backend)

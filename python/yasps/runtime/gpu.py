@@ -14,12 +14,13 @@ from __future__ import annotations
 
 import warnings
 import weakref
-from typing import Dict, List, Optional, Sequence, Tuple
+from typing import Callable, Dict, List, Optional, Sequence, Tuple
 
 import numpy as np
 
 from .. import config
 from ..compiler.gpu import GpuKernels, compile_ir
+from ..compiler.specs import KernelRequest, grouped_requests
 from ..frontend.errors import SceneError
 from ..frontend.values import from_column_major
 from .backend import gpu_status
@@ -178,6 +179,21 @@ class GpuBackend:
     def compile(self, ir: str, paths: Sequence[str], name: str,
                 pipeline: str = "") -> GpuKernels:
         return session().kernels(ir, paths, name, pipeline)
+
+    def compile_ahead(self, requests: Sequence[KernelRequest],
+                      progress: Callable[[int], None]) -> int:
+        # The session compiles each kernel once per process: a request of
+        # every path of a group compiles them in one module, and each
+        # request finds them there later.
+        compiled = 0
+        for (ir, pipeline, name), groups in grouped_requests(requests).items():
+            union = list(dict.fromkeys(p for paths in groups for p in paths))
+            kernels = self.compile(ir, union, name, pipeline)
+            if not (kernels.stats.get("from_memory") or
+                    kernels.stats.get("from_disk")):
+                compiled += len(union)
+            progress(len(union))
+        return compiled
 
     def run(self, kernels: GpuKernels, scene, path: str, count: int,
             threads: Optional[int] = None, reuse: object = None):

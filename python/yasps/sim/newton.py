@@ -19,11 +19,15 @@ from ..frontend.attribute import Attribute
 from ..frontend.errors import SceneError
 from ..solve import SolverError
 from ..solve.minimize import checked_fixed_mask
+from ..solve.prepare import compile_scene
 
 Targets = Union[Attribute, Sequence[Attribute]]
 
-#: The stages of a Newton iteration that a report times.
-STAGES = ("collisions", "ccd", "derivatives", "assembly", "pcg", "energy")
+#: The stages of a Newton iteration that a report times; ``compile`` is the
+#: kernels' compilation (or their loading from the caches), done before the
+#: first iteration so that no other stage includes it.
+STAGES = ("compile", "collisions", "ccd", "derivatives", "assembly", "pcg",
+          "energy")
 
 
 class NewtonReport:
@@ -34,7 +38,8 @@ class NewtonReport:
     ``converged``, ``stepBounds`` (the CCD bound of each iteration, with
     contact), ``stiffness`` (kappa after each change of an adaptive
     contact's stiffness), ``cgIterations`` (of each direction) and
-    ``seconds``: the time per stage as the paper's Fig. 20 splits it,
+    ``seconds``: the time per stage as the paper's Fig. 20 splits it, after
+    ``compile`` (the scene's kernels compiled or loaded up front),
     ``collisions`` (ipctk's collision sets and the pairs from them, friction's
     lag included), ``ccd``, ``derivatives`` (local derivatives of every
     energy), ``assembly`` (indices and the global system), ``pcg`` and
@@ -71,6 +76,13 @@ class NewtonReport:
                 f"converged={self.converged}>")
 
 
+def compile_kernels(scene, contact, progress: bool) -> float:
+    """Compiles (or loads) every kernel a Newton step of ``scene`` needs,
+    the world positions of ``contact`` included; returns the seconds."""
+    also = [contact.positions] if contact is not None else []
+    return compile_scene(scene, also=also, progress=progress).seconds
+
+
 def _as_list(targets: Targets) -> List[Attribute]:
     return [targets] if isinstance(targets, Attribute) else list(targets)
 
@@ -98,7 +110,8 @@ def newton(scene, x: Targets, tolerance: float,
            max_iterations: int = 20, cg_tolerance: float = 1e-4,
            fixed=None, contact=None,
            cg_max_iterations: int = 1000,
-           cg_stopping: str = "residual") -> NewtonReport:
+           cg_stopping: str = "residual",
+           compile_first: bool = True) -> NewtonReport:
     """Minimises the scene's energy over its targets ``x`` (one attribute,
     or the list of the scene's minimisation targets in order) by Newton's
     method: directions from ``minimizeEnergy``, the step limited by
@@ -113,13 +126,18 @@ def newton(scene, x: Targets, tolerance: float,
     entry by ``tolerance`` or more (IPC's rule). A direction whose PCG
     stops at ``cg_max_iterations`` before ``cg_tolerance`` is used as it is
     (counted in ``inexactDirections``). ``cg_stopping``: minimizeEnergy's
-    stopping rule ("residual" or "energy_norm")."""
+    stopping rule ("residual" or "energy_norm"). ``compile_first``: compile
+    the scene's kernels (``yasps.compile``) before the first iteration,
+    timed as the report's ``compile`` stage; a caller that did so already
+    passes False."""
     targets = _as_list(x)
     _check_targets(scene, targets)
     if fixed is not None and isinstance(x, Attribute):
         fixed = [fixed]
     report = NewtonReport()
     clock = time.perf_counter
+    if compile_first:
+        report.seconds["compile"] += compile_kernels(scene, contact, False)
 
     def energy() -> float:
         if contact is not None:
@@ -292,6 +310,9 @@ class ImplicitEuler:
         count from 1); returns the sum of the steps' reports."""
         total = NewtonReport()
         total.converged = True
+        # The wait for kernels shown on its own bar before the frames'.
+        compiled = compile_kernels(self.scene, self.contact, progress)
+        total.seconds["compile"] += compiled
         with tqdm(range(1, frames + 1), unit="frame", disable=not progress,
                   leave=False) as bar:
             for frame in bar:
@@ -310,6 +331,9 @@ class ImplicitEuler:
 
     def step(self) -> NewtonReport:
         """Advances one time step; returns the Newton report."""
+        # Before friction's lag, which computes world positions: no stage
+        # but ``compile`` includes compiling.
+        compile_seconds = compile_kernels(self.scene, self.contact, False)
         previous = [t.value for t in self.targets]
         for value, v, g, mask, hat in zip(previous, self.velocities,
                                           self.gravity, self.fixed,
@@ -341,7 +365,8 @@ class ImplicitEuler:
                            cg_tolerance=self.cg_tolerance, fixed=fixed,
                            contact=self.contact,
                            cg_max_iterations=self.cg_max_iterations,
-                           cg_stopping=self.cg_stopping)
+                           cg_stopping=self.cg_stopping,
+                           compile_first=False)
             solve.seconds["collisions"] += lag_seconds
             solve.frictionLags = int(friction)
             if report is None:
@@ -357,4 +382,5 @@ class ImplicitEuler:
                 break
         self.velocities = [(t.value - p) / self.dt
                            for t, p in zip(self.targets, previous)]
+        report.seconds["compile"] += compile_seconds
         return report

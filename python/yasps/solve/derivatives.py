@@ -11,10 +11,13 @@ import numpy as np
 
 from .. import config
 from ..compiler import MissingAttributeError
-from ..compiler.specs import DerivativeKernels, derivative_kernels
+from ..compiler.pipelines import differentiation_pipeline
+from ..compiler.specs import (DerivativeKernels, KernelRequest,
+                              derivative_kernels, scene_params)
 from ..frontend.attribute import Attribute
 from ..frontend.errors import SceneError
 from ..frontend.scene import Scene
+from ..ir import kernel_ir, symbol_path
 from ..runtime import Backend, LocalInputs, compute
 from .compression import compressed_sizes, project_compressed
 from .params import ParamResolver, ParamSlot
@@ -79,6 +82,44 @@ class LocalDerivatives:
         return out
 
 
+def _request(scene: Scene, energy: Attribute, assembly_only: bool,
+             ir: Optional[str], with_tables: bool
+             ) -> Tuple[DerivativeKernels, Optional[SlotPlan], KernelRequest]:
+    """What the kernels of ``energy``'s local derivatives are and the
+    compiler request for them: with ``with_tables`` (assembly on a backend
+    that takes slot Jacobian tables), a factored energy's J comes from
+    shared tables, and its inner gradient and the tables' kernels replace
+    ``__grad`` and ``__ij``."""
+    spec = derivative_kernels(scene, energy, assembly_only, ir)
+    paths = list(spec.paths)
+    plan = slot_plan(scene, energy, spec.ir, spec.pipeline) \
+        if with_tables and spec.separate else None
+    if plan is not None:
+        unused = (spec.path("ij"), spec.path("grad"))
+        paths = [p for p in paths if p not in unused] + \
+            [spec.path("ijac")] + plan.kernel_paths
+    return spec, plan, KernelRequest(spec.ir, tuple(paths), scene.name,
+                                     spec.pipeline)
+
+
+def _takes_tables(backend: Backend) -> bool:
+    """Whether assembly on ``backend`` reads J from shared slot Jacobian
+    tables (the derivatives then run on the host)."""
+    return bool(backend.slot_factors and backend.derivatives is backend.host
+                and config.slot_jacobians)
+
+
+def assembly_requests(scene: Scene, backend: Backend) -> List[KernelRequest]:
+    """The compiler requests that assembling ``scene`` on ``backend`` makes
+    (one per energy with derivatives), for compiling them up front."""
+    ir = kernel_ir(scene)
+    if not scene.minimizeTargets:
+        return []
+    gradients = scene_params(scene, ir, differentiation_pipeline()).gradients
+    return [_request(scene, energy, True, ir, _takes_tables(backend))[2]
+            for energy in scene.energies if gradients[symbol_path(energy)]]
+
+
 class _Outputs:
     """An energy's derivative kernels compiled for one backend, run on
     demand; ``reuse`` keeps each output's memory for the next call (the
@@ -88,27 +129,17 @@ class _Outputs:
                  threads: Optional[int], assembly_only: bool, reuse: bool,
                  ir: Optional[str] = None,
                  tables: Optional[TableCache] = None):
-        self.spec: DerivativeKernels = derivative_kernels(scene, energy,
-                                                          assembly_only, ir)
+        #: With ``tables`` (assembly on a backend that takes them): J from
+        #: shared slot Jacobian tables instead of per-instance ``__ij``.
+        self.spec, self.plan, request = _request(
+            scene, energy, assembly_only, ir, tables is not None)
         self.scene, self.energy, self.backend = scene, energy, backend
         self.threads, self.reuse = threads, reuse
         self.count = energy.owner.numInstances
-        spec = self.spec
-        paths = list(spec.paths)
-        #: With ``tables`` (assembly on a backend that takes them): J from
-        #: shared slot Jacobian tables instead of per-instance ``__ij``.
-        self.plan: Optional[SlotPlan] = None
         self.tables = tables
-        if tables is not None and spec.separate:
-            self.plan = slot_plan(scene, energy, spec.ir, spec.pipeline)
-        if self.plan is not None:
-            # The inner gradient replaces __grad, the tables __ij.
-            unused = (spec.path("ij"), spec.path("grad"))
-            paths = [p for p in paths if p not in unused] + \
-                [spec.path("ijac")] + self.plan.kernel_paths
         try:
-            self.kernels = backend.compile(spec.ir, paths, scene.name,
-                                           spec.pipeline)
+            self.kernels = backend.compile(request.ir, request.paths,
+                                           request.name, request.pipeline)
             if self.plan is not None:
                 self.plan.check(self.shape("hess_inner_proj")[1],
                                 self.shape("dofs")[1])
@@ -215,8 +246,7 @@ def assembly_inputs(scene: Scene, energy: Attribute, backend: Backend,
     assembles slot factors and ``config.slot_jacobians`` allows). Raises
     NoDerivativesError for an energy without derivatives."""
     where = backend.derivatives
-    if not (backend.slot_factors and where is backend.host and
-            config.slot_jacobians):
+    if not _takes_tables(backend):
         tables = None
     elif tables is None:
         tables = {}

@@ -9,8 +9,8 @@ from typing import Dict, List, Optional, Tuple
 
 import numpy as np
 
-from ..compiler.params import JoinParam, Param, ReadParam, decode_params
-from ..compiler.errors import native, translated
+from ..compiler.params import (JoinParam, Param, ReadParam,
+                               attribute_params)
 from ..compiler.pipelines import DIFFERENTIATION_PIPELINE
 from ..frontend.attribute import Attribute
 from ..frontend.scene import Entity, Scene
@@ -77,10 +77,9 @@ class ParamResolver:
     def slots(self, attr: Attribute) -> List[ParamSlot]:
         path = symbol_path(attr)
         if path not in self.cache:
-            with translated("attribute_params"):
-                self.cache[path] = decode_params(native().attribute_params(
-                    self.ir, DIFFERENTIATION_PIPELINE, [path + "__jac"],
-                    self.scene.name)[0])
+            self.cache[path] = attribute_params(
+                self.ir, DIFFERENTIATION_PIPELINE, [path + "__jac"],
+                self.scene.name)[0]
         return [ParamSlot(p, attr.owner, self) for p in self.cache[path]]
 
     def expand(self, attr: Attribute, instance: int) -> List[Location]:

@@ -18,6 +18,7 @@
 #include "mlir/IR/DialectRegistry.h"
 #include "llvm/Support/Error.h"
 
+#include <functional>
 #include <map>
 #include <memory>
 #include <string>
@@ -69,6 +70,11 @@ struct CpuCompileOptions {
   /// {lanes}); 0 picks the host's vector width in doubles (8 with AVX-512,
   /// else 4), 1 evaluates one instance at a time.
   int64_t lanes = 0;
+  /// Called with each kernel's attribute path once its machine code is
+  /// made (not for kernels found in a cache), from the thread that made it
+  /// and one call at a time: for progress shown to users. No part of any
+  /// cache key.
+  std::function<void(const std::string &attribute)> onKernelCompiled;
 };
 
 /// How many kernels this process has compiled to machine code (LLVM

@@ -1,0 +1,122 @@
+"""Compiling everything a scene's evaluation and Newton steps need, up
+front, with the wait shown (``yasps.compile(scene)``).
+
+Without it, kernels are compiled when first used: each energy's derivative
+kernels at the first ``minimizeEnergy``, its value kernel at the first
+``evaluateEnergy``, each as a request of its own. Here the requests that
+share a scene IR and pipeline are compiled as one (one lowering, code
+generation over every core), with a progress bar over kernels, and each
+later request finds its kernels in memory.
+"""
+
+from __future__ import annotations
+
+import sys
+import time
+from dataclasses import dataclass
+from typing import List, Optional, Sequence
+
+from ..compiler.specs import KernelRequest, grouped_requests
+from ..frontend.attribute import Attribute
+from ..frontend.errors import SceneError
+from ..frontend.scene import Scene
+from ..ir import kernel_ir, symbol_path
+from ..runtime import Backend, current
+from ..runtime.evaluate import compute_request
+from .derivatives import assembly_requests
+
+
+@dataclass(frozen=True)
+class CompileSummary:
+    """What :func:`compile_scene` did."""
+    scene: str
+    kernels: int    #: kernels the scene's evaluation and Newton steps use
+    compiled: int   #: of them, those compiled now (the rest were cached)
+    seconds: float  #: wall time, cached or not
+
+    @property
+    def loaded(self) -> int:
+        """Kernels found in the memory or disk cache."""
+        return self.kernels - self.compiled
+
+    def line(self) -> str:
+        """One line for users: kernels, compiled and cached, seconds."""
+        return (f"scene '{self.scene}': {self.kernels} kernels, "
+                f"{self.compiled} compiled, {self.loaded} from the cache, "
+                f"in {self.seconds:.1f} s")
+
+
+def _value_requests(scene: Scene, attributes: Sequence[Attribute]
+                    ) -> List[KernelRequest]:
+    """The requests of ``compute()`` on each of ``attributes``: the named
+    ones share one emission of the scene (the IR is the same for all)."""
+    named = [a for a in attributes if a.isNamed]
+    requests = [compute_request(a) for a in attributes if not a.isNamed]
+    if named:
+        ir = kernel_ir(scene, precision="f64")
+        requests += [KernelRequest(ir, (symbol_path(a),), scene.name)
+                     for a in named]
+    return requests
+
+
+def _check_also(scene: Scene, also: Sequence[Attribute]) -> None:
+    for attr in also:
+        if not isinstance(attr, Attribute) or attr.owner is None or \
+                attr.owner.scene is not scene:
+            what = attr.describe() if isinstance(attr, Attribute) else \
+                type(attr).__name__
+            raise SceneError(f"yasps.compile: {what} is not an attribute of "
+                             f"scene '{scene.name}'")
+
+
+def compile_scene(scene: Scene, also: Sequence[Attribute] = (),
+                  progress: bool = True,
+                  backend: Optional[Backend] = None) -> CompileSummary:
+    """Compiles (or loads from the caches) every kernel that evaluating
+    ``scene``'s energy and assembling its Newton system need, and those of
+    the attributes ``also`` (world positions, say), on ``backend``
+    (default: the current one). With ``progress``, a progress bar over
+    kernels while it works and a summary line on stderr when anything was
+    compiled. Raises IRError for an energy the compiler cannot
+    differentiate."""
+    start = time.perf_counter()
+    _check_also(scene, also)
+    backend = backend or current()
+    values = _value_requests(scene, list(scene.energies) + list(also))
+    derivatives = assembly_requests(scene, backend.derivatives)
+    total = sum(len({p for paths in groups for p in paths})
+                for requests in (values, derivatives)
+                for groups in grouped_requests(requests).values())
+    with _progress_bar(total, f"compiling {scene.name}", progress) as bar:
+        compiled = backend.derivatives.compile_ahead(derivatives, bar.update)
+        compiled += backend.compile_ahead(values, bar.update)
+    summary = CompileSummary(scene.name, total, compiled,
+                             time.perf_counter() - start)
+    if progress and compiled:
+        print(summary.line(), file=sys.stderr)
+    return summary
+
+
+class _NoBar:
+    def __enter__(self) -> "_NoBar":
+        return self
+
+    def __exit__(self, *exc) -> None:
+        pass
+
+    def update(self, n: int = 1) -> None:
+        pass
+
+
+def _progress_bar(total: int, description: str, shown: bool):
+    """A tqdm bar over ``total`` kernels on stderr (cleared when done), or
+    none: without ``shown``, or where tqdm is not installed (the package
+    itself needs only NumPy)."""
+    try:
+        from tqdm import tqdm
+    except ImportError:
+        shown = False
+    if not shown:
+        return _NoBar()
+    return tqdm(total=total, unit="kernel", desc=description, leave=False,
+                file=sys.stderr)
