@@ -242,9 +242,11 @@ auto compilePrepared(const std::string &ir, const std::string &locations,
           parseVerified(ir + locations, bufferName, sourceMgr, diagnostics);
       if (!pipeline.empty())
         if (llvm::Error err = mlir::yasps::runPasses(
-                *parsed, "kernel generation failed", [&](PassManager &pm) {
+                *parsed, "kernel generation failed",
+                [&](PassManager &pm) {
                   return parsePassPipeline(pipeline, pm);
-                }))
+                },
+                mlir::yasps::Verification::Deferred))
           return std::move(err);
       scene = preparedScenes().insert(key, std::move(parsed));
     }

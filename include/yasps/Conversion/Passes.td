@@ -50,7 +50,7 @@ def YaspsLowerToLoops : Pass<"yasps-lower-to-loops", "::mlir::ModuleOp"> {
            "threads do; CPU kernels use the host's vector width)">,
     Option<"projectionLanes", "projection-lanes", "int64_t",
            /*default=*/"0",
-           "Lanes of kernels that PSD-project a matrix of at most 12x12 "
+           "Lanes of kernels that PSD-project a matrix of at most 9x9 "
            "(0: `lanes`). The eigensolver is a chain of dependent square "
            "roots and divisions; two vectors of problems per step overlap "
            "two chains (the CPU compiler's default: twice the host's "

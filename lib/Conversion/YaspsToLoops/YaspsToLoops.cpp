@@ -32,8 +32,10 @@ namespace {
 
 // Projections up to this size get projectionLanes: measured on 9x9 and
 // 12x12 (stable Neo-Hookean, 16 against 8 lanes: 1330 -> 1100 and 1936 ->
-// 1661 ns per instance); larger ones keep their compile time.
-constexpr int64_t kMaxWideProjection = 12;
+// 1661 ns per instance). 12x12 ones gained less for twice the straight-line
+// code (1.1 s of the README demo's 11.5 s cold compile): from 10x10 up,
+// kernels keep their compile time.
+constexpr int64_t kMaxWideProjection = 9;
 
 std::string kernelName(SymbolRefAttr path) {
   std::string name = "yasps_eval_" + path.getRootReference().str();

@@ -166,10 +166,26 @@ std::string hostDescription() {
   return text;
 }
 
-std::string cacheKey(ModuleOp kernels, const CpuCompileOptions &options) {
+/// Kernels with more arithmetic per instance than this are optimised at
+/// O2 at most. LLVM's O3 took 12% longer to compile the largest contact
+/// kernels (the edge-edge barrier's projected 12x12 Hessian, 5,900 ops:
+/// 1.55 -> 1.36 s cold for the energy) for run times within 0-8% of O2's
+/// (bench/compile_times.py, docs/benchmarks.md).
+constexpr int64_t kLargeKernelOps = 3500;
+
+/// The LLVM optimisation level of `kernel`.
+unsigned optLevelOf(const CpuKernel &kernel, const CpuCompileOptions &options) {
+  int64_t ops = 0;
+  for (const auto &entry : kernel.opCounts)
+    ops += entry.second;
+  return ops > kLargeKernelOps ? std::min(options.optLevel, 2u)
+                               : options.optLevel;
+}
+
+std::string cacheKey(ModuleOp kernels, unsigned optLevel) {
   std::string extra;
   llvm::raw_string_ostream os(extra);
-  os << kLoweringPipeline << "\nO" << options.optLevel << "\n"
+  os << kLoweringPipeline << "\nO" << optLevel << "\n"
      << kCodegenVersion << "\n"
      << hostDescription();
   return hashKernels(kernels, extra);
@@ -300,7 +316,7 @@ std::vector<KernelUnit> splitKernels(ModuleOp kernels,
         builder.clone(op);
     }
     unit.kernel = kernel;
-    unit.key = cacheKey(*unit.module, options);
+    unit.key = cacheKey(*unit.module, optLevelOf(kernel, options));
     unit.kernel.objectKey = unit.key;
     units.push_back(std::move(unit));
   }
@@ -315,12 +331,13 @@ llvm::Error jitUnit(KernelUnit &unit, const CpuCompileOptions &options) {
   ExecutionEngineOptions engineOptions;
   // `transformer` is a function_ref: the function it refers to must outlive
   // ExecutionEngine::create, which runs it.
+  unsigned optLevel = optLevelOf(unit.kernel, options);
   std::function<llvm::Error(llvm::Module *)> optimize =
-      makeOptimizingTransformer(options.optLevel, /*sizeLevel=*/0,
+      makeOptimizingTransformer(optLevel, /*sizeLevel=*/0,
                                 /*targetMachine=*/nullptr);
   engineOptions.transformer = optimize;
   engineOptions.jitCodeGenOptLevel =
-      static_cast<llvm::CodeGenOptLevel>(std::min(options.optLevel, 3u));
+      static_cast<llvm::CodeGenOptLevel>(std::min(optLevel, 3u));
   engineOptions.enableObjectDump = !objectPath.empty();
   auto engine = ExecutionEngine::create(*unit.module, engineOptions);
   ++compiledCount();
@@ -402,7 +419,8 @@ mlir::yasps::compileCpuKernels(ModuleOp module,
             runPasses(*unit->module, "lowering to the LLVM dialect failed",
                       [&](PassManager &pm) {
                         return parsePassPipeline(kLoweringPipeline, pm);
-                      }))
+                      },
+                      Verification::AtEnd))
       return std::move(err);
   st.lowerSeconds = secondsSince(start);
   Clock::time_point codegenStart = Clock::now();

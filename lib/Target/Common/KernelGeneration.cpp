@@ -7,6 +7,7 @@
 
 #include "mlir/AsmParser/AsmParser.h"
 #include "mlir/Dialect/Func/IR/FuncOps.h"
+#include "mlir/IR/Verifier.h"
 #include "mlir/Pass/PassRegistry.h"
 #include "mlir/Transforms/Passes.h"
 #include "llvm/Support/FileSystem.h"
@@ -62,7 +63,8 @@ mlir::yasps::describeParams(ArrayAttr params) {
 
 llvm::Error mlir::yasps::runPasses(
     ModuleOp module, const std::string &what,
-    llvm::function_ref<LogicalResult(PassManager &)> populate) {
+    llvm::function_ref<LogicalResult(PassManager &)> populate,
+    Verification verification) {
   std::string diagnostics;
   llvm::raw_string_ostream os(diagnostics);
   ScopedDiagnosticHandler handler(module.getContext(), [&](Diagnostic &diag) {
@@ -72,7 +74,9 @@ llvm::Error mlir::yasps::runPasses(
     return success();
   });
   PassManager pm(module.getContext());
-  if (failed(populate(pm)) || failed(pm.run(module)))
+  pm.enableVerifier(verification == Verification::EachPass);
+  if (failed(populate(pm)) || failed(pm.run(module)) ||
+      (verification == Verification::AtEnd && failed(verify(module))))
     return llvm::createStringError(llvm::inconvertibleErrorCode(),
                                    what + (diagnostics.empty() ? "" : ":\n") +
                                        diagnostics);
@@ -105,10 +109,10 @@ llvm::Expected<OwningOpRef<ModuleOp>> mlir::yasps::generateLoopKernels(
     StringRef outStorage) {
   OwningOpRef<ModuleOp> kernels(cast<ModuleOp>(module->clone()));
   if (!prePipeline.empty())
-    if (llvm::Error err = runPasses(*kernels, "kernel generation failed",
-                                    [&](PassManager &pm) {
-                                      return parsePassPipeline(prePipeline, pm);
-                                    }))
+    if (llvm::Error err = runPasses(
+            *kernels, "kernel generation failed",
+            [&](PassManager &pm) { return parsePassPipeline(prePipeline, pm); },
+            Verification::Deferred))
       return std::move(err);
   if (llvm::Error err = checkAttributesExist(*kernels, attributes))
     return std::move(err);
@@ -133,7 +137,8 @@ llvm::Expected<OwningOpRef<ModuleOp>> mlir::yasps::generateLoopKernels(
             pm.addPass(createCSEPass());
             pm.addPass(createYaspsCountOps());
             return success();
-          }))
+          },
+          Verification::Deferred))
     return std::move(err);
   return kernels;
 }
