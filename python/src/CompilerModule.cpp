@@ -240,6 +240,10 @@ auto compilePrepared(const std::string &ir, const std::string &locations,
     if (!scene) {
       OwningOpRef<ModuleOp> parsed =
           parseVerified(ir + locations, bufferName, sourceMgr, diagnostics);
+      // The differentiated scene is not verified here (0.5 s on the README
+      // demo's scene): the loop kernels made from it are, before LLVM sees
+      // them; yasps-opt, the lit tests and the fuzzer verify the
+      // differentiation passes after each one.
       if (!pipeline.empty())
         if (llvm::Error err = mlir::yasps::runPasses(
                 *parsed, "kernel generation failed",

@@ -112,6 +112,7 @@ llvm::Expected<OwningOpRef<ModuleOp>> mlir::yasps::generateLoopKernels(
     if (llvm::Error err = runPasses(
             *kernels, "kernel generation failed",
             [&](PassManager &pm) { return parsePassPipeline(prePipeline, pm); },
+            // The loop kernels made from it are verified below.
             Verification::Deferred))
       return std::move(err);
   if (llvm::Error err = checkAttributesExist(*kernels, attributes))
@@ -138,7 +139,7 @@ llvm::Expected<OwningOpRef<ModuleOp>> mlir::yasps::generateLoopKernels(
             pm.addPass(createYaspsCountOps());
             return success();
           },
-          Verification::Deferred))
+          Verification::AtEnd))
     return std::move(err);
   return kernels;
 }
