@@ -194,3 +194,4 @@ def test_compile_rejects_attributes_of_another_scene():
     _, b = _soft_box("two")
     with pytest.raises(yasps.SceneError, match="not an attribute of scene"):
         yasps.compile(one, also=[b.x], progress=False)
+

@@ -12,7 +12,8 @@ from .meshes import (HEX_CORNERS, Cage, box_tet_mesh, cage_grid,
                      orient_tets, polyline_segments, read_tet_mesh,
                      signed_tet_volumes, trilinear_weights, tube_mesh,
                      zigzag_spring)
-from .newton import ImplicitEuler, NewtonReport, iteration_totals, newton
+from .newton import (ImplicitEuler, NewtonNotConverged, NewtonReport,
+                     iteration_totals, newton)
 from .output import (RecordedFrame, SurfaceRecorder, render_surfaces,
                      render_surfaces_array, write_video)
 from .run import Body, RunSummary, simulate
@@ -21,7 +22,7 @@ __all__ = ["AffineBody", "Body", "Cage", "FreeVertices", "HEX_CORNERS",
            "add_caged_surface", "add_free_vertices", "add_hex8_neo_hookean",
            "cage_grid", "hex8_gauss_points", "hex_tets", "lumped_masses",
            "material_constant",
-           "trilinear_weights", "tube_mesh", "polyline_segments", "zigzag_spring", "RunSummary", "simulate", "ImplicitEuler", "NewtonReport", "RecordedFrame",
+           "trilinear_weights", "tube_mesh", "polyline_segments", "zigzag_spring", "RunSummary", "simulate", "ImplicitEuler", "NewtonNotConverged", "NewtonReport", "RecordedFrame",
            "SurfaceRecorder", "add_affine_body", "add_affine_inertia",
            "add_cloth", "add_elastic_tets",
            "box_tet_mesh", "cloth_corners", "cloth_grid", "hinges_of",

@@ -10,6 +10,7 @@ are the usual choices for a simulation.
 from __future__ import annotations
 
 import time
+import warnings
 from typing import Callable, Dict, List, Optional, Sequence, Tuple, Union
 
 import numpy as np
@@ -28,6 +29,12 @@ Targets = Union[Attribute, Sequence[Attribute]]
 #: first iteration so that no other stage includes it.
 STAGES = ("compile", "collisions", "ccd", "derivatives", "assembly", "pcg",
           "energy")
+
+
+class NewtonNotConverged(UserWarning):
+    """Newton stopped at its iteration cap (or with a step too small to
+    lower the energy) before its direction fell below the tolerance: the
+    step's result is not the minimiser the time step asks for."""
 
 
 class NewtonReport:
@@ -60,6 +67,12 @@ class NewtonReport:
         #: friction_iterations)
         self.frictionLags = 0
         self.seconds: Dict[str, float] = dict.fromkeys(STAGES, 0.0)
+        #: the length of the last direction (world space with contact)
+        #: over the tolerance: below 1 when converged
+        self.residual = 0.0
+        #: a run's frames (from 1) that ended unconverged, with their
+        #: ``residual``
+        self.unconverged: List[Tuple[int, float]] = []
 
     def add(self, other: "NewtonReport") -> None:
         """Accumulates another solve's counts and seconds (a run's total)."""
@@ -74,6 +87,16 @@ class NewtonReport:
     def __repr__(self) -> str:
         return (f"<NewtonReport {self.iterations} iterations, "
                 f"converged={self.converged}>")
+
+    def unconverged_text(self) -> str:
+        """What the unconverged frames of a run were, for users: their
+        count and the worst; "" when every frame converged."""
+        if not self.unconverged:
+            return ""
+        frame, residual = max(self.unconverged, key=lambda u: u[1])
+        return (f"{len(self.unconverged)} unconverged frame"
+                f"{'s' * (len(self.unconverged) > 1)} (worst: frame {frame}, "
+                f"last Newton direction {residual:.3g}x the tolerance)")
 
 
 def compile_kernels(scene, contact, progress: bool) -> float:
@@ -198,6 +221,8 @@ def newton(scene, x: Targets, tolerance: float,
             alpha = min(alpha, bound)
         else:
             length = max(float(np.abs(p).max()) for p in steps)
+        report.residual = length / tolerance if tolerance > 0 else \
+            float("inf")
         while alpha > 1e-10:
             for t, value, p in zip(targets, current, steps):
                 t.updateValue(value + alpha * p)
@@ -301,6 +326,7 @@ class ImplicitEuler:
                              f"whole number >= 1, got {friction_iterations!r}")
         self.friction_iterations = int(friction_iterations)
         self.velocities = [np.zeros_like(t.value) for t in self.targets]
+        self._warned = False
 
     def run(self, frames: int, on_frame: Optional[Callable[[int, NewtonReport],
                                                           None]] = None,
@@ -316,12 +342,24 @@ class ImplicitEuler:
         with tqdm(range(1, frames + 1), unit="frame", disable=not progress,
                   leave=False) as bar:
             for frame in bar:
-                report = self.step()
+                report = self.step(warn=False)
                 total.add(report)
                 total.converged = total.converged and report.converged
-                bar.set_postfix(newton=report.iterations)
+                if not report.converged:
+                    total.unconverged.append((frame, report.residual))
+                bar.set_postfix(newton=report.iterations,
+                                **({"unconverged": len(total.unconverged)}
+                                   if total.unconverged else {}))
                 if on_frame is not None:
                     on_frame(frame, report)
+        if total.unconverged:
+            warnings.warn(
+                f"ImplicitEuler.run: {total.unconverged_text()} of {frames}: "
+                f"Newton stopped at its cap of {self.max_iterations} "
+                "iterations (or where the line search found no decrease) "
+                "before the step fell below velocity_tolerance * dt. Raise "
+                "max_iterations, or see docs/contact.md on convergence",
+                NewtonNotConverged, stacklevel=2)
         return total
 
     @property
@@ -329,8 +367,10 @@ class ImplicitEuler:
         """The first target's velocity (the single-target form)."""
         return self.velocities[0]
 
-    def step(self) -> NewtonReport:
-        """Advances one time step; returns the Newton report."""
+    def step(self, warn: bool = True) -> NewtonReport:
+        """Advances one time step; returns the Newton report. A step that
+        ends unconverged warns (NewtonNotConverged, once per stepper;
+        ``warn=False`` for none: ``run`` warns once per run instead)."""
         # Before friction's lag, which computes world positions: no stage
         # but ``compile`` includes compiling.
         compile_seconds = compile_kernels(self.scene, self.contact, False)
@@ -383,4 +423,12 @@ class ImplicitEuler:
         self.velocities = [(t.value - p) / self.dt
                            for t, p in zip(self.targets, previous)]
         report.seconds["compile"] += compile_seconds
+        if warn and not report.converged and not self._warned:
+            self._warned = True
+            warnings.warn(
+                f"ImplicitEuler.step: Newton stopped unconverged after "
+                f"{report.iterations} iterations (last direction "
+                f"{report.residual:.3g}x the tolerance); NewtonReport."
+                "converged tells for each step (warned once per stepper)",
+                NewtonNotConverged, stacklevel=2)
         return report

@@ -53,10 +53,12 @@ class RunSummary:
     def line(self) -> str:
         """One line: frames, Newton and CG iterations, closest distance."""
         r = self.report
+        unconverged = r.unconverged_text()
         return (f"{self.frames} frames in {self.seconds:.1f} s, "
                 f"{r.iterations} Newton iterations, {sum(r.cgIterations)} CG "
                 f"iterations, min distance {self.min_distance:.3g} m, "
-                f"{'INTERSECTIONS FOUND' if self.intersections else 'no intersections'}")
+                f"{'INTERSECTIONS FOUND' if self.intersections else 'no intersections'}"
+                + (f", {unconverged}" if unconverged else ""))
 
     def stages(self) -> str:
         """The time per stage, one line each with its share."""

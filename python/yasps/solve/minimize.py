@@ -166,7 +166,9 @@ def minimize_energy(scene, backend: Backend, tolerance: float = 1e-6,
             f"(diagonal ratio {pcg.diagonal_ratio:.3g}, CG's estimate "
             f"{pcg.condition_estimate:.3g}) means the residual bounds the "
             f"step's relative error only by {bound:.3g}; use "
-            "stopping='energy_norm' or a smaller tolerance (warned once per "
-            "scene; lastSolve['errorBound'] has it for every solve)",
+            "stopping='energy_norm' (cg_stopping='energy_norm' for "
+            "yasps.sim's newton and ImplicitEuler) or a smaller tolerance "
+            "(warned once per scene; lastSolve['errorBound'] has it for every "
+            "solve)",
             IllConditionedSolve, stacklevel=4)
     return solution
