@@ -102,7 +102,8 @@ def main() -> None:
     # progress bar; the time steps then compile nothing.
     summary = yasps.compile(s, also=[contact.positions,
                                      bodies["rigid"].positions])
-    print(summary.line())
+    if not summary.compiled:  # else yasps.compile printed it
+        print(summary.line())
     count = sum(len(b.now()) for b in bodies.values())
     print(f"{count} vertices: cloth {args.cloth}x{args.cloth} cells, a soft and "
           f"an affine box of {args.box}^3 cells; dt = {DT} s")

@@ -41,6 +41,8 @@ install(Services(
                                      name=s.name),
     compute=lambda attr, threads: runtime.compute(attr, runtime.current(),
                                                   threads),
+    total_energy=lambda s, threads: runtime.total_energy(
+        s, runtime.current(), threads),
     energy_derivatives=lambda s, energy, threads: solve.energy_derivatives(
         s, energy, runtime.current(), threads),
     minimize_energy=lambda s, *args: solve.minimize_energy(

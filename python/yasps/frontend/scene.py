@@ -336,8 +336,7 @@ class Scene(Entity):
     def evaluateEnergy(self, threads: Optional[int] = None) -> float:
         """The total energy: every registered energy summed over its
         instances, evaluated with compiled kernels."""
-        return float(sum(attr.compute(threads).value.sum()
-                         for attr in self.energies))
+        return services().total_energy(self, threads)
 
     def energyDerivatives(self, energy: Attribute,
                           threads: Optional[int] = None):

@@ -25,6 +25,8 @@ class Services:
     verify: Callable[[Any], None]
     #: ``Attribute.compute``: (attribute, threads) -> ComputedValue.
     compute: Callable[[Any, Optional[int]], Any]
+    #: ``Scene.evaluateEnergy``: (scene, threads) -> the total energy.
+    total_energy: Callable[[Any, Optional[int]], float]
     #: ``Scene.energyDerivatives``: (scene, energy, threads).
     energy_derivatives: Callable[[Any, Any, Optional[int]], Any]
     #: ``Scene.minimizeEnergy``: (scene, tolerance, maxIterations,

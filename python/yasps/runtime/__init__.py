@@ -7,7 +7,7 @@ from __future__ import annotations
 from .backend import BackendError, GpuStatus, backend, devices, gpu_status
 from .base import Backend, LocalInputs
 from .cpu import CpuBackend
-from .evaluate import ComputedValue, compute
+from .evaluate import ComputedValue, compute, total_energy
 from .gpu import GpuBackend
 
 _cpu = CpuBackend()
@@ -32,4 +32,5 @@ def current() -> Backend:
 
 __all__ = ["Backend", "BackendError", "ComputedValue", "CpuBackend",
            "GpuBackend", "GpuStatus", "LocalInputs", "backend", "compute",
+           "total_energy",
            "cpu_backend", "current", "devices", "gpu_backend", "gpu_status"]

@@ -17,7 +17,7 @@ from ..frontend.attribute import Attribute
 from ..frontend.errors import SceneError
 from ..frontend.scene import Entity
 from ..compiler.specs import KernelRequest
-from ..ir import kernel_ir
+from ..ir import kernel_ir, symbol_path
 from .base import Backend, Shape
 
 #: Name under which an unnamed expression is evaluated.
@@ -105,3 +105,23 @@ def compute(attr: Attribute, backend: Backend,
                          threads)
     return ComputedValue(attr, output, (count, attr.rows, attr.cols),
                          backend.stats(kernels), backend)
+
+
+def total_energy(scene, backend: Backend,
+                 threads: Optional[int] = None) -> float:
+    """The sum of every registered energy over its instances, in f64
+    (``Scene.evaluateEnergy``): the scene is emitted once for all of its
+    energies, whose kernels share that IR, instead of once per energy (the
+    line search calls this at every candidate)."""
+    energies = scene.energies
+    if not energies:
+        return 0.0
+    ir = kernel_ir(scene, precision="f64")
+    total = 0.0
+    for energy in energies:
+        path = symbol_path(energy)
+        count = energy.owner.numInstances
+        kernels = backend.compile(ir, (path,), scene.name)
+        output = backend.run(kernels, scene, path, count, threads)
+        total += float(backend.to_host(output, (count, 1, 1)).sum())
+    return total
