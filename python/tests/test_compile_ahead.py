@@ -195,3 +195,31 @@ def test_compile_rejects_attributes_of_another_scene():
     with pytest.raises(yasps.SceneError, match="not an attribute of scene"):
         yasps.compile(one, also=[b.x], progress=False)
 
+
+
+def test_kernel_ir_is_emitted_again_only_when_the_scene_changes():
+    """The line search and collision detection evaluate a scene many times
+    a Newton iteration: its kernel IR is emitted once per structure, and
+    every change of what the IR says (an attribute, a primitive, a
+    connectivity, an energy, a target) emits it anew."""
+    s, b = _soft_box("changing")
+    first = kernel_ir(s)
+    assert kernel_ir(s) is first
+    assert kernel_ir(s, precision="f32") is not first
+    prim = s.soft.v
+    changes = [
+        lambda: prim.addConstant("c", rows=1),
+        lambda: s.soft.addPrimitive("q", numInstances=2),
+        lambda: s.soft.q.addConnectivity("q2v", prim, [[0], [1]], 1),
+        lambda: s.addEnergy(prim.addAttribute(
+            "e2", computed_attribute=prim["c"] * b.x.squaredNorm())),
+        lambda: s.addMinimizeTarget([prim.addAttribute("y", rows=1)]),
+    ]
+    for change in changes:
+        before = kernel_ir(s)
+        change()
+        after = kernel_ir(s)
+        assert after != before and kernel_ir(s) is after
+    # Values and dynamic counts are no part of it.
+    b.x.updateValue(b.x.value + 1.0)
+    assert kernel_ir(s) is after

@@ -186,7 +186,9 @@ def test_contact_in_f32_stays_apart_and_near_f64():
         stepper = boxes.stepper(velocity_tolerance=1e-5, cg_tolerance=1e-9)
         xs, faces = boxes.xs, boxes.faces
         for _ in range(8):
-            report = stepper.step()
+            # f32 kernels cannot bring every direction below 1e-5 m/s:
+            # some steps stop at the cap, as this test means them to.
+            report = stepper.step(warn=False)
             V = np.concatenate([x.value[:, :, 0] for x in xs])
             assert np.isfinite(V).all()
             assert all(b <= a for a, b in report.stepEnergies)

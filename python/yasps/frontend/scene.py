@@ -125,7 +125,14 @@ class Entity:
     def _register(self, attr: Attribute) -> Attribute:
         self._symbols[attr.name] = attr
         self._attributes[attr.name] = attr
+        self._changed()
         return attr
+
+    def _changed(self) -> None:
+        """Marks the scene's structure (what its IR says) as changed: every
+        method that adds to what the IR prints calls it, and caches of the
+        emitted IR (``ir.kernel_ir``) are keyed by the count."""
+        self.scene._structure += 1
 
     def addConstant(self, name: str, rows: int, cols: int = 1) -> Attribute:
         """Adds a stored attribute that is never differentiated."""
@@ -229,6 +236,8 @@ class Scene(Entity):
         self._energies: List[tuple] = []  # (attribute, dynamic, projection)
         self._targets: List[Attribute] = []
         self._energy_counter = 0
+        #: Counts the changes of what the scene's IR says (Entity._changed).
+        self._structure = 0
 
     @property
     def meshes(self) -> Dict[str, "Mesh"]:
@@ -245,6 +254,7 @@ class Scene(Entity):
         self._check_new_symbol(name, "mesh")
         mesh = Mesh(name, self)
         self._symbols[name] = mesh
+        self._changed()
         self._meshes[name] = mesh
         return mesh
 
@@ -296,6 +306,7 @@ class Scene(Entity):
             attr = owner.addAttribute(f"energy{self._energy_counter}",
                                       computed_attribute=attr)
         self._energies.append((attr, bool(dynamic_instances), projection))
+        self._changed()
         return attr
 
     def addMinimizeTarget(self, targets: Union[Attribute, Sequence[Attribute]]) -> None:
@@ -325,10 +336,12 @@ class Scene(Entity):
                                  "listed twice")
             new.append(target)
         self._targets.extend(new)
+        self._changed()
         try:
             services().verify(self)
         except Exception:
             self._targets = self._targets[:len(self._targets) - len(new)]
+            self._changed()
             raise
 
     # ---------------------------------------------------------- evaluation
@@ -421,6 +434,7 @@ class Mesh(Entity):
         count = as_count(numInstances, f"addPrimitive({name!r}): numInstances")
         primitive = Primitive(name, self, count, bool(isDynamic))
         self._symbols[name] = primitive
+        self._changed()
         self._children[name] = primitive
         return primitive
 
@@ -448,6 +462,7 @@ class Mesh(Entity):
                              "listed twice")
         union = PrimitiveUnion(name, self, members)
         self._symbols[name] = union
+        self._changed()
         self._children[name] = union
         return union
 
@@ -510,6 +525,7 @@ class Primitive(Entity):
         conn = Connectivity(name, self, target, int(arity))
         conn._indices = conn._validate(indices)
         self._symbols[name] = conn
+        self._changed()
         self._connectivities[name] = conn
         return conn
 

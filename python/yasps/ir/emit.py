@@ -7,6 +7,7 @@ anonymous sub-expressions inlined and shared sub-expressions emitted once.
 
 from __future__ import annotations
 
+import weakref
 from typing import Dict, List, Optional, Tuple
 
 import numpy as np
@@ -293,6 +294,14 @@ def emit_scene(scene: Scene, locations: bool = False,
     return text + located.table()
 
 
+#: Each scene's kernel IR (without extra attributes) by element type, with
+#: the structure count it was emitted at: evaluating the same scene again
+#: (the line search, collision detection, assembly: many times a Newton
+#: iteration) emits nothing until the scene changes.
+_kernel_irs: "weakref.WeakKeyDictionary[Scene, Dict[str, Tuple[int, KernelIR]]]" \
+    = weakref.WeakKeyDictionary()
+
+
 def kernel_ir(scene: Scene,
               extra: Optional[Dict[Entity, List[Tuple[str, Attribute]]]] = None,
               precision: Optional[str] = None) -> KernelIR:
@@ -303,6 +312,15 @@ def kernel_ir(scene: Scene,
     primitives are written with 0 instances: a new number of collision
     pairs gives the same text, which the compiled libraries are cached
     by."""
+    element = config.resolve_precision(
+        precision if precision is not None else scene.precision)
+    if not extra:
+        cached = _kernel_irs.get(scene, {}).get(element)
+        if cached is not None and cached[0] == scene._structure:
+            return cached[1]
     located = _Locations(True)
-    text = _emit(scene, located, extra, False, precision)
-    return KernelIR(text, located.table())
+    ir = KernelIR(_emit(scene, located, extra, False, element),
+                  located.table())
+    if not extra:
+        _kernel_irs.setdefault(scene, {})[element] = (scene._structure, ir)
+    return ir
