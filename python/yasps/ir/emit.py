@@ -234,8 +234,8 @@ class KernelIR(str):
     aliases (``loc(#locN)``) whose definitions, ``locations``, are kept
     apart, so inserting lines above the scene code, renaming the script or
     running it under a profiler changes no key, while diagnostics still
-    name the user's file and line. ``parseable()`` is what the compiler
-    parses."""
+    name the user's file and line. The compiler parses the text followed by
+    ``locations`` (``text_and_locations``)."""
 
     locations: str
 
@@ -243,10 +243,6 @@ class KernelIR(str):
         ir = super().__new__(cls, text)
         ir.locations = locations
         return ir
-
-    def parseable(self) -> str:
-        """The text with its location definitions."""
-        return str(self) + self.locations
 
 
 def text_and_locations(ir: str) -> Tuple[str, str]:

@@ -14,13 +14,12 @@ from __future__ import annotations
 import sys
 import time
 from dataclasses import dataclass
-from typing import List, Optional, Sequence
+from typing import Optional, Sequence
 
-from ..compiler.specs import KernelRequest, grouped_requests
+from ..compiler.specs import grouped_requests
 from ..frontend.attribute import Attribute
 from ..frontend.errors import SceneError
 from ..frontend.scene import Scene
-from ..ir import kernel_ir, symbol_path
 from ..runtime import Backend, current
 from ..runtime.evaluate import compute_request
 from .derivatives import assembly_requests
@@ -46,19 +45,6 @@ class CompileSummary:
                 f"in {self.seconds:.1f} s")
 
 
-def _value_requests(scene: Scene, attributes: Sequence[Attribute]
-                    ) -> List[KernelRequest]:
-    """The requests of ``compute()`` on each of ``attributes``: the named
-    ones share one emission of the scene (the IR is the same for all)."""
-    named = [a for a in attributes if a.isNamed]
-    requests = [compute_request(a) for a in attributes if not a.isNamed]
-    if named:
-        ir = kernel_ir(scene, precision="f64")
-        requests += [KernelRequest(ir, (symbol_path(a),), scene.name)
-                     for a in named]
-    return requests
-
-
 def _check_also(scene: Scene, also: Sequence[Attribute]) -> None:
     for attr in also:
         if not isinstance(attr, Attribute) or attr.owner is None or \
@@ -82,7 +68,9 @@ def compile_scene(scene: Scene, also: Sequence[Attribute] = (),
     start = time.perf_counter()
     _check_also(scene, also)
     backend = backend or current()
-    values = _value_requests(scene, list(scene.energies) + list(also))
+    # kernel_ir keeps the scene's IR: the named attributes' requests share
+    # one emission.
+    values = [compute_request(a) for a in list(scene.energies) + list(also)]
     derivatives = assembly_requests(scene, backend.derivatives)
     total = sum(len({p for paths in groups for p in paths})
                 for requests in (values, derivatives)
