@@ -267,8 +267,9 @@ FIRST_FRAME = [
     "positions), cold (a new process, an empty kernel cache; building then",
     "includes compiling the world positions that `Contact` computes) and",
     "warm (a new process with the cache the cold run left: no compile",
-    "request parses the scene; building verifies it once). Medians of two runs of `python3 bench/scene_compile.py`, each",
-    "in processes of their own; \"three\" is the README demo's three bodies",
+    "request parses the scene; building verifies it once). Medians of",
+    "two runs of `python3 bench/scene_compile.py`, each in processes of",
+    "their own; \"three\" is the README demo's three bodies",
     "at 209 vertices. The repulsive curve has no Newton system of this",
     "kind and is left out.", "",
 ]
