@@ -3,7 +3,7 @@ on disk); this module keeps the compiled libraries of this process."""
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import Callable, Dict, List, Optional, Sequence
 
 import numpy as np
@@ -31,7 +31,14 @@ class CpuKernels:
     was served (``stats``: cache hits and compile times)."""
     library: object
     stats: dict
-    _info: Dict[str, KernelInfo] = field(default_factory=dict)
+
+    @property
+    def _info(self) -> Dict[str, KernelInfo]:
+        # Kept per library, not per request: a library compiled for a whole
+        # scene (yasps.compile) serves every energy's request, and reading
+        # its kernel list anew for each took 5 ms of every Newton solve on
+        # the README demo.
+        return _infos.setdefault(id(self.library), {})
 
     def kernel(self, path: str) -> KernelInfo:
         """The kernel evaluating ``path``."""
@@ -80,6 +87,10 @@ def requests_lowered() -> int:
 #: dynamic primitives, so new numbers of collision pairs find their library
 #: here.
 _libraries: Dict[tuple, object] = {}
+
+#: What each library's kernels take, by id(library) (libraries stay
+#: alive in _libraries for the life of the process).
+_infos: Dict[int, Dict[str, KernelInfo]] = {}
 
 
 def _key(ir: str, paths: Sequence[str], pipeline: str) -> tuple:
