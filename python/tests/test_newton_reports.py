@@ -39,4 +39,11 @@ def test_unconverged_newton_is_reported_everywhere(tmp_path):
                            tmp_path, stills=0, video=False, progress=False)
     assert "2 unconverged frames" in summary.line()
     stepper.max_iterations = 50
-    assert stepper.step().converged
+    report = stepper.step()
+    assert report.converged
+    # How it converged: one residual and step size per direction, the
+    # last residual below 1 and the first above (the box had to move).
+    assert len(report.residuals) == len(report.stepSizes) == \
+        len(report.cgIterations) == report.iterations
+    assert report.residuals[-1] == report.residual < 1 < report.residuals[0]
+    assert all(0.0 < a <= 1.0 for a in report.stepSizes)

@@ -24,7 +24,7 @@ parameterisations it follows the curved motion in straight pieces.
 
 from __future__ import annotations
 
-from typing import Dict, List, Optional, Sequence, Tuple, Union
+from typing import Dict, Optional, Sequence, Tuple, Union
 
 import ipctk
 import numpy as np
@@ -37,14 +37,20 @@ from ..solve import assemble
 from .friction import (ARITIES, FrictionPairs, add_friction_primitives,
                        tangential_pairs)
 from .halfspace import HalfSpaces
-from .pairs import BY_NAME, PAIR_TYPES, barrier_energy, classify
+from .pairs import PAIR_TYPES, barrier_energy, collision_pairs
 from .stiffness import AdaptiveStiffness
 from .surface import edges_of, surface_of
+from .sweep import Sweep
 
 __all__ = ["Contact", "PAIR_TYPES", "edges_of", "surface_of"]
 
 #: Straight pieces that follow a curved (non-linear) motion in stepBound.
 CURVED_PIECES = 8
+
+#: The narrow phase of the step bound: IPC's additive CCD (Li et al. 2021),
+#: which stops a step where a pair's distance has shrunk to a tenth of what
+#: it was (and never below ``min_distance``).
+NARROW_PHASE_CCD = ipctk.AdditiveCCD()
 
 
 class Contact:
@@ -102,6 +108,9 @@ class Contact:
         rest = self.world()
         self.mesh = ipctk.CollisionMesh(rest, edges, faces)
         self.collisions = ipctk.NormalCollisions()
+        #: the broad phase of the last straight step bound, reused by the
+        #: collision sets of positions inside its swept boxes
+        self._sweep: Optional[Sweep] = None
         mesh = scene.addMesh(name)
         # A stored value, not a number in the IR: changing the stiffness
         # recompiles nothing.
@@ -186,31 +195,22 @@ class Contact:
         return {f"friction{a}": len(f.vertices) for a, f in pairs.items()}
 
     def _normal_pairs(self, V: np.ndarray) -> Dict[str, int]:
-        """The barrier pairs of ipctk's collision set at positions V."""
-        self.collisions.build(self.mesh, V, self.dhat)
-        found: Dict[str, List[List[int]]] = {t.name: [] for t in PAIR_TYPES}
-        eps: Dict[str, List[float]] = {t.name: [] for t in PAIR_TYPES}
-        weights: Dict[str, List[float]] = {t.name: [] for t in PAIR_TYPES}
-        edges, faces = self.mesh.edges, self.mesh.faces
-        for group in (self.collisions.vv_collisions,
-                      self.collisions.ev_collisions,
-                      self.collisions.ee_collisions,
-                      self.collisions.fv_collisions):
-            for collision in group:
-                ids = collision.vertex_ids(edges, faces)
-                kind, order = classify(collision, ids)
-                found[kind].append(order)
-                eps[kind].append(float(getattr(collision, "eps_x", 1.0)))
-                weights[kind].append(float(collision.weight))
+        """The barrier pairs of ipctk's collision set at positions V (from
+        the last step's candidates where they cover V)."""
+        if self._sweep is not None and self._sweep.holds(V):
+            self.collisions.build(self._sweep.candidates, self.mesh, V,
+                                  self.dhat)
+        else:
+            self.collisions.build(self.mesh, V, self.dhat)
+        found = collision_pairs(self.collisions, self.mesh.edges,
+                                self.mesh.faces)
         for kind, pairs in found.items():
             p = self.primitives[kind]
-            arity = BY_NAME[kind].arity
-            p.updateNumInstances(len(pairs))
-            p.connectivities["v"].updateConnectivity(
-                np.asarray(pairs, dtype=np.int64).reshape(-1, arity))
-            p["eps_x"].updateValue(np.asarray(eps[kind]).reshape(-1, 1))
-            p["weight"].updateValue(np.asarray(weights[kind]).reshape(-1, 1))
-        return {kind: len(pairs) for kind, pairs in found.items()}
+            p.updateNumInstances(len(pairs.vertices))
+            p.connectivities["v"].updateConnectivity(pairs.vertices)
+            p["eps_x"].updateValue(pairs.eps_x.reshape(-1, 1))
+            p["weight"].updateValue(pairs.weight.reshape(-1, 1))
+        return {kind: len(pairs.vertices) for kind, pairs in found.items()}
 
     def stepBound(self, steps: Sequence[np.ndarray],
                   pieces: int = CURVED_PIECES) -> float:
@@ -254,7 +254,12 @@ class Contact:
             scale = max(length, 1e-300)
             straight = np.abs(middle - 0.5 * (V0 + V1)).max() <= 1e-9 * scale
             if straight:
-                return self._bound(V0, V1), length
+                self._sweep = Sweep(self.mesh, V0, V1, self.dhat)
+                bound = self._sweep.candidates.compute_collision_free_stepsize(
+                    self.mesh, V0, V1, narrow_phase_ccd=NARROW_PHASE_CCD)
+                return min(self.halfspaces.step_bound(V0, V1),
+                           float(bound)), length
+            self._sweep = None
             previous = V0
             for k in range(pieces):
                 following = world_at((k + 1) / pieces)
@@ -274,8 +279,9 @@ class Contact:
         """The fraction of the straight motion V0 -> V1 that keeps surfaces
         at least ``margin`` apart (and from the half-spaces)."""
         return min(self.halfspaces.step_bound(V0, V1, margin), float(
-            ipctk.compute_collision_free_stepsize(self.mesh, V0, V1,
-                                                  min_distance=margin)))
+            ipctk.compute_collision_free_stepsize(
+                self.mesh, V0, V1, min_distance=margin,
+                narrow_phase_ccd=NARROW_PHASE_CCD)))
 
     @property
     def kappa(self) -> float:

@@ -3,8 +3,8 @@ with the exact squared distance of that type and the barrier on it, the
 edge-edge ones with IPC's mollifier against nearly parallel edges.
 
 ipctk's collision set says which vertices are close and by which features;
-:func:`classify` turns each of its collisions into a pair type and the
-vertex order its distance expects. The energies are yasps attributes on the
+:func:`collision_pairs` turns its collisions into arrays of each pair
+type, in the vertex order its distance expects. The energies are yasps attributes on the
 pairs, so their derivatives come from the compiler for any
 parameterisation of the vertices.
 """
@@ -12,9 +12,11 @@ parameterisation of the vertices.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Callable, Dict, List, Tuple
+from operator import attrgetter
+from typing import Callable, Dict, List, NamedTuple, Tuple
 
 import ipctk
+import numpy as np
 
 from ..frontend import energies as E
 from ..frontend.attribute import Attribute, select
@@ -83,44 +85,84 @@ def barrier_energy(pair: PairType, gathered: Attribute, eps: Attribute,
     return energy
 
 
-_PT = ipctk.PointTriangleDistanceType
-_PE = ipctk.PointEdgeDistanceType
 _EE = ipctk.EdgeEdgeDistanceType
 
+#: Edge-edge collisions by ipctk's known distance type: the pair type and
+#: the order of (a0, a1, b0, b1) that type's distance expects (closest end
+#: points first). The type is the one ipctk evaluates the collision with:
+#: at the border of two types the distances agree but their Hessians do
+#: not, so guessing it again from the positions would not give ipctk's
+#: potential.
+_EDGE_EDGE_ORDERS = {
+    _EE.EA_EB: ("ee", (0, 1, 2, 3)),
+    _EE.EA0_EB0: ("ee_vv", (0, 1, 2, 3)), _EE.EA0_EB1: ("ee_vv", (0, 1, 3, 2)),
+    _EE.EA1_EB0: ("ee_vv", (1, 0, 2, 3)), _EE.EA1_EB1: ("ee_vv", (1, 0, 3, 2)),
+    _EE.EA0_EB: ("ee_ev", (0, 1, 2, 3)), _EE.EA1_EB: ("ee_ev", (1, 0, 2, 3)),
+    _EE.EA_EB0: ("ee_ev", (2, 3, 0, 1)), _EE.EA_EB1: ("ee_ev", (3, 2, 0, 1)),
+}
 
-def classify(collision, ids: List[int]) -> Tuple[str, List[int]]:
-    """The pair type of one ipctk collision and its vertices in that type's
-    order; ``ids`` are the collision's vertex ids. The type is the one ipctk
-    evaluates the collision with (``known_dtype``): a point-edge collision's
-    distance is always to the line, a face-vertex one's to the plane, an
-    edge-edge one's by the type found when the set was built. At the border
-    of two types the distances agree but their Hessians do not, so guessing
-    the type again from the positions would not give ipctk's potential."""
-    if isinstance(collision, ipctk.VertexVertexNormalCollision):
-        return "vv", ids[:2]
-    dtype = collision.known_dtype()
-    if isinstance(collision, ipctk.EdgeVertexNormalCollision):
-        v, e0, e1 = ids[:3]
-        ends = {_PE.P_E0: [v, e0], _PE.P_E1: [v, e1]}
-        return ("vv", ends[dtype]) if dtype in ends else ("ev", [v, e0, e1])
-    if isinstance(collision, ipctk.FaceVertexNormalCollision):
-        v, t0, t1, t2 = ids
-        corners = {_PT.P_T0: t0, _PT.P_T1: t1, _PT.P_T2: t2}
-        edges = {_PT.P_E0: (t0, t1), _PT.P_E1: (t1, t2), _PT.P_E2: (t2, t0)}
-        if dtype in corners:
-            return "vv", [v, corners[dtype]]
-        if dtype in edges:
-            return "ev", [v, *edges[dtype]]
-        return "fv", [v, t0, t1, t2]
-    if isinstance(collision, ipctk.EdgeEdgeNormalCollision):
-        a0, a1, b0, b1 = ids
-        ends = {_EE.EA0_EB0: [a0, a1, b0, b1], _EE.EA0_EB1: [a0, a1, b1, b0],
-                _EE.EA1_EB0: [a1, a0, b0, b1], _EE.EA1_EB1: [a1, a0, b1, b0]}
-        point_edge = {_EE.EA0_EB: [a0, a1, b0, b1], _EE.EA1_EB: [a1, a0, b0, b1],
-                      _EE.EA_EB0: [b0, b1, a0, a1], _EE.EA_EB1: [b1, b0, a0, a1]}
-        if dtype in ends:
-            return "ee_vv", ends[dtype]
-        if dtype in point_edge:
-            return "ee_ev", point_edge[dtype]
-        return "ee", [a0, a1, b0, b1]
-    raise TypeError(f"unsupported ipctk collision {type(collision).__name__}")
+
+class PairArrays(NamedTuple):
+    """The pairs of one type: vertices (n, arity) in the type's order, the
+    edge-edge mollifier thresholds eps_x (n,) (1 where unused) and ipctk's
+    weights (n,)."""
+    vertices: np.ndarray
+    eps_x: np.ndarray
+    weight: np.ndarray
+
+
+def _fields(group, names: Tuple[str, ...]) -> np.ndarray:
+    """The named fields of every collision of a group, (n, len(names))."""
+    return np.array(list(map(attrgetter(*names), group)),
+                    dtype=float).reshape(-1, len(names))
+
+
+def collision_pairs(collisions: ipctk.NormalCollisions, edges: np.ndarray,
+                    faces: np.ndarray) -> Dict[str, PairArrays]:
+    """ipctk's collision set as arrays per pair type. ipctk's build knows
+    each collision's distance type: a point-edge collision's distance is
+    always to the edge's line, a face-vertex one's to the face's plane
+    (their end-point cases became point-point or point-edge collisions),
+    and an edge-edge collision carries its type (end-point types where the
+    mollifier is active)."""
+    out: Dict[str, List[PairArrays]] = {t.name: [] for t in PAIR_TYPES}
+    vv = _fields(collisions.vv_collisions, ("vertex0_id", "vertex1_id",
+                                            "weight"))
+    out["vv"].append(PairArrays(vv[:, :2].astype(np.int64),
+                                np.ones(len(vv)), vv[:, 2]))
+    ev = _fields(collisions.ev_collisions, ("vertex_id", "edge_id", "weight"))
+    edge = edges[ev[:, 1].astype(np.int64)]
+    out["ev"].append(PairArrays(
+        np.column_stack([ev[:, 0].astype(np.int64), edge]).reshape(-1, 3),
+        np.ones(len(ev)), ev[:, 2]))
+    fv = _fields(collisions.fv_collisions, ("vertex_id", "face_id", "weight"))
+    face = faces[fv[:, 1].astype(np.int64)]
+    out["fv"].append(PairArrays(
+        np.column_stack([fv[:, 0].astype(np.int64), face]).reshape(-1, 4),
+        np.ones(len(fv)), fv[:, 2]))
+    group = collisions.ee_collisions
+    ee = _fields(group, ("edge0_id", "edge1_id", "eps_x", "weight"))
+    dtypes = np.fromiter(map(int, map(attrgetter("dtype"), group)),
+                         dtype=np.int64, count=len(group))
+    ends = np.column_stack([edges[ee[:, 0].astype(np.int64)],
+                            edges[ee[:, 1].astype(np.int64)]]).reshape(-1, 4)
+    for dtype, (kind, order) in _EDGE_EDGE_ORDERS.items():
+        rows = dtypes == int(dtype)
+        if rows.any():
+            out[kind].append(PairArrays(ends[rows][:, list(order)],
+                                        ee[rows, 2], ee[rows, 3]))
+    if len(dtypes) and not np.isin(dtypes, [int(d) for d in
+                                            _EDGE_EDGE_ORDERS]).all():
+        raise TypeError("ipctk gave an edge-edge collision of unknown "
+                        "distance type")
+    return {kind: _joined(parts, BY_NAME[kind].arity)
+            for kind, parts in out.items()}
+
+
+def _joined(parts: List[PairArrays], arity: int) -> PairArrays:
+    if not parts:
+        return PairArrays(np.zeros((0, arity), np.int64), np.zeros(0),
+                          np.zeros(0))
+    return PairArrays(np.concatenate([p.vertices for p in parts]),
+                      np.concatenate([p.eps_x for p in parts]),
+                      np.concatenate([p.weight for p in parts]))

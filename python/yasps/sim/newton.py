@@ -61,6 +61,12 @@ class NewtonReport:
         #: the barrier stiffness after each change by the adaptive rule
         self.stiffness: List[float] = []
         self.cgIterations: List[int] = []
+        #: the fraction of each direction taken (after the step bounds and
+        #: the line search; 0 where the line search found no decrease)
+        self.stepSizes: List[float] = []
+        #: the length of each direction (world space with contact) over
+        #: the tolerance: how Newton converged
+        self.residuals: List[float] = []
         #: directions taken from PCG's last iterate (it hit its limit)
         self.inexactDirections = 0
         #: friction lags taken (ImplicitEuler: one per step, more with
@@ -223,6 +229,7 @@ def newton(scene, x: Targets, tolerance: float,
             length = max(float(np.abs(p).max()) for p in steps)
         report.residual = length / tolerance if tolerance > 0 else \
             float("inf")
+        report.residuals.append(report.residual)
         while alpha > 1e-10:
             for t, value, p in zip(targets, current, steps):
                 t.updateValue(value + alpha * p)
@@ -234,7 +241,9 @@ def newton(scene, x: Targets, tolerance: float,
             for t, value in zip(targets, current):
                 t.updateValue(value)
             energy()
+            report.stepSizes.append(0.0)
             break
+        report.stepSizes.append(alpha)
         report.stepEnergies.append((current_energy, candidate))
         current_energy = candidate
         report.iterations += 1
@@ -415,6 +424,8 @@ class ImplicitEuler:
                 report.add(solve)
                 report.energies += solve.energies
                 report.stepBounds += solve.stepBounds
+                report.stepSizes += solve.stepSizes
+                report.residuals += solve.residuals
                 report.stiffness += solve.stiffness
                 report.converged = solve.converged
             # Consistent: the solution did not move after the last lag.

@@ -1,0 +1,45 @@
+"""The broad phase of one Newton step, shared by its CCD and line search.
+
+IPC's line search tries positions on the straight path from the iterate to
+the full Newton step. One broad phase over that path's swept boxes, each
+inflated by half the barrier's reach, finds every pair that can come within
+dhat anywhere on it: two primitives closer than dhat at some point of the
+path have boxes closer than dhat there, and those boxes lie inside their
+swept ones. So the CCD bound and the collision set at every line-search
+candidate are narrow phases over the same candidates, as in IPC's own
+solver, instead of a broad phase each.
+"""
+
+from __future__ import annotations
+
+import ipctk
+import numpy as np
+
+#: How far (a fraction of dhat) positions may stray outside a step's swept
+#: boxes and still use its candidates (the round-off of x + alpha p through
+#: the world-position kernels).
+SLACK = 1e-3
+
+
+class Sweep:
+    """The candidate pairs of the straight motion V0 -> V1 (vertex
+    positions (N, 3)) of ``mesh``, for barriers of reach ``dhat``."""
+
+    def __init__(self, mesh: ipctk.CollisionMesh, V0: np.ndarray,
+                 V1: np.ndarray, dhat: float):
+        slack = SLACK * dhat
+        self.lower = np.minimum(V0, V1) - slack
+        self.upper = np.maximum(V0, V1) + slack
+        self.candidates = ipctk.Candidates()
+        # Each box grows by dhat / 2 plus the slack its own vertices may
+        # stray: pairs closer than dhat then always overlap.
+        self.candidates.build(mesh, V0, V1, inflation_radius=0.5 * dhat +
+                              slack)
+
+    def holds(self, V: np.ndarray) -> bool:
+        """Whether the candidates cover positions V: every vertex inside
+        its swept box, up to the slack."""
+        return bool((V >= self.lower).all() and (V <= self.upper).all())
+
+    def __len__(self) -> int:
+        return len(self.candidates)
