@@ -6,6 +6,7 @@
 #include "yasps/Runtime/ThreadPool.h"
 
 #include <algorithm>
+#include <cmath>
 
 using namespace yasps::runtime;
 
@@ -32,30 +33,29 @@ BlockJacobi::BlockJacobi(const HessianParts &parts, const std::uint8_t *fixed,
   allVertexBlocks_ = std::all_of(
       layout_.blockOffset.begin() + 1, layout_.blockOffset.end(),
       [&](const std::int64_t &end) { return end - (&end)[-1] == 3; });
-  pool.parallelFor(0, layout_.numBlocks(), kBlocksPerChunk,
-                   [&](std::int64_t begin, std::int64_t end) {
-                     std::vector<long long> freeDofs;
-                     std::vector<double> a, l;
-                     for (std::int64_t r = begin; r < end; ++r) {
-                       std::int64_t s = layout_.blockSize(r);
-                       freeDofs.resize(static_cast<std::size_t>(s));
-                       a.resize(static_cast<std::size_t>(s * s));
-                       l.resize(static_cast<std::size_t>(s * s));
-                       double *block = inverse_.data() + start_[r];
-                       const std::uint8_t *blockFixed =
-                           fixed ? fixed + layout_.blockOffset[r] : nullptr;
-                       // The size as a constant for vertex blocks, so that
-                       // their loops unroll.
-                       if (s == 3)
-                         invertDiagonalBlock(3, block, blockFixed,
-                                             freeDofs.data(), a.data(),
-                                             l.data());
-                       else
-                         invertDiagonalBlock(s, block, blockFixed,
-                                             freeDofs.data(), a.data(),
-                                             l.data());
-                     }
-                   });
+  pool.parallelFor(
+      0, layout_.numBlocks(), kBlocksPerChunk,
+      [&](std::int64_t begin, std::int64_t end) {
+        std::vector<long long> freeDofs;
+        std::vector<double> a, l;
+        for (std::int64_t r = begin; r < end; ++r) {
+          std::int64_t s = layout_.blockSize(r);
+          freeDofs.resize(static_cast<std::size_t>(s));
+          a.resize(static_cast<std::size_t>(s * s));
+          l.resize(static_cast<std::size_t>(s * s));
+          double *block = inverse_.data() + start_[r];
+          const std::uint8_t *blockFixed =
+              fixed ? fixed + layout_.blockOffset[r] : nullptr;
+          // The size as a constant for vertex blocks, so that
+          // their loops unroll.
+          if (s == 3)
+            invertDiagonalBlock(3, block, blockFixed, freeDofs.data(), a.data(),
+                                l.data());
+          else
+            invertDiagonalBlock(s, block, blockFixed, freeDofs.data(), a.data(),
+                                l.data());
+        }
+      });
 }
 
 /// z = inv r on a 3x3 block: vertex blocks, most of an IPC system, with
@@ -92,6 +92,44 @@ BlockJacobi::applyBlock(std::int64_t b, const double *r, double *z,
     z[o + i] = sum;
     rz[i % 3] += r[o + i] * sum;
   }
+}
+
+double BlockJacobi::eigenvalueBound(const HessianParts &parts,
+                                    const std::uint8_t *fixed) const {
+  std::vector<double> rowSums(
+      static_cast<std::size_t>(layout_.blockOffset.back()), 0.0);
+  auto isFixed = [&](std::int64_t dof) { return fixed && fixed[dof]; };
+  // Adds |M_r^-1 B| (or |M_r^-1 B^T|) to the rows of block r, B the stored
+  // block between blocks r and c.
+  auto addRows = [&](std::int64_t r, std::int64_t c, const double *block,
+                     bool transposed) {
+    const std::int64_t rows = layout_.blockSize(r), cols = layout_.blockSize(c);
+    const std::int64_t rowStart = layout_.blockOffset[r];
+    const std::int64_t colStart = layout_.blockOffset[c];
+    const double *inv = inverse_.data() + start_[r];
+    for (std::int64_t i = 0; i < rows; ++i) {
+      if (isFixed(rowStart + i))
+        continue;
+      for (std::int64_t j = 0; j < cols; ++j) {
+        if (isFixed(colStart + j))
+          continue;
+        double value = 0.0;
+        for (std::int64_t k = 0; k < rows; ++k)
+          value += inv[i * rows + k] *
+                   (transposed ? block[j * rows + k] : block[k * cols + j]);
+        rowSums[static_cast<std::size_t>(rowStart + i)] += std::abs(value);
+      }
+    }
+  };
+  for (const BlockSparseMatrix *part : parts)
+    for (std::size_t b = 0; b < part->numStoredBlocks(); ++b) {
+      const std::int64_t r = part->blockRow(b), c = part->blockCol(b);
+      addRows(r, c, part->blockData(b), false);
+      if (r != c)
+        addRows(c, r, part->blockData(b), true);
+    }
+  return rowSums.empty() ? 0.0
+                         : *std::max_element(rowSums.begin(), rowSums.end());
 }
 
 void BlockJacobi::apply(const double *r, double *z, ThreadPool &pool) const {

@@ -17,6 +17,7 @@
 
 #include "GpuSystemDetail.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 
@@ -155,9 +156,15 @@ void GpuSystem::refreshLevels(const unsigned char *mask,
     }
     invertJacobi(*coarse.jacobi, coarse.parts, nullptr);
   }
-  for (std::size_t l = 0; l + 1 < all.size(); ++l)
+  for (std::size_t l = 0; l + 1 < all.size(); ++l) {
     all[l].damping = estimateDamping(l, l == 0 ? mask : nullptr,
                                      l == 0 ? hostMask : nullptr);
+    // The cap of Multilevel::estimateDamping: w lmax < 2 whatever Lanczos
+    // missed.
+    double bound = eigenvalueBound(l, l == 0 ? mask : nullptr);
+    if (bound > 0.0 && std::isfinite(bound))
+      all[l].damping = std::min(all[l].damping, 1.9 / bound);
+  }
 
   // The coarsest level's dense matrix, then its inverse.
   Levels::Level &last = all.back();
@@ -187,6 +194,32 @@ void GpuSystem::refreshLevels(const unsigned char *mask,
   int failed = 0;
   levels->failed.download(&failed, sizeof(failed));
   levels->denseReady = failed == 0;
+}
+
+double GpuSystem::eigenvalueBound(std::size_t l, const unsigned char *mask) {
+  Levels::Level &level = levels->levels[l];
+  const Jacobi &bj = *level.jacobi;
+  level.q.setZero();
+  for (const Part *part : level.parts)
+    for (const Part::Group &group : part->groups) {
+      RowBoundArgs args{group.count,
+                        group.rows,
+                        group.cols,
+                        as<const int>(part->rowDof) + group.first,
+                        as<const int>(part->colDof) + group.first,
+                        as<const double>(part->values) + group.valueStart,
+                        as<const long long>(bj.dofBlock),
+                        as<const long long>(bj.inverseStart),
+                        as<const double>(bj.inverse),
+                        mask,
+                        as<double>(level.q)};
+      launch("yasps_ml_row_bound", ceilDiv(group.count, kThreadsPerBlock),
+             args);
+    }
+  std::vector<double> rowSums(static_cast<std::size_t>(level.size));
+  level.q.download(rowSums.data(), rowSums.size() * sizeof(double));
+  return rowSums.empty() ? 0.0
+                         : *std::max_element(rowSums.begin(), rowSums.end());
 }
 
 double GpuSystem::estimateDamping(std::size_t l, const unsigned char *mask,

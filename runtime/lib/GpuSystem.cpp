@@ -36,6 +36,7 @@ const char *const kOtherKernels[] = {"yasps_assemble",
                                      "yasps_ml_smooth",
                                      "yasps_ml_residual",
                                      "yasps_ml_dense_scatter",
+                                     "yasps_ml_row_bound",
                                      "yasps_ml_dense_invert",
                                      "yasps_ml_dense_apply"};
 
@@ -104,8 +105,12 @@ void GpuSystem::allocateJacobi(const CudaContext &context, Jacobi &jacobi,
   std::vector<long long> starts{0};
   for (std::int64_t b = 0; b < jacobi.numBlocks; ++b)
     starts.push_back(starts.back() + layout.blockSize(b) * layout.blockSize(b));
+  std::vector<long long> dofBlock;
+  for (std::int64_t b = 0; b < jacobi.numBlocks; ++b)
+    dofBlock.insert(dofBlock.end(), layout.blockSize(b), b);
   jacobi.blockOffset = deviceCopy(context, offsets);
   jacobi.inverseStart = deviceCopy(context, starts);
+  jacobi.dofBlock = deviceCopy(context, dofBlock);
   const std::size_t squares = static_cast<std::size_t>(starts.back());
   jacobi.inverse = DeviceBuffer(context, squares * sizeof(double));
   jacobi.scratchA = DeviceBuffer(context, squares * sizeof(double));

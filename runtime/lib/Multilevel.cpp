@@ -305,8 +305,17 @@ void Multilevel::estimateDamping(std::size_t l, ThreadPool &pool) {
   }
   double largest = ritzExtremeValues(alphas, betas).second;
   // No estimate: a level without free DoFs, whose vectors are all 0.
-  level.damping =
+  double damping =
       largest > 0.0 && std::isfinite(largest) ? 4.0 / (3.0 * largest) : 1.0;
+  // The cycle is positive definite only while w lmax < 2. Lanczos from a
+  // random start underestimates lmax where it lies in a few stiff local
+  // modes (contact pairs far stiffer than the elastic body around them):
+  // PCG then broke down on SPD systems. A norm bound caps w (with 5% to
+  // spare for the f32 copy of the fine matrix).
+  double bound = level.smoother->eigenvalueBound(level.parts, level.fixed);
+  if (bound > 0.0 && std::isfinite(bound))
+    damping = std::min(damping, 1.9 / bound);
+  level.damping = damping;
 }
 
 void Multilevel::factorCoarsest() {

@@ -84,6 +84,7 @@ const EmulatedKernel kEmulated[] = {
     {"yasps_ml_residual", emulate<ResidualArgs, residualBody<HostBlock>>},
     {"yasps_ml_dense_scatter",
      emulate<DenseScatterArgs, denseScatterBody<HostBlock>>},
+    {"yasps_ml_row_bound", emulate<RowBoundArgs, rowBoundBody<HostBlock>>},
     {"yasps_ml_dense_invert",
      emulate<DenseInvertArgs, denseInvertBody<HostBlock>>},
     {"yasps_ml_dense_apply",

@@ -37,6 +37,7 @@ YASPS_SOLVER_KERNEL(yasps_ml_prolong, TransferArgs, prolongBody)
 YASPS_SOLVER_KERNEL(yasps_ml_smooth, SmoothArgs, smoothBody)
 YASPS_SOLVER_KERNEL(yasps_ml_residual, ResidualArgs, residualBody)
 YASPS_SOLVER_KERNEL(yasps_ml_dense_scatter, DenseScatterArgs, denseScatterBody)
+YASPS_SOLVER_KERNEL(yasps_ml_row_bound, RowBoundArgs, rowBoundBody)
 YASPS_SOLVER_KERNEL(yasps_ml_dense_invert, DenseInvertArgs, denseInvertBody)
 YASPS_SOLVER_KERNEL(yasps_ml_dense_apply, DenseApplyArgs, denseApplyBody)
 

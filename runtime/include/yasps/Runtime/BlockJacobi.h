@@ -59,6 +59,14 @@ public:
   /// (inf if one is <= 0, NaN if there is none), taken before inverting.
   double diagonalRatio() const { return diagonalRatio_; }
 
+  /// An upper bound on the eigenvalues of M^-1 A over the free DoFs, A the
+  /// sum of `parts` (whose diagonal blocks made M): the largest row sum of
+  /// |M^-1 A|, each part's blocks counted apart. A norm bounds every
+  /// eigenvalue, where a few Lanczos steps may miss the largest: a contact
+  /// pair's stiff local mode, say.
+  double eigenvalueBound(const HessianParts &parts,
+                         const std::uint8_t *fixed) const;
+
 private:
   /// z = M^-1 r on block b, adding the term of its i-th DoF to r . z to
   /// rz[i % 3] (three running sums, see applyDot).

@@ -79,6 +79,22 @@ struct DenseScatterArgs {
   double *dense;
 };
 
+/// Adds to rowSums, for the stored blocks [0, count) of one shape (as in
+/// DenseScatterArgs), the row sums of |D^-1 B| over the rows of a block's
+/// row, and of |D^-1 B^T| over those of its column (off the diagonal):
+/// D^-1 the block-Jacobi inverse of the rows' block (dofBlock maps a DoF
+/// to its block), entries at fixed DoFs left out. Their largest total
+/// bounds lmax(D^-1 A), as BlockJacobi::eigenvalueBound on the CPU.
+struct RowBoundArgs {
+  long long count, rows, cols;
+  const int *rowDof, *colDof;
+  const double *values;
+  const long long *dofBlock, *inverseStart;
+  const double *inverse;
+  const unsigned char *fixed;
+  double *rowSums;
+};
+
 /// Inverts the n x n symmetric positive definite `a` (row-major) in place,
 /// in one CUDA block: Gauss-Jordan without pivoting. A zero row (the DoFs
 /// of fixed aggregates) is taken as the identity's; a pivot that is not
@@ -210,6 +226,41 @@ YASPS_HD void denseScatterBody(Block &block, const DenseScatterArgs &args) {
         if (row != col)
           atomicAddDouble(&args.dense[(col + c) * args.n + row + r], v);
       }
+  });
+}
+
+template <typename Block>
+YASPS_HD void rowBoundBody(Block &block, const RowBoundArgs &args) {
+  block.forEachThread([&](int t) {
+    long long k = firstElement(block, t);
+    if (k >= args.count)
+      return;
+    const long long row = args.rowDof[k], col = args.colDof[k];
+    const double *values = args.values + k * args.rows * args.cols;
+    for (int side = 0; side < 2 && (side == 0 || row != col); ++side) {
+      const bool transposed = side == 1;
+      const long long first = transposed ? col : row;
+      const long long other = transposed ? row : col;
+      const long long n = transposed ? args.cols : args.rows;
+      const long long m = transposed ? args.rows : args.cols;
+      const double *inv =
+          args.inverse + args.inverseStart[args.dofBlock[first]];
+      for (long long i = 0; i < n; ++i) {
+        if (args.fixed && args.fixed[first + i])
+          continue;
+        double sum = 0.0;
+        for (long long j = 0; j < m; ++j) {
+          if (args.fixed && args.fixed[other + j])
+            continue;
+          double v = 0.0;
+          for (long long q = 0; q < n; ++q)
+            v += inv[i * n + q] * (transposed ? values[j * args.cols + q]
+                                              : values[q * args.cols + j]);
+          sum += v < 0.0 ? -v : v;
+        }
+        atomicAddDouble(&args.rowSums[first + i], sum);
+      }
+    }
   });
 }
 

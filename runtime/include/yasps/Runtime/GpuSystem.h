@@ -103,6 +103,8 @@ private:
     std::int64_t numBlocks = 0;
     DeviceBuffer blockOffset, inverseStart, inverse, scratchA, scratchL,
         scratchFree;
+    /// The block of each DoF.
+    DeviceBuffer dofBlock;
   };
   static void allocateJacobi(const CudaContext &context, Jacobi &jacobi,
                              const BlockLayout &layout);
@@ -121,6 +123,9 @@ private:
   void uploadLevels();
   std::int64_t levelCount() const;
   void refreshLevels(const unsigned char *mask, const std::uint8_t *hostMask);
+  /// The CPU's norm bound on lmax(D^-1 A) of level l (its block-Jacobi
+  /// inverses computed), from the device's values.
+  double eigenvalueBound(std::size_t l, const unsigned char *mask);
   double estimateDamping(std::size_t l, const unsigned char *mask,
                          const std::uint8_t *hostMask);
   /// `fineMask`: the solve's fixed DoFs (level 0 only).
