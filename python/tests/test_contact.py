@@ -326,3 +326,20 @@ def test_affine_inertia_is_the_vertices_inertia():
         add_affine_inertia(fast.r.body, fast.r.body["A"], fast.r.body["t"],
                            fast.r.body["A_hat"], fast.r.body["t_hat"],
                            VERTS, masses[:3], name="other")
+
+
+def test_stiffness_doubles_while_surfaces_close_below_a_hundredth_of_dhat():
+    """kappa doubles, up to its bound, only while the closest distance
+    keeps shrinking below dhat / 100 (ipctk's update rule at that distance;
+    IPC's default, 1e-9 of the diagonal, would leave it unchanged here)."""
+    from yasps.contact.stiffness import CLOSE_FRACTION, AdaptiveStiffness
+    dhat, diagonal = 1e-3, 1.0
+    stiffness = AdaptiveStiffness(dhat, average_mass=1e-3)
+    stiffness.kappa, stiffness.max_kappa = 10.0, 35.0
+    close = CLOSE_FRACTION * dhat
+    kappas = [stiffness.update(d * d, diagonal) for d in
+              (2 * close, 0.9 * close, 0.5 * close, 0.6 * close, 0.4 * close,
+               0.3 * close, 0.2 * close)]
+    assert kappas == [10.0, 10.0, 20.0, 20.0, 35.0, 35.0, 35.0]
+    assert ipctk.update_barrier_stiffness(
+        (0.5 * close) ** 2, (0.4 * close) ** 2, 35.0, 10.0, diagonal) == 10.0

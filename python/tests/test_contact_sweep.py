@@ -181,3 +181,25 @@ def test_pair_arrays_match_each_collision(angle, shift, kinds):
         rows = [(*v, e, w) for v, e, w in zip(pairs.vertices.tolist(),
                                                pairs.eps_x, pairs.weight)]
         assert sorted(rows) == sorted(want.get(kind, []))
+
+
+@pytest.mark.parametrize("gap, floor", [(1e-5, 1e-9), (4e-9, 1e-9),
+                                        (6e-10, 3e-10)])
+def test_ccd_keeps_surfaces_apart(gap, floor):
+    """A sheet pushed straight through another stops at least
+    MIN_SEPARATION (1e-9 m) from it, or at half the gap where the sheets
+    start closer than twice that: distances never shrink geometrically
+    towards rounding. ipctk measures the distance at the bound."""
+    from yasps.contact import MIN_SEPARATION
+    assert MIN_SEPARATION == 1e-9
+    scene, x, contact = two_sheets(gap=gap, angle=0.3)
+    step = np.zeros_like(x.value)
+    step[len(step) // 2:, 2, 0] = -0.01
+    bound = contact.stepBound([step])
+    assert 0.0 < bound < 1.0
+    x.updateValue(x.value + bound * step)
+    V = contact.world()
+    close = ipctk.NormalCollisions()
+    close.build(contact.mesh, V, DHAT)
+    distance = np.sqrt(close.compute_minimum_distance(contact.mesh, V))
+    assert floor <= distance < gap

@@ -49,8 +49,20 @@ CURVED_PIECES = 8
 
 #: The narrow phase of the step bound: IPC's additive CCD (Li et al. 2021),
 #: which stops a step where a pair's distance has shrunk to a tenth of what
-#: it was (and never below ``min_distance``).
+#: it was (and never below ``min_distance``). It is fast but not provably
+#: conservative: rounding decides once that tenth nears the coordinates'
+#: last digits.
 NARROW_PHASE_CCD = ipctk.AdditiveCCD()
+
+#: The narrow phase where some pair is closer than twice MIN_SEPARATION:
+#: Tight Inclusion, provably conservative (and slower).
+CLOSE_RANGE_CCD = ipctk.TightInclusionCCD()
+
+#: The closest two surfaces are let come (m): the CCD stops steps there
+#: (or at half the distance of a pair that is closer already). Additive
+#: CCD alone lets a pair close by 90% per Newton step, so distances could
+#: shrink geometrically until rounding decides whether surfaces cross.
+MIN_SEPARATION = 1e-9
 
 
 class Contact:
@@ -255,8 +267,11 @@ class Contact:
             straight = np.abs(middle - 0.5 * (V0 + V1)).max() <= 1e-9 * scale
             if straight:
                 self._sweep = Sweep(self.mesh, V0, V1, self.dhat)
+                separation = self._separation(V0)
                 bound = self._sweep.candidates.compute_collision_free_stepsize(
-                    self.mesh, V0, V1, narrow_phase_ccd=NARROW_PHASE_CCD)
+                    self.mesh, V0, V1, min_distance=separation,
+                    narrow_phase_ccd=NARROW_PHASE_CCD if separation ==
+                    MIN_SEPARATION else CLOSE_RANGE_CCD)
                 return min(self.halfspaces.step_bound(V0, V1),
                            float(bound)), length
             self._sweep = None
@@ -273,6 +288,17 @@ class Contact:
         finally:
             for t, x in zip(targets, before):
                 t.updateValue(x)
+
+    def _separation(self, V0: np.ndarray) -> float:
+        """The minimum distance the CCD keeps from V0 on (the sweep's
+        candidates built): MIN_SEPARATION, or half the closest distance
+        at V0 where some pair is closer than twice that already."""
+        close = ipctk.NormalCollisions()
+        close.build(self._sweep.candidates, self.mesh, V0, 2 * MIN_SEPARATION)
+        if close.empty():
+            return MIN_SEPARATION
+        return 0.5 * float(np.sqrt(close.compute_minimum_distance(self.mesh,
+                                                                  V0)))
 
     def _bound(self, V0: np.ndarray, V1: np.ndarray,
                margin: float = 0.0) -> float:
