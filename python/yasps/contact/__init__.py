@@ -267,13 +267,7 @@ class Contact:
             straight = np.abs(middle - 0.5 * (V0 + V1)).max() <= 1e-9 * scale
             if straight:
                 self._sweep = Sweep(self.mesh, V0, V1, self.dhat)
-                separation = self._separation(V0)
-                bound = self._sweep.candidates.compute_collision_free_stepsize(
-                    self.mesh, V0, V1, min_distance=separation,
-                    narrow_phase_ccd=NARROW_PHASE_CCD if separation ==
-                    MIN_SEPARATION else CLOSE_RANGE_CCD)
-                return min(self.halfspaces.step_bound(V0, V1),
-                           float(bound)), length
+                return self._swept_bound(self._sweep, V0, V1), length
             self._sweep = None
             previous = V0
             for k in range(pieces):
@@ -289,16 +283,23 @@ class Contact:
             for t, x in zip(targets, before):
                 t.updateValue(x)
 
-    def _separation(self, V0: np.ndarray) -> float:
-        """The minimum distance the CCD keeps from V0 on (the sweep's
-        candidates built): MIN_SEPARATION, or half the closest distance
-        at V0 where some pair is closer than twice that already."""
+    def _swept_bound(self, sweep: Sweep, V0: np.ndarray,
+                     V1: np.ndarray) -> float:
+        """The fraction of the straight motion V0 -> V1 (whose candidates
+        ``sweep`` holds) that keeps surfaces MIN_SEPARATION apart, or half
+        the closest distance at V0 where some pair is closer than twice
+        that already (then by Tight Inclusion); and off the half-spaces."""
         close = ipctk.NormalCollisions()
-        close.build(self._sweep.candidates, self.mesh, V0, 2 * MIN_SEPARATION)
-        if close.empty():
-            return MIN_SEPARATION
-        return 0.5 * float(np.sqrt(close.compute_minimum_distance(self.mesh,
-                                                                  V0)))
+        close.build(sweep.candidates, self.mesh, V0, 2 * MIN_SEPARATION)
+        separation, narrow_phase = MIN_SEPARATION, NARROW_PHASE_CCD
+        if not close.empty():
+            separation = 0.5 * float(np.sqrt(
+                close.compute_minimum_distance(self.mesh, V0)))
+            narrow_phase = CLOSE_RANGE_CCD
+        return min(self.halfspaces.step_bound(V0, V1), float(
+            sweep.candidates.compute_collision_free_stepsize(
+                self.mesh, V0, V1, min_distance=separation,
+                narrow_phase_ccd=narrow_phase)))
 
     def _bound(self, V0: np.ndarray, V1: np.ndarray,
                margin: float = 0.0) -> float:

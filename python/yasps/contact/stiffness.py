@@ -21,8 +21,8 @@ import numpy as np
 
 #: kappa doubles (up to IPC's bound, 100 times its minimum) while the
 #: closest distance keeps shrinking below this fraction of dhat. On the
-#: twisting cloth it kept surfaces 1.2e-5 m apart instead of 2.4e-9 m, with
-#: 195 instead of 644 CG iterations per Newton step (docs/contact.md).
+#: twisting cloth it keeps surfaces 1.2e-5 m apart, and PCG at 195 instead
+#: of 493-640 iterations per Newton step (docs/benchmarks.md).
 CLOSE_FRACTION = 1e-2
 
 

@@ -40,6 +40,3 @@ class Sweep:
         """Whether the candidates cover positions V: every vertex inside
         its swept box, up to the slack."""
         return bool((V >= self.lower).all() and (V <= self.upper).all())
-
-    def __len__(self) -> int:
-        return len(self.candidates)
