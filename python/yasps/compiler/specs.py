@@ -139,8 +139,10 @@ def derivative_kernels(scene: Scene, energy: Attribute, assembly_only: bool,
     evaluated = [base + "__grad"] + \
         ([] if assembly_only else hessian) + projected
     compress = assembly_only and not separate and config.compress_local_hessians
-    paths = evaluated + ([base + "__hess"] if compress else []) \
-        + [base + "__dofs"]
+    # Assembly may take plain local Hessians exact (progressively projected
+    # Newton), and compression projects them after merging DoFs.
+    paths = evaluated + ([base + "__hess"] if assembly_only and not separate
+                         else []) + [base + "__dofs"]
     return DerivativeKernels(base, ir, pipeline, separate, evaluated,
                              compress, paths)
 
@@ -149,7 +151,8 @@ def scene_kernel_paths(scene: Scene) -> List[str]:
     """The attributes a scene's simulation evaluates: every energy, and for
     energies that depend on a minimisation target what assembly reads (the
     gradient, the projected Hessian or its factors, the unprojected Hessian
-    where compression needs it, and the placement indices ``__dofs``), after
+    of unfactored ones (compression and progressively projected Newton read
+    it), and the placement indices ``__dofs``), after
     ``differentiation_pipeline()``."""
     if not scene.energies:
         raise SceneError(f"scene '{scene.name}' has no energies (addEnergy)")

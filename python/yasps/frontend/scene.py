@@ -362,7 +362,8 @@ class Scene(Entity):
     def minimizeEnergy(self, tolerance: float = 1e-6, maxIterations: int = 1000,
                        threads: Optional[int] = None,
                        fixed: Optional[list] = None,
-                       stopping: str = "residual") -> list:
+                       stopping: str = "residual",
+                       projectionThreshold: Optional[float] = None) -> list:
         """Assembles the gradient g and PSD-projected Hessian H of all
         energies and solves ``H dx = g`` with block-Jacobi PCG. Returns one
         ``(N, rows, cols)`` array per minimisation target, in the order
@@ -384,9 +385,22 @@ class Scene(Entity):
         :class:`yasps.SolverError` if PCG does not converge (naming the
         energy and instance of a NaN), :class:`yasps.SceneError` if no
         energy reads a target, and warns (``IllConditionedSolve``) when the
-        residual bounds the step's error by more than 1."""
+        residual bounds the step's error by more than 1.
+
+        ``projectionThreshold`` (progressively projected Newton, SymX's and
+        STARK's default): project only the local Hessians of the instances
+        that read a DoF block (a target instance) whose gradient has an
+        entry of this magnitude or more (fixed DoFs aside), and take the
+        others exact; 0 projects all, ``inf`` none. The system may then be
+        indefinite: PCG stops with "breakdown" where it meets negative
+        curvature, and ``lastSolve`` tells ``descends`` (whether ``-dx``
+        lowers the energy to first order), ``gradientMax`` (over the free
+        DoFs) and ``projectedInstances`` of ``instances``. Energies with
+        factored Hessians (reduced-space projection) and those
+        differentiated on a GPU are always projected."""
         return services().minimize_energy(self, tolerance, maxIterations,
-                                          threads, fixed, stopping)
+                                          threads, fixed, stopping,
+                                          projectionThreshold)
 
     # ------------------------------------------------------------------ IR
 

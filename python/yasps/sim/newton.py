@@ -72,6 +72,9 @@ class NewtonReport:
         #: friction lags taken (ImplicitEuler: one per step, more with
         #: friction_iterations)
         self.frictionLags = 0
+        #: solves repeated with more instances projected (progressive
+        #: projection), their CG iterations counted in ``cgIterations``
+        self.projectionRetries = 0
         self.seconds: Dict[str, float] = dict.fromkeys(STAGES, 0.0)
         #: the length of the last direction (world space with contact)
         #: over the tolerance: below 1 when converged
@@ -86,6 +89,7 @@ class NewtonReport:
         self.stepEnergies += other.stepEnergies
         self.inexactDirections += other.inexactDirections
         self.frictionLags += other.frictionLags
+        self.projectionRetries += other.projectionRetries
         self.cgIterations += other.cgIterations
         for stage, seconds in other.seconds.items():
             self.seconds[stage] = self.seconds.get(stage, 0.0) + seconds
@@ -123,6 +127,18 @@ def _check_targets(scene, targets: List[Attribute]) -> None:
                          f"minimisation targets in order ({names})")
 
 
+#: How Newton treats indefinite local Hessians: project every instance's
+#: ("full", projected Newton), or progressively (SymX's and STARK's
+#: default): exact Hessians first, and where a solve breaks down or does
+#: not descend, projected for the instances whose DoF blocks' gradients
+#: reach a threshold that halves at each such failure and doubles after
+#: each direction taken.
+PROJECTIONS = ("progressive", "full")
+_NONE = float("inf")
+_FIRST_THRESHOLD = {"progressive": _NONE, "full": None}
+#: Below this gradient magnitude every instance is projected.
+_SMALLEST_THRESHOLD = 1e-12
+
 #: Newton and CG iterations of every newton() call in this process (what a
 #: parameter sweep reports per run, whatever loop the user wrote).
 _totals = {"newton": 0, "cg": 0}
@@ -140,7 +156,8 @@ def newton(scene, x: Targets, tolerance: float,
            fixed=None, contact=None,
            cg_max_iterations: int = 1000,
            cg_stopping: str = "residual",
-           compile_first: bool = True) -> NewtonReport:
+           compile_first: bool = True,
+           projection: str = "progressive") -> NewtonReport:
     """Minimises the scene's energy over its targets ``x`` (one attribute,
     or the list of the scene's minimisation targets in order) by Newton's
     method: directions from ``minimizeEnergy``, the step limited by
@@ -158,7 +175,10 @@ def newton(scene, x: Targets, tolerance: float,
     stopping rule ("residual" or "energy_norm"). ``compile_first``: compile
     the scene's kernels (``yasps.compile``) before the first iteration,
     timed as the report's ``compile`` stage; a caller that did so already
-    passes False."""
+    passes False. ``projection``: one of PROJECTIONS."""
+    if projection not in PROJECTIONS:
+        raise SceneError(f"newton: projection must be one of "
+                         f"{', '.join(PROJECTIONS)}, got {projection!r}")
     targets = _as_list(x)
     _check_targets(scene, targets)
     if fixed is not None and isinstance(x, Attribute):
@@ -191,25 +211,48 @@ def newton(scene, x: Targets, tolerance: float,
     if contact is not None:
         current_energy = adapt()
     report.energies.append(current_energy)
+    # Progressive projection: nothing projected (inf) until a solve needs it.
+    threshold = _FIRST_THRESHOLD[projection]
     for _ in range(max_iterations):
-        try:
-            directions = scene.minimizeEnergy(tolerance=cg_tolerance,
-                                              maxIterations=cg_max_iterations,
-                                              fixed=fixed,
-                                              stopping=cg_stopping)
-        except SolverError as error:
-            # A CG iterate from zero on an SPD system is a descent
-            # direction: take it, inexactly, and let the line search judge.
-            directions = error.solution
-            report.inexactDirections += 1
+        cg = 0
+        while True:
+            failed, inexact = False, False
+            try:
+                directions = scene.minimizeEnergy(
+                    tolerance=cg_tolerance, maxIterations=cg_max_iterations,
+                    fixed=fixed, stopping=cg_stopping,
+                    projectionThreshold=threshold)
+            except SolverError as error:
+                # A CG iterate from zero on an SPD system is a descent
+                # direction: take it, inexactly, and let the line search
+                # judge.
+                directions, inexact = error.solution, True
+                failed = error.info["stop"] == "breakdown"
+            solve = scene.lastSolve
+            spent = solve["seconds"]
+            report.seconds["derivatives"] += spent["derivatives"]
+            report.seconds["assembly"] += spent["indices"] + spent["assembly"]
+            report.seconds["pcg"] += spent["solve"]
+            cg += int(solve["iterations"])
+            if threshold is None or \
+                    solve["projectedInstances"] == solve["instances"]:
+                break
+            # With exact Hessians the system may be indefinite: where CG met
+            # negative curvature or the direction does not descend, project
+            # more (the threshold halves), as SymX does.
+            if not (failed or not solve["descends"]):
+                break
+            threshold = 0.5 * (solve["gradientMax"] if threshold == _NONE
+                               else threshold)
+            if threshold < _SMALLEST_THRESHOLD:
+                threshold = 0.0
+            report.projectionRetries += 1
+        report.inexactDirections += inexact
+        if threshold is not None and threshold != _NONE:
+            threshold *= 2.0
         steps = [-dx for dx in directions]
-        solve = scene.lastSolve
-        spent = solve["seconds"]
-        report.seconds["derivatives"] += spent["derivatives"]
-        report.seconds["assembly"] += spent["indices"] + spent["assembly"]
-        report.seconds["pcg"] += spent["solve"]
-        report.cgIterations.append(solve["iterations"])
-        _totals["cg"] += int(solve["iterations"])
+        report.cgIterations.append(cg)
+        _totals["cg"] += cg
         current = [t.value for t in targets]
         alpha = 1.0
         if step_bound is not None:
@@ -278,7 +321,13 @@ class ImplicitEuler:
     solves again, up to that many lags in all or until a solve after a lag
     converges at once (IPC's lagged iterations): the friction force then
     follows the step's own normal force, which matters for stiff bodies
-    that bounce in contact."""
+    that bounce in contact.
+
+    ``projection`` ("progressive" or "full", see :data:`PROJECTIONS`):
+    whether Newton starts from the exact local Hessians and projects only
+    where a solve needs it (SymX's and STARK's default, and ours: Newton
+    converges quadratically where a cloth buckles), or projects every
+    instance's Hessian (projected Newton)."""
 
     def __init__(self, scene, x: Optional[Targets] = None,
                  x_hat: Optional[Targets] = None, dt: Optional[float] = None,
@@ -290,7 +339,8 @@ class ImplicitEuler:
                  cg_stopping: str = "residual",
                  friction_iterations: int = 1,
                  *, targets: Optional[Sequence[Attribute]] = None,
-                 predicted: Optional[Sequence[Attribute]] = None):
+                 predicted: Optional[Sequence[Attribute]] = None,
+                 projection: str = "progressive"):
         # targets= and predicted= are the multi-target spelling of x, x_hat.
         if targets is not None or predicted is not None:
             if x is not None or x_hat is not None:
@@ -334,6 +384,10 @@ class ImplicitEuler:
             raise SceneError(f"ImplicitEuler: friction_iterations must be a "
                              f"whole number >= 1, got {friction_iterations!r}")
         self.friction_iterations = int(friction_iterations)
+        if projection not in PROJECTIONS:
+            raise SceneError(f"ImplicitEuler: projection must be one of "
+                             f"{', '.join(PROJECTIONS)}, got {projection!r}")
+        self.projection = projection
         self.velocities = [np.zeros_like(t.value) for t in self.targets]
         self._warned = False
 
@@ -415,7 +469,8 @@ class ImplicitEuler:
                            contact=self.contact,
                            cg_max_iterations=self.cg_max_iterations,
                            cg_stopping=self.cg_stopping,
-                           compile_first=False)
+                           compile_first=False,
+                           projection=self.projection)
             solve.seconds["collisions"] += lag_seconds
             solve.frictionLags = int(friction)
             if report is None:

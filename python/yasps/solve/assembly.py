@@ -26,7 +26,9 @@ from ..frontend.values import from_column_major
 from ..ir import kernel_ir
 from ..runtime import Backend
 from ..runtime.native import native
-from .derivatives import NoDerivativesError, assembly_inputs
+from .derivatives import Contribution, NoDerivativesError, \
+    assembly_contribution
+from .projection import GradientThreshold
 
 
 class DofLayout:
@@ -94,9 +96,21 @@ _static_systems: "weakref.WeakKeyDictionary[Scene, tuple]" = \
     weakref.WeakKeyDictionary()
 
 
+def _assemble_inputs(backend: Backend, system, inputs: list,
+                     threads: Optional[int]) -> None:
+    """Zeroes ``system`` and adds every energy's inputs to it."""
+    system.set_zero()
+    for k, energy_inputs in enumerate(inputs):
+        backend.add(system, k, energy_inputs, threads)
+    backend.finish_assembly(system)
+    # The local derivatives are reused by the next call: let assembly finish.
+    backend.synchronize(system)
+
+
 def assemble(scene: Scene, backend: Backend, threads: Optional[int] = None,
              timings: Optional[Dict[str, float]] = None,
-             report: Optional[Dict[str, object]] = None):
+             report: Optional[Dict[str, object]] = None,
+             projection: Optional[GradientThreshold] = None):
     """The system assembled on ``backend`` and its DoF layout: the runtime's
     GlobalSystem on the CPU, its device mirror (a ``GpuSystem``) on the GPU.
     ``timings``, if given, receives the seconds spent on derivatives,
@@ -107,7 +121,13 @@ def assemble(scene: Scene, backend: Backend, threads: Optional[int] = None,
     dynamic ones (``dynamic_instances``, e.g. collision pairs) apart: the
     static part's DoF maps and block structure are reused for as long as
     the scene's structure and connectivities are unchanged, and only the
-    dynamic part is re-indexed on every call."""
+    dynamic part is re-indexed on every call.
+
+    ``projection`` chooses the instances whose local Hessians are
+    PSD-projected (None: all): the system is first assembled with the
+    energies' exact Hessians where :class:`Contribution` allows, and, where
+    the threshold then picks some DoFs by the assembled gradient, assembled
+    again with those instances projected."""
     clock = time.perf_counter
     spent = {"derivatives": 0.0, "indices": 0.0, "assembly": 0.0}
     targets = scene.minimizeTargets
@@ -128,54 +148,72 @@ def assemble(scene: Scene, backend: Backend, threads: Optional[int] = None,
     # The Jacobian tables of factored energies: one evaluation per source
     # for every energy that reaches it.
     tables: dict = {}
+    # None: every instance projected; a DoF mask: those of the instances
+    # reading it (at first none: the exact Hessians where allowed).
+    chosen: Optional[np.ndarray] = None
+    if projection is not None and not projection.projects_all():
+        chosen = np.zeros(layout.size, dtype=bool)
     for energy, is_dynamic, _ in scene._energies:
         start = clock()
         try:
-            contribution = assembly_inputs(scene, energy, backend, threads,
-                                           ir, tables)
+            contribution = assembly_contribution(scene, energy, backend,
+                                                 threads, ir, tables)
         except NoDerivativesError:
             continue
+        inputs = contribution.inputs(chosen)
         spent["derivatives"] += clock() - start
-        (dynamic if is_dynamic else static).append((energy, contribution))
+        (dynamic if is_dynamic else static).append(
+            (energy, contribution, inputs))
     # Launches may return at once: time the derivatives, not their launch.
     start = clock()
     backend.synchronize()
     spent["derivatives"] += clock() - start
-    off_host = sum(inputs.backend is not backend.host
-                   for _, (inputs, _) in static + dynamic)
+    contributions: List[Contribution] = [c for _, c, _ in static + dynamic]
+    inputs = [x for _, _, x in static + dynamic]
 
     start = clock()
-    key = _static_structure_key(scene, ir, layout, [e for e, _ in static])
+    key = _static_structure_key(scene, ir, layout, [e for e, _, _ in static])
     cached = _static_systems.get(scene)
     rebuilt = cached is None or cached[0] != key
     if rebuilt:
-        static_dofs = [dofs() for _, (_, dofs) in static]
+        static_dofs = [c.dofs() for _, c, _ in static]
         host_system = native().GlobalSystem(layout.block_offsets, static_dofs)
         static_read = read_dofs(layout.size, static_dofs)
         _static_systems[scene] = (key, host_system, static_read)
     else:
         host_system, static_read = cached[1], cached[2]
-    dynamic_dofs = [dofs() for _, (_, dofs) in dynamic]
+    dynamic_dofs = [c.dofs() for _, c, _ in dynamic]
     host_system.set_dynamic(dynamic_dofs)
     spent["indices"] += clock() - start
 
-    start = clock()
     system = backend.system(scene, host_system)
-    system.set_zero()
-    for k, (_, (inputs, _)) in enumerate(static + dynamic):
-        backend.add(system, k, inputs, threads)
-    backend.finish_assembly(system)
-    # The local derivatives are reused by the next call: let assembly finish.
-    backend.synchronize(system)
+    start = clock()
+    _assemble_inputs(backend, system, inputs, threads)
     spent["assembly"] += clock() - start
+    if chosen is not None and not projection.projects_none() and \
+            any(c.selective for c in contributions):
+        gradient = np.empty(layout.size)
+        system.gradient(gradient)
+        chosen = projection.projected_dofs(gradient)
+        if chosen.any():
+            start = clock()
+            inputs = [c.inputs(chosen) for c in contributions]
+            spent["derivatives"] += clock() - start
+            start = clock()
+            _assemble_inputs(backend, system, inputs, threads)
+            spent["assembly"] += clock() - start
     if timings is not None:
         timings.update(spent)
     if report is not None:
         report["staticStructureRebuilt"] = rebuilt
-        report["energiesDifferentiatedOnGpu"] = off_host
+        report["energiesDifferentiatedOnGpu"] = sum(
+            x.backend is not backend.host for x in inputs)
+        report["projectedInstances"] = sum(c.projected_count
+                                           for c in contributions)
+        report["instances"] = sum(c.count for c in contributions)
         # What minimizeEnergy checks: the DoFs some energy instance reads,
         # and the local derivatives behind a NaN.
         report["readDofs"] = static_read | read_dofs(layout.size, dynamic_dofs)
-        report["contributions"] = [(energy, inputs)
-                                   for energy, (inputs, _) in static + dynamic]
+        report["contributions"] = [
+            (energy, x) for (energy, _, _), x in zip(static + dynamic, inputs)]
     return system, layout

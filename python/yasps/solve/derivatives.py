@@ -233,18 +233,96 @@ class _Outputs:
                            self.run("grad"), projected)
 
 
-def assembly_inputs(scene: Scene, energy: Attribute, backend: Backend,
-                    threads: Optional[int] = None, ir: Optional[str] = None,
-                    tables: Optional[TableCache] = None
-                    ) -> Tuple[LocalInputs, Callable[[], np.ndarray]]:
+class Contribution:
+    """What assembly needs of one energy: its local gradients and Hessians
+    in the memory of the backend that differentiated it, and its DoF map.
+    Every instance's Hessian is PSD-projected unless :meth:`inputs` is told
+    which DoFs need it (progressively projected Newton), which energies
+    with plain local Hessians on the host allow (:attr:`selective`);
+    factored energies and those differentiated on a GPU stay projected."""
+
+    def __init__(self, outputs: _Outputs, compressed: bool):
+        self._outputs, self._compressed = outputs, compressed
+        self._projected: Optional[LocalInputs] = None
+        self._exact: Optional[np.ndarray] = None
+        self.dofs: Callable[[], np.ndarray] = outputs.dofs
+        #: whether instances may enter with their exact Hessians
+        self.selective = (outputs.plan is None and not outputs.spec.separate
+                          and outputs.backend is outputs.backend.host)
+        #: instances, and how many the last :meth:`inputs` projected
+        self.count = outputs.count
+        self.projected_count = outputs.count
+
+    def projected(self) -> LocalInputs:
+        """Every instance's Hessian projected (computed once)."""
+        if self._projected is None:
+            outputs = self._outputs
+            self._projected = outputs.compressed_inputs() if self._compressed \
+                else outputs.inputs()
+        return self._projected
+
+    def inputs(self, projected_dofs: Optional[np.ndarray] = None
+               ) -> LocalInputs:
+        """The inputs with the Hessians of the instances that read a True
+        entry of ``projected_dofs`` (a boolean mask of the global DoFs)
+        projected and the others exact; None: all projected."""
+        self.projected_count = self.count
+        if projected_dofs is None or not self.selective:
+            return self.projected()
+        dofs = self.dofs()
+        reads = np.where(dofs >= 0, projected_dofs[np.maximum(dofs, 0)],
+                         False).any(axis=1)
+        self.projected_count = int(reads.sum())
+        if reads.all():
+            return self.projected()
+        outputs = self._outputs
+        count, n, _ = outputs.shape("hess")
+        exact = self._exact_hessians().reshape(count, n * n)
+        if reads.any():
+            # A copy: the exact Hessians' buffer is the kernel's, reused.
+            exact = exact.copy()
+            if self._compressed:
+                exact[reads] = self._projected_rows(reads)
+            else:
+                exact[reads] = self.projected().hessian.reshape(
+                    count, n * n)[reads]
+        gradient = self._projected.gradient if self._projected is not None \
+            else outputs.run("grad")
+        return LocalInputs(outputs.backend, count, n, gradient, exact)
+
+    def _exact_hessians(self) -> np.ndarray:
+        """The unprojected local Hessians (computed once)."""
+        if self._exact is None:
+            self._exact = self._outputs.run("hess")
+        return self._exact
+
+    def _projected_rows(self, rows: np.ndarray) -> np.ndarray:
+        """The compressed projections of only the instances ``rows``."""
+        outputs = self._outputs
+        count, n, _ = outputs.shape("hess")
+        method = next(m for e, _, m in outputs.scene._energies
+                      if e is outputs.energy)
+        threads = config.num_threads if outputs.threads is None \
+            else outputs.threads
+        hessians = self._exact_hessians().reshape(count, n, n)
+        return project_compressed(
+            outputs.dofs()[rows], hessians[rows], method, threads,
+            config.resolve_precision(outputs.scene.precision)
+        ).reshape(-1, n * n)
+
+
+def assembly_contribution(scene: Scene, energy: Attribute, backend: Backend,
+                          threads: Optional[int] = None,
+                          ir: Optional[str] = None,
+                          tables: Optional[TableCache] = None
+                          ) -> Contribution:
     """What assembly needs of a registered energy, computed by the backend
-    that differentiates for ``backend``: the local gradients and projected
-    Hessians (or their factors) and the DoF map (computed when first asked
-    for). ``ir``: the scene's ``kernel_ir``, if the caller has it;
-    ``tables``: the Jacobian tables of this assembly, shared by its
-    energies (factored energies then take J from them where ``backend``
-    assembles slot factors and ``config.slot_jacobians`` allows). Raises
-    NoDerivativesError for an energy without derivatives."""
+    that differentiates for ``backend`` (see :class:`Contribution`).
+    ``ir``: the scene's ``kernel_ir``, if the caller has it; ``tables``:
+    the Jacobian tables of this assembly, shared by its energies (factored
+    energies then take J from them where ``backend`` assembles slot factors
+    and ``config.slot_jacobians`` allows). Raises NoDerivativesError for an
+    energy without derivatives."""
     where = backend.derivatives
     if not _takes_tables(backend):
         tables = None
@@ -252,14 +330,26 @@ def assembly_inputs(scene: Scene, energy: Attribute, backend: Backend,
         tables = {}
     outputs = _Outputs(scene, energy, where, threads, True, True, ir, tables)
     if not outputs.needs_compression():
-        return outputs.inputs(), outputs.dofs
+        return Contribution(outputs, False)
     if where.host is not where:
         # Compression runs on the host: the energy is differentiated there.
         outputs = _Outputs(scene, energy, where.host, threads, True, True,
                            ir)
         if not outputs.needs_compression():
-            return outputs.inputs(), outputs.dofs
-    return outputs.compressed_inputs(), outputs.dofs
+            return Contribution(outputs, False)
+    return Contribution(outputs, True)
+
+
+def assembly_inputs(scene: Scene, energy: Attribute, backend: Backend,
+                    threads: Optional[int] = None, ir: Optional[str] = None,
+                    tables: Optional[TableCache] = None
+                    ) -> Tuple[LocalInputs, Callable[[], np.ndarray]]:
+    """The local gradients and projected Hessians (or their factors) of a
+    registered energy and its DoF map (computed when first asked for), as
+    :func:`assembly_contribution` computes them."""
+    contribution = assembly_contribution(scene, energy, backend, threads, ir,
+                                         tables)
+    return contribution.projected(), contribution.dofs
 
 
 def energy_derivatives(scene: Scene, energy: Attribute, backend: Backend,

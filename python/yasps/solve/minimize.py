@@ -15,6 +15,7 @@ from .. import config
 from ..frontend.errors import SceneError, YaspsError
 from ..runtime import Backend
 from .assembly import DofLayout, assemble
+from .projection import GradientThreshold, free_gradient_max
 from .diagnosis import (ERROR_BOUND_WARNING, IllConditionedSolve,
                         PrecisionWarning, f32_rounding_losses,
                         first_rounding_warning_for,
@@ -93,18 +94,33 @@ _STOP_REASONS = {
 def minimize_energy(scene, backend: Backend, tolerance: float = 1e-6,
                     maxIterations: int = 1000, threads: Optional[int] = None,
                     fixed: Optional[list] = None,
-                    stopping: str = "residual") -> List[np.ndarray]:
+                    stopping: str = "residual",
+                    projection_threshold: Optional[float] = None
+                    ) -> List[np.ndarray]:
     """Solves H dx = g for the assembled projected Hessian and gradient,
     with dx = 0 at the ``fixed`` DoFs (see fixed_dof_mask), on ``backend``;
-    ``stopping``: one of STOPPING_RULES."""
+    ``stopping``: one of STOPPING_RULES; ``projection_threshold``: project
+    only the instances that read a DoF block whose free gradient reaches it
+    (:class:`GradientThreshold`; None: all)."""
     if not (tolerance >= 0):
         raise ValueError(f"minimizeEnergy: tolerance must be >= 0, got {tolerance}")
     if stopping not in STOPPING_RULES:
         raise ValueError(f"minimizeEnergy: stopping must be one of "
                          f"{', '.join(STOPPING_RULES)}, got {stopping!r}")
+    if projection_threshold is not None and not (projection_threshold >= 0):
+        raise SceneError(f"minimizeEnergy: projectionThreshold must be >= 0 "
+                         f"(or None: project every instance), got "
+                         f"{projection_threshold}")
     timings: Dict[str, float] = {}
     report: Dict[str, object] = {}
-    system, layout = assemble(scene, backend, threads, timings, report)
+    projection = None
+    if projection_threshold is not None:
+        early = DofLayout(scene.minimizeTargets)
+        projection = GradientThreshold(float(projection_threshold),
+                                       early.block_offsets,
+                                       fixed_dof_mask(early, fixed))
+    system, layout = assemble(scene, backend, threads, timings, report,
+                              projection)
     contributions = report.pop("contributions")
     mask = fixed_dof_mask(layout, fixed)
     unread = unread_targets(layout, report.pop("readDofs"), mask)
@@ -145,6 +161,13 @@ def minimize_energy(scene, backend: Backend, tolerance: float = 1e-6,
             "residualReplacements": int(pcg.residual_replacements),
             "preconditionerLevels": int(pcg.levels),
             "seconds": timings, "backend": backend.name, **report}
+    if projection is not None:
+        # What progressively projected Newton decides by: the gradient's
+        # scale and whether the direction descends (H may be indefinite).
+        gradient = np.empty(system.size)
+        system.gradient(gradient)
+        info["gradientMax"] = free_gradient_max(gradient, mask)
+        info["descends"] = bool(float(gradient @ x) > 0.0)
     scene.lastSolve = info
     solution = layout.split(x)
     if stop == "non_finite":
