@@ -151,3 +151,36 @@ def test_unknown_projection_is_refused():
     scene, x, x_hat, _ = squeezed_box(mass=1.0)
     with pytest.raises(yasps.SceneError, match="projection must be one of"):
         ImplicitEuler(scene, x, x_hat, dt=0.01, projection="sometimes")
+
+
+def test_a_retry_at_the_same_point_reuses_the_derivatives(monkeypatch):
+    """Another projection at the same point runs no derivative kernel
+    again; any new value (even an equal one) or setting does."""
+    from yasps.runtime.cpu import CpuBackend
+    scene, x, *_ = squeezed_box(mass=1.0)
+    runs = []
+    original = CpuBackend.run
+
+    def counting(self, kernels, s, path, *args, **kwargs):
+        runs.append(path)
+        return original(self, kernels, s, path, *args, **kwargs)
+
+    monkeypatch.setattr(CpuBackend, "run", counting)
+    first = solve(scene, float("inf"))
+    assert any(p.endswith("__hess") for p in runs)
+    runs.clear()
+    g, _, _ = dense_system(scene)
+    runs.clear()
+    threshold = 0.5 * np.abs(g).max()
+    mixed = solve(scene, threshold)
+    assert [p for p in runs if "__" in p and not p.endswith("__hess_proj")] \
+        == []
+    x.updateValue(x.value)
+    runs.clear()
+    np.testing.assert_array_equal(solve(scene, float("inf")), first)
+    assert any(p.endswith("__hess") for p in runs)
+    runs.clear()
+    monkeypatch.setattr(yasps.config, "compress_local_hessians", False)
+    np.testing.assert_allclose(solve(scene, threshold), mixed, rtol=1e-12,
+                               atol=1e-15)
+    assert any(p.endswith("__grad") for p in runs)

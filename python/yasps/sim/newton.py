@@ -136,6 +136,9 @@ def _check_targets(scene, targets: List[Attribute]) -> None:
 PROJECTIONS = ("progressive", "full")
 _NONE = float("inf")
 _FIRST_THRESHOLD = {"progressive": _NONE, "full": None}
+#: The threshold's factor after a failed solve and after a direction taken
+#: (SymX's ``ppn_tightening_factor`` and ``ppn_release_factor``).
+_TIGHTEN, _RELEASE = 0.5, 2.0
 #: Below this gradient magnitude every instance is projected.
 _SMALLEST_THRESHOLD = 1e-12
 
@@ -242,14 +245,14 @@ def newton(scene, x: Targets, tolerance: float,
             # more (the threshold halves), as SymX does.
             if not (failed or not solve["descends"]):
                 break
-            threshold = 0.5 * (solve["gradientMax"] if threshold == _NONE
-                               else threshold)
+            threshold = _TIGHTEN * (solve["gradientMax"]
+                                    if threshold == _NONE else threshold)
             if threshold < _SMALLEST_THRESHOLD:
                 threshold = 0.0
             report.projectionRetries += 1
         report.inexactDirections += inexact
         if threshold is not None and threshold != _NONE:
-            threshold *= 2.0
+            threshold *= _RELEASE
         steps = [-dx for dx in directions]
         report.cgIterations.append(cg)
         _totals["cg"] += cg

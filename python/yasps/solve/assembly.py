@@ -96,6 +96,69 @@ _static_systems: "weakref.WeakKeyDictionary[Scene, tuple]" = \
     weakref.WeakKeyDictionary()
 
 
+class _Point:
+    """The local derivatives computed at a scene's point (``key``: see
+    _point_key), one (energy, is_dynamic, Contribution) per energy with
+    derivatives, and the gradient assembled there once read."""
+
+    def __init__(self, key: tuple, entries: list):
+        self.key, self.entries = key, entries
+        self.gradient: Optional[np.ndarray] = None
+
+
+#: Each scene's last point: an assembly at the same point with another
+#: projection (progressive projection's retries) reuses its derivatives
+#: instead of running every kernel again.
+_last_points: "weakref.WeakKeyDictionary[Scene, _Point]" = \
+    weakref.WeakKeyDictionary()
+
+
+def _config_values() -> tuple:
+    """The settings, as (name, value) pairs: kernels and assembly read
+    them."""
+    return tuple((name, value) for name, value in sorted(vars(config).items())
+                 if not name.startswith("_") and
+                 isinstance(value, (bool, int, float, str, type(None))))
+
+
+def _point_key(scene: Scene, ir: str, backend: Backend,
+               threads: Optional[int]) -> tuple:
+    """What an assembly's local derivatives depend on besides the scene's
+    structure: the version of every stored value and connectivity, every
+    primitive's instance count, the backend, threads and settings."""
+    versions: list = []
+    pending = list(scene._symbols.values())
+    while pending:
+        entity = pending.pop()
+        if isinstance(entity, Attribute):
+            versions.append((id(entity), entity._version))
+        elif isinstance(entity, Primitive):
+            versions.append((id(entity), entity.numInstances))
+            versions += [(id(c), c._version)
+                         for c in entity._connectivities.values()]
+        if hasattr(entity, "_symbols"):
+            pending += list(entity._symbols.values())
+    return (ir, id(backend), threads, _config_values(), tuple(versions))
+
+
+def _contributions(scene: Scene, backend: Backend, threads: Optional[int],
+                   ir: str) -> list:
+    """(energy, is_dynamic, Contribution) of every energy with derivatives,
+    its kernels run on the way (assembly_contribution)."""
+    # The Jacobian tables of factored energies: one evaluation per source
+    # for every energy that reaches it.
+    tables: dict = {}
+    entries = []
+    for energy, is_dynamic, _ in scene._energies:
+        try:
+            contribution = assembly_contribution(scene, energy, backend,
+                                                 threads, ir, tables)
+        except NoDerivativesError:
+            continue
+        entries.append((energy, is_dynamic, contribution))
+    return entries
+
+
 def _assemble_inputs(backend: Backend, system, inputs: list,
                      threads: Optional[int]) -> None:
     """Zeroes ``system`` and adds every energy's inputs to it."""
@@ -144,45 +207,50 @@ def assemble(scene: Scene, backend: Backend, threads: Optional[int] = None,
     # One emission of the scene for every energy's kernels; it does not
     # change with the counts of dynamic primitives.
     ir = kernel_ir(scene)
-    static, dynamic = [], []
-    # The Jacobian tables of factored energies: one evaluation per source
-    # for every energy that reaches it.
-    tables: dict = {}
+    point = _point_key(scene, ir, backend, threads)
+    last = _last_points.get(scene)
+    reused = last is not None and last.key == point
     # None: every instance projected; a DoF mask: those of the instances
-    # reading it (at first none: the exact Hessians where allowed).
+    # reading it (at first none, the exact Hessians where allowed, unless
+    # the gradient here is known already).
     chosen: Optional[np.ndarray] = None
     if projection is not None and not projection.projects_all():
         chosen = np.zeros(layout.size, dtype=bool)
-    for energy, is_dynamic, _ in scene._energies:
-        start = clock()
-        try:
-            contribution = assembly_contribution(scene, energy, backend,
-                                                 threads, ir, tables)
-        except NoDerivativesError:
-            continue
-        inputs = contribution.inputs(chosen)
-        spent["derivatives"] += clock() - start
-        (dynamic if is_dynamic else static).append(
-            (energy, contribution, inputs))
+        if reused and last.gradient is not None \
+                and not projection.projects_none():
+            chosen = projection.projected_dofs(last.gradient)
+    start = clock()
+    if reused:
+        entries = last.entries
+    else:
+        entries = _contributions(scene, backend, threads, ir)
+        _last_points[scene] = last = _Point(point, entries)
+    inputs = [c.inputs(chosen) for _, _, c in entries]
+    spent["derivatives"] += clock() - start
     # Launches may return at once: time the derivatives, not their launch.
     start = clock()
     backend.synchronize()
     spent["derivatives"] += clock() - start
-    contributions: List[Contribution] = [c for _, c, _ in static + dynamic]
-    inputs = [x for _, _, x in static + dynamic]
+    static = [(e, c) for e, is_dynamic, c in entries if not is_dynamic]
+    dynamic = [(e, c) for e, is_dynamic, c in entries if is_dynamic]
+    # The system's energy order: static ones first.
+    order = [i for i, (_, d, _) in enumerate(entries) if not d] + \
+        [i for i, (_, d, _) in enumerate(entries) if d]
+    contributions: List[Contribution] = [entries[i][2] for i in order]
+    inputs = [inputs[i] for i in order]
 
     start = clock()
-    key = _static_structure_key(scene, ir, layout, [e for e, _, _ in static])
+    key = _static_structure_key(scene, ir, layout, [e for e, _ in static])
     cached = _static_systems.get(scene)
     rebuilt = cached is None or cached[0] != key
     if rebuilt:
-        static_dofs = [c.dofs() for _, c, _ in static]
+        static_dofs = [c.dofs() for _, c in static]
         host_system = native().GlobalSystem(layout.block_offsets, static_dofs)
         static_read = read_dofs(layout.size, static_dofs)
         _static_systems[scene] = (key, host_system, static_read)
     else:
         host_system, static_read = cached[1], cached[2]
-    dynamic_dofs = [c.dofs() for _, c, _ in dynamic]
+    dynamic_dofs = [c.dofs() for _, c in dynamic]
     host_system.set_dynamic(dynamic_dofs)
     spent["indices"] += clock() - start
 
@@ -190,11 +258,13 @@ def assemble(scene: Scene, backend: Backend, threads: Optional[int] = None,
     start = clock()
     _assemble_inputs(backend, system, inputs, threads)
     spent["assembly"] += clock() - start
-    if chosen is not None and not projection.projects_none() and \
-            any(c.selective for c in contributions):
-        gradient = np.empty(layout.size)
-        system.gradient(gradient)
-        chosen = projection.projected_dofs(gradient)
+    selective = chosen is not None and not projection.projects_none() and \
+        any(c.selective for c in contributions)
+    if selective and last.gradient is None:
+        # The gradient does not depend on the projection: read it once.
+        last.gradient = np.empty(layout.size)
+        system.gradient(last.gradient)
+        chosen = projection.projected_dofs(last.gradient)
         if chosen.any():
             start = clock()
             inputs = [c.inputs(chosen) for c in contributions]
@@ -215,5 +285,5 @@ def assemble(scene: Scene, backend: Backend, threads: Optional[int] = None,
         # and the local derivatives behind a NaN.
         report["readDofs"] = static_read | read_dofs(layout.size, dynamic_dofs)
         report["contributions"] = [
-            (energy, x) for (energy, _, _), x in zip(static + dynamic, inputs)]
+            (entries[i][0], x) for i, x in zip(order, inputs)]
     return system, layout

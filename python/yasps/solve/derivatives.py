@@ -221,17 +221,6 @@ class _Outputs:
                            inner_hessian=self.run("hess_inner_proj"),
                            inner_size=plan.inner_size, slot_factors=slots)
 
-    def compressed_inputs(self) -> LocalInputs:
-        """Gradients and Hessians projected after compression, on the host."""
-        method = next(m for e, _, m in self.scene._energies
-                      if e is self.energy)
-        threads = config.num_threads if self.threads is None else self.threads
-        projected = project_compressed(
-            self.dofs(), self.host("hess"), method, threads,
-            config.resolve_precision(self.scene.precision))
-        return LocalInputs(self.backend, self.count, self.shape("grad")[1],
-                           self.run("grad"), projected)
-
 
 class Contribution:
     """What assembly needs of one energy: its local gradients and Hessians
@@ -245,6 +234,7 @@ class Contribution:
         self._outputs, self._compressed = outputs, compressed
         self._projected: Optional[LocalInputs] = None
         self._exact: Optional[np.ndarray] = None
+        self._grad = None
         self.dofs: Callable[[], np.ndarray] = outputs.dofs
         #: whether instances may enter with their exact Hessians
         self.selective = (outputs.plan is None and not outputs.spec.separate
@@ -257,8 +247,14 @@ class Contribution:
         """Every instance's Hessian projected (computed once)."""
         if self._projected is None:
             outputs = self._outputs
-            self._projected = outputs.compressed_inputs() if self._compressed \
-                else outputs.inputs()
+            if not self.selective:
+                self._projected = outputs.inputs()
+            else:
+                count, n, _ = outputs.shape("hess")
+                hessians = self._projected_rows(np.ones(count, dtype=bool)) \
+                    if self._compressed else outputs.run("hess_proj")
+                self._projected = LocalInputs(outputs.backend, count, n,
+                                              self._gradient(), hessians)
         return self._projected
 
     def inputs(self, projected_dofs: Optional[np.ndarray] = None
@@ -286,9 +282,13 @@ class Contribution:
             else:
                 exact[reads] = self.projected().hessian.reshape(
                     count, n * n)[reads]
-        gradient = self._projected.gradient if self._projected is not None \
-            else outputs.run("grad")
-        return LocalInputs(outputs.backend, count, n, gradient, exact)
+        return LocalInputs(outputs.backend, count, n, self._gradient(), exact)
+
+    def _gradient(self):
+        """The local gradients (computed once)."""
+        if self._grad is None:
+            self._grad = self._outputs.run("grad")
+        return self._grad
 
     def _exact_hessians(self) -> np.ndarray:
         """The unprojected local Hessians (computed once)."""
