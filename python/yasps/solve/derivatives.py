@@ -290,6 +290,34 @@ class Contribution:
             self._grad = self._outputs.run("grad")
         return self._grad
 
+    def projection_update(self, projected_dofs: np.ndarray
+                          ) -> Optional[LocalInputs]:
+        """What turns this energy's exact contribution into that of
+        ``inputs(projected_dofs)`` when added to it: no gradient, and the
+        projected minus the exact Hessians of the instances that read a
+        True entry (zero elsewhere); None where that is nothing."""
+        if not self.selective:
+            return None
+        dofs = self.dofs()
+        reads = np.where(dofs >= 0, projected_dofs[np.maximum(dofs, 0)],
+                         False).any(axis=1)
+        self.projected_count = int(reads.sum())
+        method = next(m for e, _, m in self._outputs.scene._energies
+                      if e is self._outputs.energy)
+        if not reads.any() or method == "none":
+            return None
+        outputs = self._outputs
+        count, n, _ = outputs.shape("hess")
+        exact = self._exact_hessians().reshape(count, n * n)
+        update = np.zeros((count, n * n))
+        if self._compressed:
+            update[reads] = self._projected_rows(reads) - exact[reads]
+        else:
+            update[reads] = self.projected().hessian.reshape(
+                count, n * n)[reads] - exact[reads]
+        return LocalInputs(outputs.backend, count, n, np.zeros((count, n)),
+                           update)
+
     def _exact_hessians(self) -> np.ndarray:
         """The unprojected local Hessians (computed once)."""
         if self._exact is None:
