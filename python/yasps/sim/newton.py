@@ -18,7 +18,8 @@ from tqdm import tqdm
 
 from ..frontend.attribute import Attribute
 from ..frontend.errors import SceneError
-from ..solve import SolverError
+from ..runtime import current as current_backend
+from ..solve import SolverError, minimize_energy
 from ..solve.minimize import checked_fixed_mask
 from ..solve.prepare import compile_scene
 
@@ -225,10 +226,14 @@ def newton(scene, x: Targets, tolerance: float,
         while True:
             failed, inexact = False, False
             try:
-                directions = scene.minimizeEnergy(
-                    tolerance=cg_tolerance, maxIterations=cg_max_iterations,
-                    fixed=fixed, stopping=cg_stopping,
-                    projectionThreshold=threshold)
+                # Newton judges its directions itself (the line search and
+                # the stopping rule on the whole direction): a loose one
+                # costs iterations, which NewtonNotConverged reports, so
+                # minimizeEnergy's conditioning warning stays for users.
+                directions = minimize_energy(
+                    scene, current_backend(), cg_tolerance,
+                    cg_max_iterations, None, fixed, cg_stopping, threshold,
+                    warn_conditioning=False)
             except SolverError as error:
                 # A CG iterate from zero on an SPD system is a descent
                 # direction: take it, inexactly, and let the line search

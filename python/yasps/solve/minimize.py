@@ -95,13 +95,15 @@ def minimize_energy(scene, backend: Backend, tolerance: float = 1e-6,
                     maxIterations: int = 1000, threads: Optional[int] = None,
                     fixed: Optional[list] = None,
                     stopping: str = "residual",
-                    projection_threshold: Optional[float] = None
-                    ) -> List[np.ndarray]:
+                    projection_threshold: Optional[float] = None,
+                    warn_conditioning: bool = True) -> List[np.ndarray]:
     """Solves H dx = g for the assembled projected Hessian and gradient,
     with dx = 0 at the ``fixed`` DoFs (see fixed_dof_mask), on ``backend``;
     ``stopping``: one of STOPPING_RULES; ``projection_threshold``: project
     only the instances that read a DoF block whose free gradient reaches it
-    (:class:`GradientThreshold`; None: all)."""
+    (:class:`GradientThreshold`; None: all). ``warn_conditioning=False``
+    (Newton loops, which judge their directions themselves) leaves out the
+    IllConditionedSolve warning; ``lastSolve['errorBound']`` still has it."""
     if not (tolerance >= 0):
         raise ValueError(f"minimizeEnergy: tolerance must be >= 0, got {tolerance}")
     if stopping not in STOPPING_RULES:
@@ -181,17 +183,15 @@ def minimize_energy(scene, backend: Backend, tolerance: float = 1e-6,
             f"{pcg.iterations} iterations at relative residual "
             f"{pcg.relative_residual:.3g} (tolerance {tolerance:g}); the last "
             "iterate is in .solution", solution, info)
-    if stopping == "residual" and bound > ERROR_BOUND_WARNING and \
-            first_warning_for(scene):
+    if warn_conditioning and stopping == "residual" and \
+            bound > ERROR_BOUND_WARNING and first_warning_for(scene):
         warnings.warn(
             f"minimizeEnergy: PCG converged to relative residual "
             f"{pcg.relative_residual:.3g}, but the Hessian's conditioning "
             f"(diagonal ratio {pcg.diagonal_ratio:.3g}, CG's estimate "
             f"{pcg.condition_estimate:.3g}) means the residual bounds the "
             f"step's relative error only by {bound:.3g}; use "
-            "stopping='energy_norm' (cg_stopping='energy_norm' for "
-            "yasps.sim's newton and ImplicitEuler) or a smaller tolerance "
-            "(warned once per scene; lastSolve['errorBound'] has it for every "
-            "solve)",
+            "stopping='energy_norm' or a smaller tolerance (warned once per "
+            "scene; lastSolve['errorBound'] has it for every solve)",
             IllConditionedSolve, stacklevel=4)
     return solution
