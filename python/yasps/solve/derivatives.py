@@ -265,10 +265,7 @@ class Contribution:
         self.projected_count = self.count
         if projected_dofs is None or not self.selective:
             return self.projected()
-        dofs = self.dofs()
-        reads = np.where(dofs >= 0, projected_dofs[np.maximum(dofs, 0)],
-                         False).any(axis=1)
-        self.projected_count = int(reads.sum())
+        reads = self._reads(projected_dofs)
         if reads.all():
             return self.projected()
         outputs = self._outputs
@@ -298,10 +295,7 @@ class Contribution:
         True entry (zero elsewhere); None where that is nothing."""
         if not self.selective:
             return None
-        dofs = self.dofs()
-        reads = np.where(dofs >= 0, projected_dofs[np.maximum(dofs, 0)],
-                         False).any(axis=1)
-        self.projected_count = int(reads.sum())
+        reads = self._reads(projected_dofs)
         method = next(m for e, _, m in self._outputs.scene._energies
                       if e is self._outputs.energy)
         if not reads.any() or method == "none":
@@ -317,6 +311,16 @@ class Contribution:
                 count, n * n)[reads] - exact[reads]
         return LocalInputs(outputs.backend, count, n, np.zeros((count, n)),
                            update)
+
+    def _reads(self, projected_dofs: np.ndarray) -> np.ndarray:
+        """Per instance, whether it reads a True entry of
+        ``projected_dofs`` (the instances to project); counted in
+        ``projected_count``."""
+        dofs = self.dofs()
+        reads = np.where(dofs >= 0, projected_dofs[np.maximum(dofs, 0)],
+                         False).any(axis=1)
+        self.projected_count = int(reads.sum())
+        return reads
 
     def _exact_hessians(self) -> np.ndarray:
         """The unprojected local Hessians (computed once)."""
