@@ -316,6 +316,10 @@ class Contribution:
         """Per instance, whether it reads a True entry of
         ``projected_dofs`` (the instances to project); counted in
         ``projected_count``."""
+        if not projected_dofs.any():
+            # The exact assembly of a new point: nothing chosen yet.
+            self.projected_count = 0
+            return np.zeros(self.count, dtype=bool)
         dofs = self.dofs()
         reads = np.where(dofs >= 0, projected_dofs[np.maximum(dofs, 0)],
                          False).any(axis=1)
