@@ -144,7 +144,7 @@ def _point_key(scene: Scene, ir: str, backend: Backend,
 def _contributions(scene: Scene, backend: Backend, threads: Optional[int],
                    ir: str) -> list:
     """(energy, is_dynamic, Contribution) of every energy with derivatives,
-    its kernels run on the way (assembly_contribution)."""
+    static energies first (the system's order)."""
     # The Jacobian tables of factored energies: one evaluation per source
     # for every energy that reaches it.
     tables: dict = {}
@@ -156,7 +156,7 @@ def _contributions(scene: Scene, backend: Backend, threads: Optional[int],
         except NoDerivativesError:
             continue
         entries.append((energy, is_dynamic, contribution))
-    return entries
+    return [e for e in entries if not e[1]] + [e for e in entries if e[1]]
 
 
 def _assemble_inputs(backend: Backend, system, inputs: list,
@@ -187,10 +187,12 @@ def assemble(scene: Scene, backend: Backend, threads: Optional[int] = None,
     dynamic part is re-indexed on every call.
 
     ``projection`` chooses the instances whose local Hessians are
-    PSD-projected (None: all): the system is first assembled with the
-    energies' exact Hessians where :class:`Contribution` allows, and, where
-    the threshold then picks some DoFs by the assembled gradient, assembled
-    again with those instances projected."""
+    PSD-projected (None: all): at a new point the system is first
+    assembled with the energies' exact Hessians where :class:`Contribution`
+    allows; where the threshold then picks some DoFs by the assembled
+    gradient, the chosen instances' projected minus exact Hessians are
+    added (on a GPU system, it is assembled again). At the scene's last
+    point the gradient is known and one assembly does."""
     clock = time.perf_counter
     spent = {"derivatives": 0.0, "indices": 0.0, "assembly": 0.0}
     targets = scene.minimizeTargets
@@ -233,11 +235,7 @@ def assemble(scene: Scene, backend: Backend, threads: Optional[int] = None,
     spent["derivatives"] += clock() - start
     static = [(e, c) for e, is_dynamic, c in entries if not is_dynamic]
     dynamic = [(e, c) for e, is_dynamic, c in entries if is_dynamic]
-    # The system's energy order: static ones first.
-    order = [i for i, (_, d, _) in enumerate(entries) if not d] + \
-        [i for i, (_, d, _) in enumerate(entries) if d]
-    contributions: List[Contribution] = [entries[i][2] for i in order]
-    inputs = [inputs[i] for i in order]
+    contributions: List[Contribution] = [c for _, _, c in entries]
 
     start = clock()
     key = _static_structure_key(scene, ir, layout, [e for e, _ in static])
@@ -298,5 +296,5 @@ def assemble(scene: Scene, backend: Backend, threads: Optional[int] = None,
         # and the local derivatives behind a NaN.
         report["readDofs"] = static_read | read_dofs(layout.size, dynamic_dofs)
         report["contributions"] = [
-            (entries[i][0], x) for i, x in zip(order, inputs)]
+            (energy, x) for (energy, _, _), x in zip(entries, inputs)]
     return system, layout

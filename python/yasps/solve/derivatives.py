@@ -242,6 +242,9 @@ class Contribution:
         #: instances, and how many the last :meth:`inputs` projected
         self.count = outputs.count
         self.projected_count = outputs.count
+        #: the energy's projection method (addEnergy's ``projection``)
+        self._method = next(m for e, _, m in outputs.scene._energies
+                            if e is outputs.energy)
 
     def projected(self) -> LocalInputs:
         """Every instance's Hessian projected (computed once)."""
@@ -274,11 +277,7 @@ class Contribution:
         if reads.any():
             # A copy: the exact Hessians' buffer is the kernel's, reused.
             exact = exact.copy()
-            if self._compressed:
-                exact[reads] = self._projected_rows(reads)
-            else:
-                exact[reads] = self.projected().hessian.reshape(
-                    count, n * n)[reads]
+            exact[reads] = self._projected_of(reads)
         return LocalInputs(outputs.backend, count, n, self._gradient(), exact)
 
     def _gradient(self):
@@ -296,19 +295,13 @@ class Contribution:
         if not self.selective:
             return None
         reads = self._reads(projected_dofs)
-        method = next(m for e, _, m in self._outputs.scene._energies
-                      if e is self._outputs.energy)
-        if not reads.any() or method == "none":
+        if not reads.any() or self._method == "none":
             return None
         outputs = self._outputs
         count, n, _ = outputs.shape("hess")
         exact = self._exact_hessians().reshape(count, n * n)
         update = np.zeros((count, n * n))
-        if self._compressed:
-            update[reads] = self._projected_rows(reads) - exact[reads]
-        else:
-            update[reads] = self.projected().hessian.reshape(
-                count, n * n)[reads] - exact[reads]
+        update[reads] = self._projected_of(reads) - exact[reads]
         return LocalInputs(outputs.backend, count, n, np.zeros((count, n)),
                            update)
 
@@ -332,17 +325,23 @@ class Contribution:
             self._exact = self._outputs.run("hess")
         return self._exact
 
+    def _projected_of(self, rows: np.ndarray) -> np.ndarray:
+        """The projected Hessians of the instances ``rows``, one row of
+        n * n entries each."""
+        if self._compressed:
+            return self._projected_rows(rows)
+        count, n, _ = self._outputs.shape("hess")
+        return self.projected().hessian.reshape(count, n * n)[rows]
+
     def _projected_rows(self, rows: np.ndarray) -> np.ndarray:
         """The compressed projections of only the instances ``rows``."""
         outputs = self._outputs
         count, n, _ = outputs.shape("hess")
-        method = next(m for e, _, m in outputs.scene._energies
-                      if e is outputs.energy)
         threads = config.num_threads if outputs.threads is None \
             else outputs.threads
         hessians = self._exact_hessians().reshape(count, n, n)
         return project_compressed(
-            outputs.dofs()[rows], hessians[rows], method, threads,
+            outputs.dofs()[rows], hessians[rows], self._method, threads,
             config.resolve_precision(outputs.scene.precision)
         ).reshape(-1, n * n)
 
