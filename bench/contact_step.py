@@ -1,22 +1,23 @@
 #!/usr/bin/env python3
-"""Collision detection per Newton step, before and after one broad phase
-per step: on the steps the twisting cloth (examples/paper/mat_twist.py at
-dt = 0.01 s, in heavy self-contact) really takes, the same positions are
-given to
+"""Collision detection per Newton step, by ipctk and by the runtime: on
+the steps the twisting cloth (examples/paper/mat_twist.py at dt = 0.01 s,
+in heavy self-contact) really takes, the same positions are given to both
+of yasps.contact.detection's schemes, each with one broad phase per step
+(:mod:`yasps.contact.sweep`):
 
-- *per query* (yasps before): ipctk's CCD with its own broad phase and
-  Tight Inclusion narrow phase, and a full collision-set build (broad phase
-  included) at each line-search candidate;
-- *per step* (yasps now, :mod:`yasps.contact.sweep`): one broad phase over
-  the step's swept boxes, ipctk's additive CCD over its candidates, and
-  collision sets at the candidates as narrow phases over them.
+- *ipctk*: ipctk's broad phase over the step's swept boxes, its additive
+  CCD over those candidates, its collision sets at the line-search
+  candidates as narrow phases over them, and the Python conversion of its
+  collisions into pair arrays (:func:`yasps.contact.pairs.collision_pairs`);
+- *runtime* (the default): the runtime's C++ broad phase, additive CCD and
+  collision sets, which hand over the pair arrays directly.
 
-Prints seconds per Newton step of each and their ratio, the step bounds
-both find, and the pairs-to-primitives conversion the line search pays.
-With ``--run N`` it instead steps the scene N frames as yasps does now and
-prints seconds per frame, Newton iterations per frame, CG iterations per
-Newton iteration, the unconverged frames, the closest distance, ipctk's
-intersection verdict and the time per stage.
+Prints milliseconds per Newton step of each stage and their ratio, whether
+the collision sets agree (as sets of pairs with their weights), and the
+step bounds both find. With ``--run N`` it instead steps the scene N frames
+as yasps does now and prints seconds per frame, Newton iterations per
+frame, CG iterations per Newton iteration, the unconverged frames, the
+closest distance, ipctk's intersection verdict and the time per stage.
 
     python3 bench/contact_step.py [--frames 45] [--measure 5] [--run N]
 """
@@ -29,14 +30,14 @@ import time
 import warnings
 from pathlib import Path
 
-import ipctk
 import numpy as np
 
 REPO = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(REPO / "examples" / "paper"))
 
 import mat_twist  # noqa: E402
-from yasps.contact import MIN_SEPARATION, NARROW_PHASE_CCD  # noqa: E402
+from yasps.contact.detection import (IpctkDetection,  # noqa: E402
+                                     RuntimeDetection)
 from yasps.contact.sweep import Sweep  # noqa: E402
 
 #: Line-search candidates timed per step (fractions of the bounded step).
@@ -114,51 +115,63 @@ def main() -> None:
         whole_run(args.run)
         return
     contact, steps = captured_steps(args.frames, args.measure)
-    mesh, dhat = contact.mesh, contact.dhat
-    old = {"ccd": 0.0, "sets": 0.0}
-    new = {"broad phase": 0.0, "ccd": 0.0, "sets": 0.0}
-    pairs_seconds, bounds = 0.0, []
+    schemes = {"ipctk": IpctkDetection(contact.mesh, contact.dhat),
+               "runtime": RuntimeDetection(contact.mesh, contact.dhat)}
+    seconds = {name: {"broad phase": 0.0, "ccd": 0.0, "sets": 0.0}
+               for name in schemes}
+    bounds, agree, sets = [], 0, 0
     for V0, V1, _ in steps:
-        seconds, old_bound = timed(lambda: ipctk.compute_collision_free_stepsize(
-            mesh, V0, V1))
-        old["ccd"] += seconds
-        seconds, sweep = timed(lambda: Sweep(mesh, V0, V1, dhat))
-        new["broad phase"] += seconds
-        seconds, new_bound = timed(
-            lambda: sweep.candidates.compute_collision_free_stepsize(
-                mesh, V0, V1, min_distance=MIN_SEPARATION,
-                narrow_phase_ccd=NARROW_PHASE_CCD))
-        new["ccd"] += seconds
-        bounds.append((old_bound, new_bound))
-        for fraction in CANDIDATES:
-            V = V0 + fraction * new_bound * (V1 - V0)
-            full, reused = ipctk.NormalCollisions(), ipctk.NormalCollisions()
-            old["sets"] += timed(lambda: full.build(mesh, V, dhat))[0]
-            new["sets"] += timed(lambda: reused.build(sweep.candidates, mesh,
-                                                      V, dhat))[0]
-            contact.collisions = reused
-            pairs_seconds += timed(lambda: contact._normal_pairs(V))[0]
+        found = {}
+        for name, scheme in schemes.items():
+            spent, sweep = timed(lambda: Sweep(scheme.candidates, V0, V1,
+                                               contact.dhat))
+            seconds[name]["broad phase"] += spent
+            spent, bound = timed(lambda: scheme.swept_bound(sweep, V0, V1))
+            seconds[name]["ccd"] += spent
+            found[name] = []
+            for fraction in CANDIDATES:
+                V = V0 + fraction * bound * (V1 - V0)
+                spent, pairs = timed(lambda: scheme.pairs(V, sweep))
+                seconds[name]["sets"] += spent
+                found[name].append(pair_rows(pairs[0]))
+            bounds.append(bound)
+        sets += len(CANDIDATES)
+        agree += sum(a == b for a, b in zip(found["ipctk"], found["runtime"]))
     count = len(steps)
-    old_total, new_total = sum(old.values()), sum(new.values())
     print(f"twisting cloth, 625 vertices, frames {args.frames - args.measure + 1}"
           f"-{args.frames}: {count} Newton steps, {len(CANDIDATES)} "
           f"line-search candidates each")
-    print(f"{'per step, ms':<34}{'per query':>12}{'per step':>12}")
-    print(f"{'broad phase (own)':<34}{'-':>12}"
-          f"{1e3 * new['broad phase'] / count:>12.2f}")
-    print(f"{'CCD':<34}{1e3 * old['ccd'] / count:>12.2f}"
-          f"{1e3 * new['ccd'] / count:>12.2f}")
-    print(f"{'collision sets':<34}{1e3 * old['sets'] / count:>12.2f}"
-          f"{1e3 * new['sets'] / count:>12.2f}")
-    print(f"{'total':<34}{1e3 * old_total / count:>12.2f}"
-          f"{1e3 * new_total / count:>12.2f}   ratio "
-          f"{old_total / new_total:.1f}x")
-    print(f"pairs to primitives (Python): {1e3 * pairs_seconds / count:.2f} "
-          f"ms per step")
-    old_bounds, new_bounds = np.array(bounds).T
-    print(f"step bounds: Tight Inclusion median {np.median(old_bounds):.3f}, "
-          f"additive median {np.median(new_bounds):.3f}; steps both leave "
-          f"whole: {int(((old_bounds == 1) & (new_bounds == 1)).sum())}/{count}")
+    print(f"{'ms per Newton step':<24}{'ipctk':>10}{'runtime':>10}")
+    for stage in ("broad phase", "ccd", "sets"):
+        print(f"{stage:<24}{1e3 * seconds['ipctk'][stage] / count:>10.2f}"
+              f"{1e3 * seconds['runtime'][stage] / count:>10.2f}")
+    totals = {name: sum(s.values()) for name, s in seconds.items()}
+    print(f"{'total':<24}{1e3 * totals['ipctk'] / count:>10.2f}"
+          f"{1e3 * totals['runtime'] / count:>10.2f}   ratio "
+          f"{totals['ipctk'] / totals['runtime']:.1f}x")
+    ipctk_bounds, runtime_bounds = np.array(bounds).reshape(-1, 2).T
+    print(f"collision sets equal: {agree}/{sets}; step bounds: largest "
+          f"difference {np.abs(ipctk_bounds - runtime_bounds).max():.2g}, "
+          f"steps left whole {int((ipctk_bounds == 1).sum())} (ipctk) and "
+          f"{int((runtime_bounds == 1).sum())} (runtime) of {count}")
+
+
+def pair_rows(found) -> dict:
+    """Pair arrays as sets of (vertices, weight) per kind, the two edges of
+    an edge-edge pair unordered (the broad phases list pairs either way
+    round)."""
+    out = {}
+    for kind, pairs in found.items():
+        rows = set()
+        for ids, weight in zip(pairs.vertices.tolist(), pairs.weight):
+            if kind in ("vv", "ee"):
+                ids = sorted([sorted(ids[:2]), sorted(ids[2:])]) \
+                    if kind == "ee" else sorted(ids)
+            elif kind == "ee_vv":
+                ids = sorted([ids[:2], ids[2:]])
+            rows.add((str(ids), float(weight)))
+        out[kind] = rows
+    return out
 
 
 if __name__ == "__main__":

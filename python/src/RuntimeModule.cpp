@@ -2,10 +2,12 @@
 //
 // The extension module `_yasps_runtime`: the C++ runtime without the
 // compiler (it links no MLIR). The Newton system and its solver, local
-// Hessian compression, and the CUDA backend (GpuRuntimeBindings.cpp).
+// Hessian compression, contact's narrow phase and CCD
+// (ContactBindings.cpp), and the CUDA backend (GpuRuntimeBindings.cpp).
 //
 //===----------------------------------------------------------------------===//
 
+#include "ContactBindings.h"
 #include "GpuRuntimeBindings.h"
 #include "PcgBindings.h"
 #include "ThreadPools.h"
@@ -333,6 +335,7 @@ NB_MODULE(_yasps_runtime, m) {
             "Hessian compression and the CUDA backend (no compiler).";
 
   ::yasps::python::bindPcg(m);
+  ::yasps::python::bindContact(m);
   ::yasps::python::bindGpuRuntime(m);
   nb::class_<PySystem>(m, "GlobalSystem",
                        "The block-sparse Newton system of a scene.")

@@ -20,6 +20,17 @@ import yasps  # noqa: E402
 from yasps.sim import box_tet_mesh  # noqa: E402
 
 
+def ipctk_collisions(contact, V=None):
+    """ipctk's own collision set of ``contact``'s mesh at positions V (by
+    default its world positions now): the independent reference that
+    yasps' collision sets are checked against."""
+    import ipctk
+    V = contact.world() if V is None else V
+    collisions = ipctk.NormalCollisions()
+    collisions.build(contact.mesh, V, contact.dhat)
+    return collisions
+
+
 def box_mesh(n: int = 2):
     """A unit cube of n^3 cells, each split into 6 positively oriented tets."""
     return box_tet_mesh(n)

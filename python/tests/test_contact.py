@@ -15,6 +15,8 @@ from yasps.sim import (ImplicitEuler, add_affine_inertia, add_elastic_tets,
                        box_tet_mesh)
 from yasps.solve import assemble
 
+from conftest import ipctk_collisions
+
 VERTS, TETS = box_tet_mesh(2, 0.5)
 FACES = surface_of(TETS)
 
@@ -90,19 +92,20 @@ def test_barrier_matches_ipctk(cells, angle, axis, gap, dhat, projection,
     if angle == 0.0:
         assert counts["ee"] + counts["ee_ev"] + counts["ee_vv"] > 0
     V = contact.world()
+    collisions = ipctk_collisions(contact, V)
     potential = ipctk.BarrierPotential(dhat, 3.0)
-    want = potential(contact.collisions, contact.mesh, V)
+    want = potential(collisions, contact.mesh, V)
     assert abs(s.evaluateEnergy() - want) <= 1e-10 * abs(want)
     g, H = system_arrays(s)
-    assert relative(g, potential.gradient(contact.collisions, contact.mesh, V)) < 1e-10
+    assert relative(g, potential.gradient(collisions, contact.mesh, V)) < 1e-10
     method = ipctk.PSDProjectionMethod.NONE if projection == "none" else \
         ipctk.PSDProjectionMethod.CLAMP
-    reference = potential.hessian(contact.collisions, contact.mesh, V,
+    reference = potential.hessian(collisions, contact.mesh, V,
                                   project_hessian_to_psd=method).toarray()
     if projection == "none" or not linear_maps:
         assert relative(H, reference) < 1e-10
         return
-    unprojected = potential.hessian(contact.collisions, contact.mesh, V).toarray()
+    unprojected = potential.hessian(collisions, contact.mesh, V).toarray()
     scale = np.abs(reference).max()
     assert np.linalg.eigvalsh(H).min() >= -1e-10 * scale
     assert np.linalg.eigvalsh(H - unprojected).min() >= -1e-10 * scale
@@ -153,16 +156,18 @@ def test_affine_body_gets_the_chain_rule_of_the_soft_derivatives():
     Vt = contact.world()
     tangential = ipctk.TangentialCollisions()
     potential = ipctk.BarrierPotential(0.05, 2.0)
-    tangential.build(contact.mesh, Vt, contact.collisions, potential, 0.4)
+    tangential.build(contact.mesh, Vt, ipctk_collisions(contact, Vt),
+                     potential, 0.4)
     t.updateValue(t.value + [[[2e-3], [-1e-3], [1e-4]]])
     A.updateValue(A.value @ rotation(1e-3, [0, 0, 1]))
     assert sum(contact.update().values()) > 0
     V = contact.world()
+    collisions = ipctk_collisions(contact, V)
     friction = ipctk.FrictionPotential(0.1 * 0.01)
     none = ipctk.PSDProjectionMethod.NONE
-    gw = potential.gradient(contact.collisions, contact.mesh, V) + \
+    gw = potential.gradient(collisions, contact.mesh, V) + \
         friction.gradient(tangential, contact.mesh, V - Vt)
-    Hw = (potential.hessian(contact.collisions, contact.mesh, V,
+    Hw = (potential.hessian(collisions, contact.mesh, V,
                             project_hessian_to_psd=none)
           + friction.hessian(tangential, contact.mesh, V - Vt,
                              project_hessian_to_psd=none)).toarray()
@@ -251,7 +256,7 @@ def test_adaptive_stiffness_is_ipctks():
     V = contact.world()
     inertia = 0.3 * (V - np.concatenate([h.value[:, :, 0] for h in hats]))
     barrier = ipctk.BarrierPotential(0.05, 1.0).gradient(
-        contact.collisions, contact.mesh, V)
+        ipctk_collisions(contact, V), contact.mesh, V)
     diagonal = np.linalg.norm(V.max(axis=0) - V.min(axis=0))
     want, _ = ipctk.initial_barrier_stiffness(
         diagonal, ipctk.ClampedLogBarrier(), 0.05, 0.3, inertia.reshape(-1),

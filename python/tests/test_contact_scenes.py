@@ -15,6 +15,8 @@ import numpy as np
 import yasps
 from yasps.sim import ImplicitEuler, add_free_vertices
 
+from conftest import ipctk_collisions
+
 REPO = Path(__file__).resolve().parents[2]
 DT = 0.01
 
@@ -48,7 +50,7 @@ def test_soft_box_dropped_on_a_soft_box_on_the_ground():
         check_frame(report, V, both)
         assert V[:, 2].min() > 0.0
         ids = [c.vertex_ids(contact.mesh.edges, contact.mesh.faces)
-               for c in contact.collisions.fv_collisions]
+               for c in ipctk_collisions(contact).fv_collisions]
         between += sum(min(i) < verts_per_box <= max(i) for i in ids)
     assert between > 0
     # Resting on it, pressed into its top: below its top corners, well above

@@ -10,7 +10,10 @@ import pytest
 
 import yasps
 from yasps.contact import Contact
+from yasps.contact.pairs import BY_NAME
 from yasps.sim import cloth_grid
+
+from conftest import ipctk_collisions
 
 DHAT = 0.01
 
@@ -33,24 +36,15 @@ def two_sheets(gap: float, angle: float = 0.5, shift=(0.0, 0.0)):
     return scene, x, contact
 
 
-class RecordedBuilds:
-    """ipctk's NormalCollisions, recording which broad phase each build
-    used: the step's candidates or a new one."""
+class RecordedBroadPhases:
+    """The contact's broad phase, counting its calls."""
 
-    def __init__(self):
-        self.inner = ipctk.NormalCollisions()
-        self.from_candidates = 0
-        self.full = 0
+    def __init__(self, broad_phase):
+        self.broad_phase, self.calls = broad_phase, 0
 
-    def build(self, *args):
-        if isinstance(args[0], ipctk.Candidates):
-            self.from_candidates += 1
-        else:
-            self.full += 1
-        self.inner.build(*args)
-
-    def __getattr__(self, name):
-        return getattr(self.inner, name)
+    def __call__(self, *args):
+        self.calls += 1
+        return self.broad_phase(*args)
 
 
 def collision_set(collisions, mesh) -> set:
@@ -73,12 +67,37 @@ def collision_set(collisions, mesh) -> set:
     return out
 
 
+def pair_set(contact) -> set:
+    """The contact's pairs now as (type, vertices, eps_x, weight) rows, in
+    the form of collision_set's (ipctk's classes by pair type)."""
+    names = {"vv": "VertexVertexNormalCollision",
+             "ev": "EdgeVertexNormalCollision",
+             "fv": "FaceVertexNormalCollision"}
+    out = set()
+    for kind, p in contact.primitives.items():
+        rows = p.connectivities["v"].indices.reshape(-1, BY_NAME[kind].arity)
+        for ids, w in zip(rows.tolist(), p["weight"].value.reshape(-1)):
+            if kind == "vv":
+                key = frozenset(ids)
+            elif kind.startswith("ee"):
+                key = frozenset((frozenset(ids[:2]), frozenset(ids[2:])))
+            else:
+                key = tuple(ids)
+            out.add((names.get(kind, "EdgeEdgeNormalCollision"), key,
+                     float(w)))
+    return out
+
+
 def test_line_search_collision_sets_use_the_step_candidates():
     """Along a step that presses the sheets together and slides them, the
     pairs at every candidate come from the step's candidates (no new broad
-    phase) and are exactly ipctk's full build there."""
-    scene, x, contact = two_sheets(gap=0.004)
-    contact.collisions = RecordedBuilds()
+    phase) and are exactly ipctk's own full build there. The sheets are
+    shifted off the symmetric layout, where a vertex sits exactly over
+    another and closest-feature types tie (test_contact_detection checks
+    that case by energy)."""
+    scene, x, contact = two_sheets(gap=0.004, shift=(0.0013, 0.0007))
+    recorded = RecordedBroadPhases(contact.detection.candidates)
+    contact.detection.candidates = recorded
     rng = np.random.default_rng(3)
     step = np.zeros_like(x.value)
     half = len(step) // 2
@@ -87,21 +106,20 @@ def test_line_search_collision_sets_use_the_step_candidates():
     start = x.value.copy()
     bound, _ = contact.stepBoundAndLength([step])
     assert 0.0 < bound < 1.0
+    assert recorded.calls == 1
     for alpha in (0.0, 0.3, 0.5 * bound, bound):
         x.updateValue(start + alpha * step)
         contact.update()
-        V = contact.world()
-        reference = ipctk.NormalCollisions()
-        reference.build(contact.mesh, V, DHAT)
+        reference = ipctk_collisions(contact)
         assert not reference.empty()
-        assert collision_set(contact.collisions, contact.mesh) == \
-            collision_set(reference, contact.mesh)
-    assert contact.collisions.from_candidates == 4
-    assert contact.collisions.full == 0
+        assert pair_set(contact) == collision_set(reference, contact.mesh)
+    assert recorded.calls == 1
     # Positions outside the swept boxes get a broad phase of their own.
     x.updateValue(start + 2.0 * step)
     contact.update()
-    assert contact.collisions.full == 1
+    assert recorded.calls == 2
+    assert pair_set(contact) == collision_set(ipctk_collisions(contact),
+                                              contact.mesh)
 
 
 @pytest.mark.parametrize("seed", [0, 1, 2])
@@ -161,20 +179,16 @@ def test_pair_arrays_match_each_collision(angle, shift, kinds):
     vertices, eps_x and weight."""
     from yasps.contact.pairs import collision_pairs
     scene, x, contact = two_sheets(gap=0.004, angle=angle, shift=shift)
-    V = contact.world()
-    contact.collisions.build(contact.mesh, V, DHAT)
+    collisions = ipctk_collisions(contact)
     want = {}
-    for group in (contact.collisions.vv_collisions,
-                  contact.collisions.ev_collisions,
-                  contact.collisions.ee_collisions,
-                  contact.collisions.fv_collisions):
+    for group in (collisions.vv_collisions, collisions.ev_collisions,
+                  collisions.ee_collisions, collisions.fv_collisions):
         for c in group:
             kind, ids = reference_pair(c, contact.mesh)
             eps = c.eps_x if isinstance(c, ipctk.EdgeEdgeNormalCollision) \
                 else 1.0
             want.setdefault(kind, []).append((*ids, eps, c.weight))
-    got = collision_pairs(contact.collisions, contact.mesh.edges,
-                          contact.mesh.faces)
+    got = collision_pairs(collisions, contact.mesh.edges, contact.mesh.faces)
     assert {k for k, pairs in got.items() if len(pairs.vertices)} == \
         set(want) >= kinds
     for kind, pairs in got.items():

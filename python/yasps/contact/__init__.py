@@ -2,10 +2,11 @@
 
 :class:`Contact` owns the plumbing between a scene and ipctk (the IPC
 toolkit): the world positions of a vertex primitive or UNION, computed by
-the scene's own kernels from whatever parameterises them; ipctk's collision
-set at those positions, turned into dynamic pair primitives joined to the
-vertices (one per closest-feature type, :mod:`.pairs`) that carry IPC's
-barrier as yasps energies; and ipctk's CCD for the largest safe step. The
+the scene's own kernels from whatever parameterises them; IPC's collision
+set at those positions (by the runtime's narrow phase, or ipctk's,
+:mod:`.detection`), as dynamic pair primitives joined to the vertices (one
+per closest-feature type, :mod:`.pairs`) that carry IPC's barrier as yasps
+energies; and additive CCD for the largest safe step. The
 barrier's derivatives and assembly are yasps' own, so free, affine, caged
 or new parameterisations need no contact code of their own::
 
@@ -37,33 +38,18 @@ from ..solve import assemble
 from .friction import (ARITIES, FrictionPairs, add_friction_primitives,
                        tangential_pairs)
 from .halfspace import HalfSpaces
-from .pairs import PAIR_TYPES, barrier_energy, collision_pairs
+from .detection import (MIN_SEPARATION, NARROW_PHASE_CCD, IpctkDetection,
+                        RuntimeDetection, runtime_supports)
+from .pairs import PAIR_TYPES, barrier_energy
 from .stiffness import AdaptiveStiffness
 from .surface import edges_of, surface_of
 from .sweep import Sweep
 
-__all__ = ["Contact", "PAIR_TYPES", "edges_of", "surface_of"]
+__all__ = ["Contact", "MIN_SEPARATION", "PAIR_TYPES", "edges_of",
+           "surface_of"]
 
 #: Straight pieces that follow a curved (non-linear) motion in stepBound.
 CURVED_PIECES = 8
-
-#: The narrow phase of the step bound: IPC's additive CCD (Li et al. 2021),
-#: which stops a step where a pair's distance has shrunk to a tenth of what
-#: it was (and never below ``min_distance``). It is fast but not provably
-#: conservative: rounding decides once that tenth nears the coordinates'
-#: last digits.
-NARROW_PHASE_CCD = ipctk.AdditiveCCD()
-
-#: The narrow phase where some pair is closer than twice MIN_SEPARATION:
-#: Tight Inclusion, provably conservative (and slower).
-CLOSE_RANGE_CCD = ipctk.TightInclusionCCD()
-
-#: The closest two surfaces are let come (m): the CCD stops steps there
-#: (or at half the distance of a pair that is closer already). Additive
-#: CCD alone lets a pair close by 90% per Newton step, so distances could
-#: shrink geometrically until rounding decides whether surfaces cross.
-MIN_SEPARATION = 1e-9
-
 
 class Contact:
     """IPC contact among the surface ``faces`` (and ``edges``, by default
@@ -119,10 +105,19 @@ class Contact:
                                  f"0..{count - 1} of {vertices.describe()}")
         rest = self.world()
         self.mesh = ipctk.CollisionMesh(rest, edges, faces)
+        #: ipctk's collision set, built where friction is lagged (its
+        #: tangential set starts from it)
         self.collisions = ipctk.NormalCollisions()
+        self.detection: Union[RuntimeDetection, IpctkDetection] = \
+            RuntimeDetection(self.mesh, self.dhat) \
+            if runtime_supports(self.mesh) else \
+            IpctkDetection(self.mesh, self.dhat)
         #: the broad phase of the last straight step bound, reused by the
         #: collision sets of positions inside its swept boxes
         self._sweep: Optional[Sweep] = None
+        #: the positions of the last collision set and its smallest
+        #: squared distance (the adaptive stiffness reads it)
+        self._last_pairs: Optional[Tuple[np.ndarray, float]] = None
         mesh = scene.addMesh(name)
         # A stored value, not a number in the IR: changing the stiffness
         # recompiles nothing.
@@ -196,6 +191,7 @@ class Contact:
         built), with tangential motion measured from ``start``."""
         self.eps_u.updateValue([self.eps_v * dt])
         barrier = ipctk.BarrierPotential(self.dhat, self.kappa)
+        self.collisions.build(self.mesh, V, self.dhat)
         tangential = ipctk.TangentialCollisions()
         tangential.build(self.mesh, V, self.collisions, barrier, self.friction)
         pairs = {arity: FrictionPairs(arity) for arity in ARITIES}
@@ -207,15 +203,10 @@ class Contact:
         return {f"friction{a}": len(f.vertices) for a, f in pairs.items()}
 
     def _normal_pairs(self, V: np.ndarray) -> Dict[str, int]:
-        """The barrier pairs of ipctk's collision set at positions V (from
-        the last step's candidates where they cover V)."""
-        if self._sweep is not None and self._sweep.holds(V):
-            self.collisions.build(self._sweep.candidates, self.mesh, V,
-                                  self.dhat)
-        else:
-            self.collisions.build(self.mesh, V, self.dhat)
-        found = collision_pairs(self.collisions, self.mesh.edges,
-                                self.mesh.faces)
+        """The barrier pairs of the collision set at positions V (from the
+        last step's candidates where they cover V)."""
+        found, min_distance2 = self.detection.pairs(V, self._sweep)
+        self._last_pairs = (V, min_distance2)
         for kind, pairs in found.items():
             p = self.primitives[kind]
             p.updateNumInstances(len(pairs.vertices))
@@ -223,6 +214,14 @@ class Contact:
             p["eps_x"].updateValue(pairs.eps_x.reshape(-1, 1))
             p["weight"].updateValue(pairs.weight.reshape(-1, 1))
         return {kind: len(pairs.vertices) for kind, pairs in found.items()}
+
+    def _min_distance2(self, V: np.ndarray) -> float:
+        """The smallest squared distance among the pairs at V (inf if none
+        are closer than dhat)."""
+        if self._last_pairs is None or \
+                not np.array_equal(self._last_pairs[0], V):
+            self._normal_pairs(V)
+        return self._last_pairs[1]
 
     def stepBound(self, steps: Sequence[np.ndarray],
                   pieces: int = CURVED_PIECES) -> float:
@@ -266,8 +265,11 @@ class Contact:
             scale = max(length, 1e-300)
             straight = np.abs(middle - 0.5 * (V0 + V1)).max() <= 1e-9 * scale
             if straight:
-                self._sweep = Sweep(self.mesh, V0, V1, self.dhat)
-                return self._swept_bound(self._sweep, V0, V1), length
+                self._sweep = Sweep(self.detection.candidates, V0, V1,
+                                    self.dhat)
+                return min(self.halfspaces.step_bound(V0, V1),
+                           self.detection.swept_bound(self._sweep, V0,
+                                                      V1)), length
             self._sweep = None
             previous = V0
             for k in range(pieces):
@@ -282,24 +284,6 @@ class Contact:
         finally:
             for t, x in zip(targets, before):
                 t.updateValue(x)
-
-    def _swept_bound(self, sweep: Sweep, V0: np.ndarray,
-                     V1: np.ndarray) -> float:
-        """The fraction of the straight motion V0 -> V1 (whose candidates
-        ``sweep`` holds) that keeps surfaces MIN_SEPARATION apart, or half
-        the closest distance at V0 where some pair is closer than twice
-        that already (then by Tight Inclusion); and off the half-spaces."""
-        close = ipctk.NormalCollisions()
-        close.build(sweep.candidates, self.mesh, V0, 2 * MIN_SEPARATION)
-        separation, narrow_phase = MIN_SEPARATION, NARROW_PHASE_CCD
-        if not close.empty():
-            separation = 0.5 * float(np.sqrt(
-                close.compute_minimum_distance(self.mesh, V0)))
-            narrow_phase = CLOSE_RANGE_CCD
-        return min(self.halfspaces.step_bound(V0, V1), float(
-            sweep.candidates.compute_collision_free_stepsize(
-                self.mesh, V0, V1, min_distance=separation,
-                narrow_phase_ccd=narrow_phase)))
 
     def _bound(self, V0: np.ndarray, V1: np.ndarray,
                margin: float = 0.0) -> float:
@@ -343,9 +327,7 @@ class Contact:
         if self.adaptive.kappa is None:
             kappa = self.adaptive.initial(diagonal, self._gradient)
         else:
-            min2 = (self.collisions.compute_minimum_distance(self.mesh, V)
-                    if not self.collisions.empty() else float("inf"))
-            kappa = self.adaptive.update(min2, diagonal)
+            kappa = self.adaptive.update(self._min_distance2(V), diagonal)
         self._set_kappa(kappa)
         return kappa
 

@@ -12,7 +12,8 @@ solver, instead of a broad phase each.
 
 from __future__ import annotations
 
-import ipctk
+from typing import Any, Callable
+
 import numpy as np
 
 #: How far (a fraction of dhat) positions may stray outside a step's swept
@@ -20,21 +21,22 @@ import numpy as np
 #: the world-position kernels).
 SLACK = 1e-3
 
+#: A broad phase: (V0, V1, inflation radius) -> candidates.
+BroadPhase = Callable[[np.ndarray, np.ndarray, float], Any]
+
 
 class Sweep:
     """The candidate pairs of the straight motion V0 -> V1 (vertex
-    positions (N, 3)) of ``mesh``, for barriers of reach ``dhat``."""
+    positions (N, 3)) by ``broad_phase``, for barriers of reach ``dhat``."""
 
-    def __init__(self, mesh: ipctk.CollisionMesh, V0: np.ndarray,
+    def __init__(self, broad_phase: BroadPhase, V0: np.ndarray,
                  V1: np.ndarray, dhat: float):
         slack = SLACK * dhat
         self.lower = np.minimum(V0, V1) - slack
         self.upper = np.maximum(V0, V1) + slack
-        self.candidates = ipctk.Candidates()
         # Each box grows by dhat / 2 plus the slack its own vertices may
         # stray: pairs closer than dhat then always overlap.
-        self.candidates.build(mesh, V0, V1, inflation_radius=0.5 * dhat +
-                              slack)
+        self.candidates = broad_phase(V0, V1, 0.5 * dhat + slack)
 
     def holds(self, V: np.ndarray) -> bool:
         """Whether the candidates cover positions V: every vertex inside

@@ -1,0 +1,163 @@
+"""The runtime's collision detection (yasps.contact.detection) against
+ipctk, the independent reference: its collision sets equal ipctk's (pairs,
+types, vertex order, weights, mollifier thresholds, smallest distance) on
+crumpled sheets; its additive CCD gives ipctk's bound, which ipctk's Tight
+Inclusion finds collision free; where closest-feature types tie, the
+barrier energy is still ipctk's; meshes it does not cover go to ipctk."""
+
+import ipctk
+import numpy as np
+import pytest
+
+import yasps
+from yasps.contact import Contact
+from yasps.contact.detection import (MIN_SEPARATION, IpctkDetection,
+                                     RuntimeDetection)
+from yasps.contact.pairs import PAIR_TYPES, collision_pairs
+from yasps.contact.surface import edges_of
+from yasps.runtime.native import native
+from yasps.sim import cloth_grid
+
+
+def crumpled_sheets(seed: int, noise: float):
+    """Two 12x12-cell sheets 0.006 apart, every vertex moved by Gaussian
+    noise of scale ``noise``: (ipctk mesh, positions)."""
+    verts, faces = cloth_grid(12, size=0.5)
+    V = np.vstack([verts, verts + [0.013, 0.007, 0.006]])
+    F = np.vstack([faces, faces + len(verts)]).astype(np.int32)
+    mesh = ipctk.CollisionMesh(V, edges_of(F), F)
+    rng = np.random.default_rng(seed)
+    return mesh, V + noise * rng.standard_normal(V.shape)
+
+
+def rows_by_kind(found) -> dict:
+    """Pair arrays as sets of (vertices, eps_x, weight) rows per kind, the
+    two edges of an edge-edge pair (and the points of a point-point pair)
+    unordered: broad phases may list a pair either way round, which also
+    changes eps_x's last digit (a product of the two edges' terms), so it
+    is compared to 12 digits."""
+    out = {}
+    for kind, pairs in found.items():
+        rows = set()
+        for ids, eps, w in zip(pairs.vertices.tolist(), pairs.eps_x,
+                               pairs.weight):
+            if kind == "vv":
+                ids = tuple(sorted(ids))
+            elif kind == "ee":
+                ids = tuple(sorted([tuple(sorted(ids[:2])),
+                                    tuple(sorted(ids[2:]))]))
+            elif kind == "ee_vv":
+                ids = tuple(sorted([tuple(ids[:2]), tuple(ids[2:])]))
+            rows.add((tuple(np.ravel(ids).tolist()), float(f"{eps:.12g}"),
+                      float(w)))
+        out[kind] = rows
+    return out
+
+
+@pytest.mark.parametrize("seed, noise, dhat", [(0, 0.004, 0.01),
+                                               (1, 0.008, 0.02),
+                                               (2, 0.002, 0.005)])
+def test_collision_sets_equal_ipctks(seed, noise, dhat):
+    mesh, V = crumpled_sheets(seed, noise)
+    ours, closest2 = RuntimeDetection(mesh, dhat).pairs(V, None)
+    reference = ipctk.NormalCollisions()
+    reference.build(mesh, V, dhat)
+    want = collision_pairs(reference, mesh.edges, mesh.faces)
+    got_rows, want_rows = rows_by_kind(ours), rows_by_kind(want)
+    assert sum(map(len, want_rows.values())) > 100
+    assert {k for k, rows in want_rows.items() if rows} >= {"ev", "fv", "ee"}
+    assert got_rows == want_rows
+    for kind, pairs in ours.items():
+        assert pairs.vertices.shape == (len(pairs.weight),
+                                        dict((t.name, t.arity)
+                                             for t in PAIR_TYPES)[kind])
+    assert closest2 == pytest.approx(
+        reference.compute_minimum_distance(mesh, V), rel=1e-12)
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_additive_ccd_bound_is_ipctks_and_collision_free(seed):
+    mesh, V0 = crumpled_sheets(seed, 0.0005)
+    assert not ipctk.has_intersections(mesh, V0)
+    rng = np.random.default_rng(10 + seed)
+    V1 = V0 + 0.02 * rng.standard_normal(V0.shape)
+    detection = RuntimeDetection(mesh, 0.01)
+    candidates = detection.candidates(V0, V1, 0.0)
+    bound = native().contact_step_bound(detection.native, candidates, V0, V1,
+                                        MIN_SEPARATION)
+    want = ipctk.compute_collision_free_stepsize(
+        mesh, V0, V1, min_distance=MIN_SEPARATION,
+        narrow_phase_ccd=ipctk.AdditiveCCD())
+    assert ipctk.is_step_collision_free(mesh, V0, V1) is False
+    assert 0.0 < bound < 1.0
+    assert bound == pytest.approx(want, rel=1e-9)
+    assert ipctk.is_step_collision_free(mesh, V0, V0 + bound * (V1 - V0))
+
+
+def test_tied_closest_features_keep_ipctks_energy():
+    """A sheet turned about the vertex at its centre and lowered onto
+    another: that vertex sits exactly over its twin, where the closest
+    features of many pairs tie and the two classifications may split them
+    differently. The barrier energy on either set is the same."""
+    verts, faces = cloth_grid(6, size=0.3)
+    c, s = np.cos(0.5), np.sin(0.5)
+    turned = verts @ np.array([[c, -s, 0], [s, c, 0], [0, 0, 1]]).T
+    V = np.vstack([verts, turned + [0.0, 0.0, 0.004]])
+    F = np.vstack([faces, faces + len(verts)]).astype(np.int32)
+    mesh = ipctk.CollisionMesh(V, edges_of(F), F)
+    dhat = 0.01
+    reference = ipctk.NormalCollisions()
+    reference.build(mesh, V, dhat)
+    barrier = ipctk.BarrierPotential(dhat, 1.0)
+    want = barrier(reference, mesh, V)
+    scene = yasps.scene("tie")
+    v = scene.addMesh("m").addPrimitive("v", numInstances=len(V))
+    x = v.addAttribute("position", rows=3)
+    x.updateValue(V[:, :, None])
+    scene.addMinimizeTarget(x)
+    contact = Contact(scene, v, faces=F, dhat=dhat, kappa=1.0)
+    assert isinstance(contact.detection, RuntimeDetection)
+    contact.update()
+    assert scene.evaluateEnergy() == pytest.approx(want, rel=1e-12)
+
+
+def test_meshes_with_free_edges_or_points_use_ipctk():
+    """An edge on no face and a lone point need vertex-vertex and
+    edge-vertex candidates, which only ipctk's broad phase makes."""
+    verts, faces = cloth_grid(3, size=0.3)
+    lone = len(verts)
+    V = np.vstack([verts, [[0.1, 0.1, 0.002], [0.2, 0.1, 0.5],
+                           [0.2, 0.2, 0.5]]])
+    scene = yasps.scene("codim")
+    v = scene.addMesh("m").addPrimitive("v", numInstances=len(V))
+    x = v.addAttribute("position", rows=3)
+    x.updateValue(V[:, :, None])
+    scene.addMinimizeTarget(x)
+    edges = np.vstack([edges_of(faces), [[lone + 1, lone + 2]]])
+    contact = Contact(scene, v, faces=faces, edges=edges, dhat=0.01,
+                      kappa=1.0)
+    assert isinstance(contact.detection, IpctkDetection)
+    counts = contact.update()
+    assert counts["fv"] == 1   # the lone point over the sheet
+    surface = Contact(scene, v, faces=faces, dhat=0.01, kappa=1.0,
+                      name="surface")
+    assert isinstance(surface.detection, IpctkDetection)  # points on no face
+    sheet = yasps.scene("sheet")
+    w = sheet.addMesh("m").addPrimitive("v", numInstances=len(verts))
+    y = w.addAttribute("position", rows=3)
+    y.updateValue(verts[:, :, None])
+    sheet.addMinimizeTarget(y)
+    only = Contact(sheet, w, faces=faces, dhat=0.01, kappa=1.0)
+    assert isinstance(only.detection, RuntimeDetection)
+
+
+def test_contact_mesh_refuses_bad_input():
+    verts, faces = cloth_grid(2, size=0.3)
+    edges = edges_of(faces).astype(np.int32)
+    with pytest.raises(ValueError, match="not among the edges"):
+        native().ContactMesh(verts, edges[1:], faces.astype(np.int32))
+    with pytest.raises(ValueError, match="outside"):
+        native().ContactMesh(verts, edges + 100, faces.astype(np.int32))
+    mesh = native().ContactMesh(verts, edges, faces.astype(np.int32))
+    with pytest.raises(ValueError, match="positions"):
+        native().contact_candidates(mesh, verts[:3], verts[:3], 0.1)

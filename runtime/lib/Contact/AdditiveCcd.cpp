@@ -1,0 +1,153 @@
+//===- AdditiveCcd.cpp - the largest step that keeps surfaces apart -------===//
+
+#include "yasps/Runtime/Contact/AdditiveCcd.h"
+
+#include "Blocks.h"
+
+#include <atomic>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+namespace yasps::runtime::contact {
+
+namespace {
+
+/// A pair's four points now and their displacements over the whole step,
+/// less the mean displacement (a common translation closes no distance).
+struct Motion {
+  std::array<Vec3, 4> x, dx;
+
+  Motion(Positions v0, Positions v1, const std::array<int32_t, 4> &ids) {
+    Vec3 mean;
+    for (int k = 0; k < 4; ++k) {
+      x[k] = v0[ids[k]];
+      dx[k] = v1[ids[k]] - x[k];
+      mean = mean + 0.25 * dx[k];
+    }
+    for (Vec3 &d : dx)
+      d = d - mean;
+  }
+
+  double length(int k) const { return std::sqrt(squaredNorm(dx[k])); }
+};
+
+/// Guards a pair whose advance stalls (a gap near round-off): the fraction
+/// reached so far is returned, which is conservative.
+constexpr long kMaxIterations = 10'000'000L;
+
+/// Algorithm 1 of the additive CCD. `maxDisplacement` bounds how fast the
+/// distance can close per unit of the step. Returns the fraction at which
+/// the pair's distance has closed to the gap, or +inf if it does not
+/// before `tmax`.
+template <typename Distance2>
+double additiveImpact(Motion motion, double maxDisplacement, double minDistance,
+                      double tmax, double rescaling, Distance2 &&distance2) {
+  const double inf = std::numeric_limits<double>::infinity();
+  const double min2 = minDistance * minDistance;
+  double d2 = distance2(motion.x);
+  if (d2 <= min2)
+    return 0.0;
+  if (maxDisplacement == 0)
+    return inf;
+  double d = std::sqrt(d2), excess = d2 - min2;
+  // (d - min) as (d^2 - min^2) / (d + min): no cancellation near min.
+  const double gap = (1 - rescaling) * excess / (d + minDistance);
+  double toi = 0;
+  for (long i = 0; i < kMaxIterations; ++i) {
+    double advance = rescaling * excess / ((d + minDistance) * maxDisplacement);
+    for (int k = 0; k < 4; ++k)
+      motion.x[k] = motion.x[k] + advance * motion.dx[k];
+    d2 = distance2(motion.x);
+    d = std::sqrt(d2);
+    excess = d2 - min2;
+    if (toi > 0 && (excess <= 0 || excess / (d + minDistance) < gap))
+      return toi;
+    toi += advance;
+    if (toi > tmax)
+      return inf;
+  }
+  return toi;
+}
+
+double faceVertexImpact(const SurfaceMesh &mesh, Positions v0, Positions v1,
+                        int32_t f, int32_t p, double minDistance, double tmax,
+                        double rescaling) {
+  const auto &face = mesh.faces()[f];
+  Motion motion(v0, v1, {p, face[0], face[1], face[2]});
+  double maxDisplacement =
+      motion.length(0) +
+      std::max({motion.length(1), motion.length(2), motion.length(3)});
+  return additiveImpact(motion, maxDisplacement, minDistance, tmax, rescaling,
+                        [](const std::array<Vec3, 4> &x) {
+                          return pointTriangleDistance2(x[0], x[1], x[2], x[3]);
+                        });
+}
+
+double edgeEdgeImpact(const SurfaceMesh &mesh, Positions v0, Positions v1,
+                      int32_t ea, int32_t eb, double minDistance, double tmax,
+                      double rescaling) {
+  const auto &a = mesh.edges()[ea], &b = mesh.edges()[eb];
+  Motion motion(v0, v1, {a[0], a[1], b[0], b[1]});
+  double maxDisplacement = std::max(motion.length(0), motion.length(1)) +
+                           std::max(motion.length(2), motion.length(3));
+  return additiveImpact(motion, maxDisplacement, minDistance, tmax, rescaling,
+                        [](const std::array<Vec3, 4> &x) {
+                          return edgeEdgeDistance2(x[0], x[1], x[2], x[3]);
+                        });
+}
+
+} // namespace
+
+double additiveStepBound(const SurfaceMesh &mesh, const Candidates &candidates,
+                         Positions v0, Positions v1, double minDistance,
+                         double rescaling, ThreadPool *pool) {
+  // Each pair runs only up to the earliest impact found so far: the
+  // minimum is the same in any order, and later pairs stop sooner.
+  std::atomic<double> earliest(1.0);
+  auto lower = [&](double toi) {
+    double now = earliest.load(std::memory_order_relaxed);
+    while (toi < now && !earliest.compare_exchange_weak(
+                            now, toi, std::memory_order_relaxed)) {
+    }
+  };
+  const int64_t numFaceVertex =
+      static_cast<int64_t>(candidates.faceVertex.size());
+  const int64_t count =
+      numFaceVertex + static_cast<int64_t>(candidates.edgeEdge.size());
+  forBlocks(pool, count, blockCount(pool, count, 1024),
+            [&](int64_t, int64_t begin, int64_t end) {
+              for (int64_t i = begin; i < end; ++i) {
+                double tmax = earliest.load(std::memory_order_relaxed);
+                if (i < numFaceVertex) {
+                  const auto &[f, p] = candidates.faceVertex[i];
+                  lower(faceVertexImpact(mesh, v0, v1, f, p, minDistance, tmax,
+                                         rescaling));
+                } else {
+                  const auto &[ea, eb] = candidates.edgeEdge[i - numFaceVertex];
+                  lower(edgeEdgeImpact(mesh, v0, v1, ea, eb, minDistance, tmax,
+                                       rescaling));
+                }
+              }
+            });
+  return earliest.load();
+}
+
+double candidateMinDistance2(const SurfaceMesh &mesh,
+                             const Candidates &candidates, Positions v) {
+  double least = std::numeric_limits<double>::infinity();
+  for (const auto &[f, p] : candidates.faceVertex) {
+    const auto &face = mesh.faces()[f];
+    least = std::min(least, pointTriangleDistance2(v[p], v[face[0]], v[face[1]],
+                                                   v[face[2]]));
+  }
+  for (const auto &[ea, eb] : candidates.edgeEdge) {
+    const auto &a = mesh.edges()[ea], &b = mesh.edges()[eb];
+    least =
+        std::min(least, edgeEdgeDistance2(v[a[0]], v[a[1]], v[b[0]], v[b[1]]));
+  }
+  return least;
+}
+
+} // namespace yasps::runtime::contact
