@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <atomic>
 #include <cerrno>
+#include <chrono>
 #include <climits>
 #include <cstdlib>
 #include <exception>
@@ -16,6 +17,31 @@ using namespace yasps::runtime;
 // A few chunks per thread let threads that finish early, or the caller that
 // starts before the workers wake, take over work from slower ones.
 static constexpr std::int64_t kChunksPerThread = 4;
+
+// How long a thread polls for the next job (a worker) or for the workers to
+// finish (the caller) before it sleeps on a condition variable. Waking a
+// sleeping thread costs tens of microseconds, up to about a hundred on a
+// loaded 2-core machine: more than a Newton step's kernels and products of a
+// small scene take. Jobs come in bursts (a solve's products, an assembly's
+// kernels), so a thread that has just finished one polls a little while and
+// picks up the next at once; between bursts it sleeps.
+static constexpr auto kPollFor = std::chrono::microseconds(100);
+
+namespace {
+/// Polls `ready` until it holds or kPollFor has passed; returns it.
+template <typename Ready> bool pollUntil(Ready &&ready) {
+  auto deadline = std::chrono::steady_clock::now() + kPollFor;
+  for (unsigned spins = 0;; ++spins) {
+    if (ready())
+      return true;
+#if defined(__x86_64__) || defined(__i386__)
+    __builtin_ia32_pause();
+#endif
+    if (spins % 64 == 63 && std::chrono::steady_clock::now() > deadline)
+      return ready();
+  }
+}
+} // namespace
 
 // The pool whose chunk the current thread is running, so that a nested
 // parallelFor on the same pool runs inline instead of waiting for itself.
@@ -69,7 +95,7 @@ ThreadPool::~ThreadPool() { stopWorkers(); }
 void ThreadPool::stopWorkers() {
   {
     std::lock_guard<std::mutex> lock(mutex_);
-    stopping_ = true;
+    stopping_.store(true, std::memory_order_release);
   }
   wakeWorkers_.notify_all();
   for (std::thread &worker : workers_)
@@ -80,18 +106,25 @@ void ThreadPool::stopWorkers() {
 void ThreadPool::workerLoop() {
   CurrentPoolScope scope(this);
   std::uint64_t seen = 0;
-  std::unique_lock<std::mutex> lock(mutex_);
   while (true) {
-    wakeWorkers_.wait(lock, [&] { return stopping_ || generation_ != seen; });
-    if (stopping_)
+    auto posted = [&] {
+      return stopping_.load(std::memory_order_acquire) ||
+             generation_.load(std::memory_order_acquire) != seen;
+    };
+    if (!pollUntil(posted)) {
+      std::unique_lock<std::mutex> lock(mutex_);
+      wakeWorkers_.wait(lock, posted);
+    }
+    if (stopping_.load(std::memory_order_acquire))
       return;
-    seen = generation_;
-    Job *job = job_;
-    lock.unlock();
-    runChunks(*job);
-    lock.lock();
-    if (--pendingWorkers_ == 0)
+    seen = generation_.load(std::memory_order_acquire);
+    runChunks(*job_.load(std::memory_order_acquire));
+    if (pendingWorkers_.fetch_sub(1, std::memory_order_acq_rel) == 1) {
+      // The caller may sleep on jobDone_: notify under the mutex, so that it
+      // cannot miss this between its check and its wait.
+      std::lock_guard<std::mutex> lock(mutex_);
       jobDone_.notify_one();
+    }
   }
 }
 
@@ -145,19 +178,24 @@ void ThreadPool::parallelFor(
   std::lock_guard<std::mutex> callLock(callMutex_);
   CurrentPoolScope scope(this);
   Job job{body, begin, n / numChunks, n % numChunks, numChunks};
+  job_.store(&job, std::memory_order_relaxed);
+  pendingWorkers_.store(static_cast<unsigned>(workers_.size()),
+                        std::memory_order_relaxed);
   {
+    // Under the mutex: a worker about to sleep checks the generation there.
     std::lock_guard<std::mutex> lock(mutex_);
-    job_ = &job;
-    pendingWorkers_ = static_cast<unsigned>(workers_.size());
-    ++generation_;
+    generation_.fetch_add(1, std::memory_order_release);
   }
   wakeWorkers_.notify_all();
   runChunks(job);
-  {
+  auto finished = [&] {
+    return pendingWorkers_.load(std::memory_order_acquire) == 0;
+  };
+  if (!pollUntil(finished)) {
     std::unique_lock<std::mutex> lock(mutex_);
-    jobDone_.wait(lock, [&] { return pendingWorkers_ == 0; });
-    job_ = nullptr;
+    jobDone_.wait(lock, finished);
   }
+  job_.store(nullptr, std::memory_order_relaxed);
   if (job.error)
     std::rethrow_exception(job.error);
 }

@@ -195,6 +195,25 @@ TEST(ThreadPool, CanBeReusedManyTimes) {
   }
 }
 
+TEST(ThreadPool, JobsAfterIdlePausesReachSleepingWorkers) {
+  // Pauses longer than the workers poll for put them to sleep between
+  // jobs, shorter ones find them polling; each job still runs every index
+  // once and returns only when all chunks are done.
+  ThreadPool pool(3);
+  for (int iteration = 0; iteration < 30; ++iteration) {
+    std::this_thread::sleep_for(std::chrono::microseconds(
+        iteration % 3 == 0 ? 0 : (iteration % 3 == 1 ? 50 : 2000)));
+    std::vector<std::atomic<int>> hits(4000);
+    pool.parallelFor(0, 4000, 1, [&](std::int64_t begin, std::int64_t end) {
+      std::this_thread::sleep_for(std::chrono::microseconds(100));
+      for (std::int64_t i = begin; i < end; ++i)
+        ++hits[i];
+    });
+    for (const auto &hit : hits)
+      ASSERT_EQ(hit.load(), 1) << "iteration " << iteration;
+  }
+}
+
 TEST(ThreadPool, AcceptsCallsFromSeveralThreads) {
   ThreadPool pool(3);
   std::atomic<std::int64_t> total{0};

@@ -3,13 +3,16 @@
 // Kernels run once per simulation step, so the threads that run them are
 // created once and kept: starting threads every step would cost more than
 // small steps take. The calling thread takes chunks too, so a pool of N
-// threads keeps only N - 1 workers.
+// threads keeps only N - 1 workers. Threads that have just finished a job
+// poll for the next one for a short while before they sleep: jobs come in
+// bursts, and waking a sleeping thread costs more than a small job.
 //
 //===----------------------------------------------------------------------===//
 
 #ifndef YASPS_RUNTIME_THREADPOOL_H
 #define YASPS_RUNTIME_THREADPOOL_H
 
+#include <atomic>
 #include <condition_variable>
 #include <cstdint>
 #include <functional>
@@ -56,17 +59,18 @@ private:
   std::vector<std::thread> workers_;
   // Held while a job runs: one job at a time.
   std::mutex callMutex_;
-  // Guards the fields below, which hand a job to the workers.
+  // Sleeping threads wait on these; the generation and the stop flag change
+  // under it, so that a thread checking them there cannot miss a change.
   std::mutex mutex_;
   std::condition_variable wakeWorkers_;
   std::condition_variable jobDone_;
-  Job *job_ = nullptr;
+  std::atomic<Job *> job_{nullptr};
   // Bumped per job so that each worker takes part in each job exactly once.
-  std::uint64_t generation_ = 0;
+  std::atomic<std::uint64_t> generation_{0};
   // Workers that have not yet finished with the current job; the job lives
   // on the caller's stack until this is 0.
-  unsigned pendingWorkers_ = 0;
-  bool stopping_ = false;
+  std::atomic<unsigned> pendingWorkers_{0};
+  std::atomic<bool> stopping_{false};
 };
 
 /// The size defaultThreadPool() gets: the positive integer in environment
