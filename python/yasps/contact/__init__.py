@@ -51,6 +51,7 @@ __all__ = ["Contact", "MIN_SEPARATION", "PAIR_TYPES", "edges_of",
 #: Straight pieces that follow a curved (non-linear) motion in stepBound.
 CURVED_PIECES = 8
 
+
 class Contact:
     """IPC contact among the surface ``faces`` (and ``edges``, by default
     those of the faces) of ``vertices``, a primitive or primitive union
@@ -63,7 +64,9 @@ class Contact:
     (origin, normal) the vertices stay above. ``friction`` > 0 adds IPC's
     lagged friction with coefficient mu = friction and smoothing velocity
     ``eps_v`` (m/s; the displacement threshold is eps_v dt), lagged by
-    ``update(lag=True, dt=...)`` once per time step."""
+    ``update(lag=True, dt=...)`` once per time step. ``detection`` finds
+    the pairs and bounds steps: the runtime's (:mod:`.detection`), or
+    ipctk's where some vertex or edge lies on no face."""
 
     def __init__(self, scene: Scene,
                  vertices: Union[Primitive, PrimitiveUnion],
@@ -156,10 +159,10 @@ class Contact:
 
     def update(self, lag: bool = False, dt: Optional[float] = None,
                step_start: Optional[np.ndarray] = None) -> Dict[str, int]:
-        """Rebuilds the pairs from ipctk's collision set (and the
-        half-spaces) at the current positions; returns the number of pairs
-        of each type. With ``lag`` also the friction pairs: ipctk's
-        tangential set here, with the normal forces at the current
+        """Rebuilds the pairs from the collision set (``self.detection``'s;
+        and the half-spaces) at the current positions; returns the number of
+        pairs of each type. With ``lag`` also the friction pairs: ipctk's
+        tangential set here (from ipctk's own collision set), with the normal forces at the current
         stiffness and the threshold eps_v * ``dt``. Tangential motion is
         measured from ``step_start`` (the world positions (N, 3) at the
         time step's start; default: now, the lag at a step's start). A lag
