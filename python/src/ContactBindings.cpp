@@ -91,8 +91,7 @@ void yasps::python::bindContact(nb::module_ &m) {
       .def_prop_ro("num_vertices", &SurfaceMesh::numVertices);
 
   nb::class_<Candidates>(m, "ContactCandidates",
-                         "The face-vertex and edge-edge pairs of a broad "
-                         "phase.")
+                         "The candidate pairs of a broad phase.")
       .def_prop_ro(
           "face_vertex",
           [](const Candidates &c) { return pairsOf(c.faceVertex); },
@@ -100,6 +99,15 @@ void yasps::python::bindContact(nb::module_ &m) {
       .def_prop_ro(
           "edge_edge", [](const Candidates &c) { return pairsOf(c.edgeEdge); },
           nb::rv_policy::move, "(edge, edge) rows")
+      .def_prop_ro(
+          "vertex_vertex",
+          [](const Candidates &c) { return pairsOf(c.vertexVertex); },
+          nb::rv_policy::move, "(vertex, vertex) rows of codimensional points")
+      .def_prop_ro(
+          "edge_vertex",
+          [](const Candidates &c) { return pairsOf(c.edgeVertex); },
+          nb::rv_policy::move,
+          "(edge, vertex) rows of codimensional edges and points")
       .def("__len__", &Candidates::size);
 
   m.def(

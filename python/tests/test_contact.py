@@ -63,7 +63,11 @@ def relative(a, b) -> float:
     (2, 0.3, [1, 2, 0.5], 0.02, 0.05, "none", True),
     # Points whose closest point on an edge lies at its end: ipctk keeps
     # them point-edge pairs (its known type), whose Hessian differs from the
-    # point-point one there.
+    # point-point one there. The boxes turn about their common vertical
+    # axis, so a vertex sits exactly over another: closest-feature types
+    # tie, and the runtime's detection may split them otherwise than
+    # ipctk's (same energy, other Hessians: test_contact_detection.py), so
+    # these two take ipctk's detection, whose pairs this test checks.
     (4, 0.3, [0, 0, 1], 0.012, 0.02, "clamp", False),
     (4, 0.3, [0, 0, 1], 0.012, 0.02, "clamp", True),
 ])
@@ -85,7 +89,8 @@ def test_barrier_matches_ipctk(cells, angle, axis, gap, dhat, projection,
         "pair", verts, turned + ([0.1, 0.05, lift] if cells == 2 else
                                  [0.0, 0.0, lift]))
     contact = Contact(s, union, faces=np.concatenate([faces, faces + len(verts)]),
-                      dhat=dhat, kappa=3.0, projection=projection)
+                      dhat=dhat, kappa=3.0, projection=projection,
+                      detection="ipctk" if cells == 4 else "runtime")
     s.addMinimizeTarget([xa, xb])
     counts = contact.update()
     assert sum(counts.values()) > 0

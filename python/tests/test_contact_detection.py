@@ -121,34 +121,57 @@ def test_tied_closest_features_keep_ipctks_energy():
     assert scene.evaluateEnergy() == pytest.approx(want, rel=1e-12)
 
 
-def test_meshes_with_free_edges_or_points_use_ipctk():
-    """An edge on no face and a lone point need vertex-vertex and
-    edge-vertex candidates, which only ipctk's broad phase makes."""
+def test_points_and_rods_equal_ipctks():
+    """Points on no edge (a tet mesh's inner vertices are such points) and
+    edges on no face (rods) meet each other through vertex-vertex and
+    edge-vertex pairs, and the sheets through face-vertex and edge-edge
+    ones: the sets and the CCD bound equal ipctk's."""
+    mesh, V = crumpled_sheets(0, 0.001)
+    rng = np.random.default_rng(7)
+    points = rng.uniform([-0.2, -0.2, 0.0], [0.2, 0.2, 0.008], (300, 3))
+    rods = rng.uniform([-0.2, -0.2, 0.0], [0.2, 0.2, 0.008], (120, 3))
+    V = np.vstack([V, points, rods])
+    first_rod = len(V) - len(rods)
+    rod_edges = np.arange(first_rod, len(V)).reshape(-1, 2)
+    mesh = ipctk.CollisionMesh(V, np.vstack([mesh.edges, rod_edges]),
+                               mesh.faces)
+    assert mesh.num_codim_vertices == len(points)
+    assert mesh.num_codim_edges == len(rod_edges)
+    dhat = 0.01
+    detection = RuntimeDetection(mesh, dhat)
+    candidates = detection.candidates(V, V, 0.5 * dhat)
+    assert len(candidates.vertex_vertex) and len(candidates.edge_vertex)
+    ours, closest2 = detection.pairs(V, None)
+    reference = ipctk.NormalCollisions()
+    reference.build(mesh, V, dhat)
+    assert rows_by_kind(ours) == rows_by_kind(
+        collision_pairs(reference, mesh.edges, mesh.faces))
+    assert closest2 == pytest.approx(
+        reference.compute_minimum_distance(mesh, V), rel=1e-12)
+    V1 = V + 0.01 * rng.standard_normal(V.shape)
+    moving = detection.candidates(V, V1, 0.0)
+    bound = native().contact_step_bound(detection.native, moving, V, V1,
+                                        MIN_SEPARATION)
+    want = ipctk.compute_collision_free_stepsize(
+        mesh, V, V1, min_distance=MIN_SEPARATION,
+        narrow_phase_ccd=ipctk.AdditiveCCD())
+    assert bound == pytest.approx(want, rel=1e-9)
+
+
+def test_contact_chooses_its_detection():
     verts, faces = cloth_grid(3, size=0.3)
-    lone = len(verts)
-    V = np.vstack([verts, [[0.1, 0.1, 0.002], [0.2, 0.1, 0.5],
-                           [0.2, 0.2, 0.5]]])
-    scene = yasps.scene("codim")
-    v = scene.addMesh("m").addPrimitive("v", numInstances=len(V))
+    scene = yasps.scene("choice")
+    v = scene.addMesh("m").addPrimitive("v", numInstances=len(verts))
     x = v.addAttribute("position", rows=3)
-    x.updateValue(V[:, :, None])
+    x.updateValue(verts[:, :, None])
     scene.addMinimizeTarget(x)
-    edges = np.vstack([edges_of(faces), [[lone + 1, lone + 2]]])
-    contact = Contact(scene, v, faces=faces, edges=edges, dhat=0.01,
-                      kappa=1.0)
-    assert isinstance(contact.detection, IpctkDetection)
-    counts = contact.update()
-    assert counts["fv"] == 1   # the lone point over the sheet
-    surface = Contact(scene, v, faces=faces, dhat=0.01, kappa=1.0,
-                      name="surface")
-    assert isinstance(surface.detection, IpctkDetection)  # points on no face
-    sheet = yasps.scene("sheet")
-    w = sheet.addMesh("m").addPrimitive("v", numInstances=len(verts))
-    y = w.addAttribute("position", rows=3)
-    y.updateValue(verts[:, :, None])
-    sheet.addMinimizeTarget(y)
-    only = Contact(sheet, w, faces=faces, dhat=0.01, kappa=1.0)
-    assert isinstance(only.detection, RuntimeDetection)
+    assert isinstance(Contact(scene, v, faces=faces, kappa=1.0).detection,
+                      RuntimeDetection)
+    assert isinstance(Contact(scene, v, faces=faces, kappa=1.0, name="c2",
+                              detection="ipctk").detection, IpctkDetection)
+    with pytest.raises(yasps.SceneError, match="detection must be one of"):
+        Contact(scene, v, faces=faces, kappa=1.0, name="c3",
+                detection="bvh")
 
 
 def test_contact_mesh_refuses_bad_input():

@@ -38,8 +38,8 @@ from ..solve import assemble
 from .friction import (ARITIES, FrictionPairs, add_friction_primitives,
                        tangential_pairs)
 from .halfspace import HalfSpaces
-from .detection import (MIN_SEPARATION, NARROW_PHASE_CCD, IpctkDetection,
-                        RuntimeDetection, runtime_supports)
+from .detection import (DETECTIONS, MIN_SEPARATION, NARROW_PHASE_CCD,
+                        IpctkDetection, RuntimeDetection)
 from .pairs import PAIR_TYPES, barrier_energy
 from .stiffness import AdaptiveStiffness
 from .surface import edges_of, surface_of
@@ -64,9 +64,9 @@ class Contact:
     (origin, normal) the vertices stay above. ``friction`` > 0 adds IPC's
     lagged friction with coefficient mu = friction and smoothing velocity
     ``eps_v`` (m/s; the displacement threshold is eps_v dt), lagged by
-    ``update(lag=True, dt=...)`` once per time step. ``detection`` finds
-    the pairs and bounds steps: the runtime's (:mod:`.detection`), or
-    ipctk's where some vertex or edge lies on no face."""
+    ``update(lag=True, dt=...)`` once per time step. ``detection``
+    ("runtime" or "ipctk", :mod:`.detection`) finds the pairs and bounds
+    steps: the runtime's by default, ipctk's for a cross-check."""
 
     def __init__(self, scene: Scene,
                  vertices: Union[Primitive, PrimitiveUnion],
@@ -76,7 +76,8 @@ class Contact:
                  average_mass: Optional[float] = None,
                  position: str = "position", name: str = "contact",
                  projection: str = "clamp", halfspaces=(),
-                 friction: float = 0.0, eps_v: float = 1e-3):
+                 friction: float = 0.0, eps_v: float = 1e-3,
+                 detection: str = "runtime"):
         if position not in vertices:
             raise SceneError(f"Contact: {vertices.describe()} has no "
                              f"attribute {position!r} (its world positions)")
@@ -86,6 +87,9 @@ class Contact:
                              f"{self.positions.describe()}")
         if not dhat > 0:
             raise ValueError(f"Contact: dhat must be > 0, got {dhat}")
+        if detection not in DETECTIONS:
+            raise SceneError(f"Contact: detection must be one of "
+                             f"{', '.join(DETECTIONS)}, got {detection!r}")
         if not friction >= 0 or not eps_v > 0:
             raise ValueError(f"Contact: friction must be >= 0 and eps_v > 0, "
                              f"got friction={friction}, eps_v={eps_v}")
@@ -112,9 +116,7 @@ class Contact:
         #: tangential set starts from it)
         self.collisions = ipctk.NormalCollisions()
         self.detection: Union[RuntimeDetection, IpctkDetection] = \
-            RuntimeDetection(self.mesh, self.dhat) \
-            if runtime_supports(self.mesh) else \
-            IpctkDetection(self.mesh, self.dhat)
+            DETECTIONS[detection](self.mesh, self.dhat)
         #: the broad phase of the last straight step bound, reused by the
         #: collision sets of positions inside its swept boxes
         self._sweep: Optional[Sweep] = None

@@ -7,11 +7,11 @@ Two implementations with one interface:
 - :class:`RuntimeDetection`, the default: the runtime's own C++ broad
   phase (a uniform grid of swept boxes), narrow phase and additive CCD,
   which hand the pairs over as arrays per pair type. It builds IPC's
-  collision set by ipctk's rules, and tests compare its sets, distances and
-  bounds with ipctk's.
-- :class:`IpctkDetection`: ipctk's own, for meshes with codimensional
-  vertices or edges (points and edges on no face), whose vertex-vertex and
-  edge-vertex candidates the runtime does not generate.
+  collision set by ipctk's rules, codimensional points and edges (on no
+  face; a tet mesh's inner vertices among them) included, and tests compare
+  its sets, distances and bounds with ipctk's.
+- :class:`IpctkDetection`: ipctk's own (``Contact(detection="ipctk")``),
+  the reference, whose collisions become pair arrays in Python.
 
 Both fall back to ipctk's Tight Inclusion CCD (provably conservative) where
 some pair is already closer than twice MIN_SEPARATION.
@@ -46,13 +46,6 @@ MIN_SEPARATION = 1e-9
 
 #: Pairs found, by pair type name, and their smallest squared distance.
 Found = Tuple[Dict[str, PairArrays], float]
-
-
-def runtime_supports(mesh: ipctk.CollisionMesh) -> bool:
-    """Whether the runtime's detection covers ``mesh``: every vertex and
-    edge on a face (its broad phase pairs faces with vertices and edges
-    with edges only)."""
-    return mesh.num_codim_vertices == 0 and mesh.num_codim_edges == 0
 
 
 def _contiguous(V: np.ndarray) -> np.ndarray:
@@ -106,7 +99,7 @@ class RuntimeDetection:
 
 
 class IpctkDetection:
-    """ipctk's broad phase, collision set and CCD (any mesh)."""
+    """ipctk's broad phase, collision set and CCD."""
 
     def __init__(self, mesh: ipctk.CollisionMesh, dhat: float):
         self.mesh, self.dhat = mesh, dhat
@@ -149,3 +142,7 @@ def _close_range_bound(mesh: ipctk.CollisionMesh,
     return float(candidates.compute_collision_free_stepsize(
         mesh, V0, V1, min_distance=separation,
         narrow_phase_ccd=CLOSE_RANGE_CCD))
+
+
+#: Contact's ``detection`` choices.
+DETECTIONS = {"runtime": RuntimeDetection, "ipctk": IpctkDetection}

@@ -14,20 +14,23 @@ namespace yasps::runtime::contact {
 
 namespace {
 
-/// A pair's four points now and their displacements over the whole step,
-/// less the mean displacement (a common translation closes no distance).
+/// A pair's points (two to four) now and their displacements over the
+/// whole step, less the mean displacement (a common translation closes no
+/// distance).
 struct Motion {
   std::array<Vec3, 4> x, dx;
 
-  Motion(Positions v0, Positions v1, const std::array<int32_t, 4> &ids) {
+  Motion(Positions v0, Positions v1, std::initializer_list<int32_t> ids) {
     Vec3 mean;
-    for (int k = 0; k < 4; ++k) {
-      x[k] = v0[ids[k]];
-      dx[k] = v1[ids[k]] - x[k];
-      mean = mean + 0.25 * dx[k];
+    int k = 0;
+    for (int32_t id : ids) {
+      x[k] = v0[id];
+      dx[k] = v1[id] - x[k];
+      mean = mean + (1.0 / ids.size()) * dx[k];
+      ++k;
     }
-    for (Vec3 &d : dx)
-      d = d - mean;
+    for (int j = 0; j < k; ++j)
+      dx[j] = dx[j] - mean;
   }
 
   double length(int k) const { return std::sqrt(squaredNorm(dx[k])); }
@@ -57,7 +60,7 @@ double additiveImpact(Motion motion, double maxDisplacement, double minDistance,
   double toi = 0;
   for (long i = 0; i < kMaxIterations; ++i) {
     double advance = rescaling * excess / ((d + minDistance) * maxDisplacement);
-    for (int k = 0; k < 4; ++k)
+    for (int k = 0; k < 4; ++k) // unused points move by zero
       motion.x[k] = motion.x[k] + advance * motion.dx[k];
     d2 = distance2(motion.x);
     d = std::sqrt(d2);
@@ -69,6 +72,27 @@ double additiveImpact(Motion motion, double maxDisplacement, double minDistance,
       return inf;
   }
   return toi;
+}
+
+double vertexVertexImpact(Positions v0, Positions v1, int32_t a, int32_t b,
+                          double minDistance, double tmax, double rescaling) {
+  Motion motion(v0, v1, {a, b});
+  return additiveImpact(
+      motion, motion.length(0) + motion.length(1), minDistance, tmax, rescaling,
+      [](const std::array<Vec3, 4> &x) { return squaredNorm(x[0] - x[1]); });
+}
+
+double edgeVertexImpact(const SurfaceMesh &mesh, Positions v0, Positions v1,
+                        int32_t e, int32_t p, double minDistance, double tmax,
+                        double rescaling) {
+  const auto &ends = mesh.edges()[e];
+  Motion motion(v0, v1, {p, ends[0], ends[1]});
+  double maxDisplacement =
+      motion.length(0) + std::max(motion.length(1), motion.length(2));
+  return additiveImpact(motion, maxDisplacement, minDistance, tmax, rescaling,
+                        [](const std::array<Vec3, 4> &x) {
+                          return pointEdgeDistance2(x[0], x[1], x[2]);
+                        });
 }
 
 double faceVertexImpact(const SurfaceMesh &mesh, Positions v0, Positions v1,
@@ -114,8 +138,12 @@ double additiveStepBound(const SurfaceMesh &mesh, const Candidates &candidates,
   };
   const int64_t numFaceVertex =
       static_cast<int64_t>(candidates.faceVertex.size());
-  const int64_t count =
+  const int64_t numEdgeEdge =
       numFaceVertex + static_cast<int64_t>(candidates.edgeEdge.size());
+  const int64_t numVertexVertex =
+      numEdgeEdge + static_cast<int64_t>(candidates.vertexVertex.size());
+  const int64_t count =
+      numVertexVertex + static_cast<int64_t>(candidates.edgeVertex.size());
   forBlocks(pool, count, blockCount(pool, count, 1024),
             [&](int64_t, int64_t begin, int64_t end) {
               for (int64_t i = begin; i < end; ++i) {
@@ -124,10 +152,19 @@ double additiveStepBound(const SurfaceMesh &mesh, const Candidates &candidates,
                   const auto &[f, p] = candidates.faceVertex[i];
                   lower(faceVertexImpact(mesh, v0, v1, f, p, minDistance, tmax,
                                          rescaling));
-                } else {
+                } else if (i < numEdgeEdge) {
                   const auto &[ea, eb] = candidates.edgeEdge[i - numFaceVertex];
                   lower(edgeEdgeImpact(mesh, v0, v1, ea, eb, minDistance, tmax,
                                        rescaling));
+                } else if (i < numVertexVertex) {
+                  const auto &[a, b] = candidates.vertexVertex[i - numEdgeEdge];
+                  lower(vertexVertexImpact(v0, v1, a, b, minDistance, tmax,
+                                           rescaling));
+                } else {
+                  const auto &[e, p] =
+                      candidates.edgeVertex[i - numVertexVertex];
+                  lower(edgeVertexImpact(mesh, v0, v1, e, p, minDistance, tmax,
+                                         rescaling));
                 }
               }
             });

@@ -157,6 +157,39 @@ void inBlocks(ThreadPool *pool, int64_t count, Block &&block,
     out.insert(out.end(), part.begin(), part.end());
 }
 
+/// The codimensional points against each other and against the
+/// codimensional edges (ipctk's extra candidates for points and rods). A
+/// codimensional point is on no edge, so no pair shares a vertex.
+void codimCandidates(const SurfaceMesh &mesh, const std::vector<Box> &vertices,
+                     const std::vector<Box> &edges, Candidates &out) {
+  const std::vector<int32_t> &points = mesh.codimVertices();
+  if (points.empty())
+    return;
+  std::vector<Box> pointBoxes;
+  pointBoxes.reserve(points.size());
+  for (int32_t v : points)
+    pointBoxes.push_back(vertices[v]);
+  BoxGrid grid(pointBoxes);
+  std::vector<int32_t> seen(points.size(), -1);
+  for (int32_t i = 0; i < static_cast<int32_t>(points.size()); ++i)
+    grid.query(pointBoxes[i], [&](int32_t j) {
+      if (j <= i || seen[j] == i)
+        return;
+      seen[j] = i;
+      if (pointBoxes[i].overlaps(pointBoxes[j]))
+        out.vertexVertex.push_back({points[i], points[j]});
+    });
+  seen.assign(points.size(), -1);
+  for (int32_t e : mesh.codimEdges())
+    grid.query(edges[e], [&](int32_t j) {
+      if (seen[j] == e)
+        return;
+      seen[j] = e;
+      if (edges[e].overlaps(pointBoxes[j]))
+        out.edgeVertex.push_back({e, points[j]});
+    });
+}
+
 } // namespace
 
 Candidates sweptCandidates(const SurfaceMesh &mesh, Positions v0, Positions v1,
@@ -209,6 +242,7 @@ Candidates sweptCandidates(const SurfaceMesh &mesh, Positions v0, Positions v1,
   };
   inBlocks(pool, static_cast<int64_t>(faces.size()), faceBlock, out.faceVertex);
   inBlocks(pool, static_cast<int64_t>(edges.size()), edgeBlock, out.edgeEdge);
+  codimCandidates(mesh, vertices, edges, out);
   return out;
 }
 

@@ -190,14 +190,47 @@ void addFaceVertex(Recorder &out, const SurfaceMesh &mesh, Positions v,
   }
 }
 
+void addVertexVertex(Recorder &out, Positions v, double dhat2, int32_t a,
+                     int32_t b) {
+  double d2 = squaredNorm(v[a] - v[b]);
+  if (!(d2 < dhat2))
+    return;
+  out.distance(d2);
+  out.pointPoint(a, b);
+}
+
+void addEdgeVertex(Recorder &out, const SurfaceMesh &mesh, Positions v,
+                   double dhat2, int32_t e, int32_t p) {
+  const auto &ends = mesh.edges()[e];
+  Vec3 point = v[p], e0 = v[ends[0]], e1 = v[ends[1]];
+  PointEdgeType type = pointEdgeType(point, e0, e1);
+  double d2 = pointEdgeDistance2(point, e0, e1, type);
+  if (!(d2 < dhat2))
+    return;
+  out.distance(d2);
+  switch (type) {
+  case PointEdgeType::End0:
+    return out.pointPoint(p, ends[0]);
+  case PointEdgeType::End1:
+    return out.pointPoint(p, ends[1]);
+  case PointEdgeType::Inside:
+    return out.pointEdge(p, e);
+  }
+}
+
 } // namespace
 
 CollisionSet buildCollisionSet(const SurfaceMesh &mesh,
                                const Candidates &candidates, Positions v,
                                double dhat, ThreadPool *pool) {
   const double dhat2 = dhat * dhat;
-  // Edge-edge candidates first, then face-vertex ones (ipctk's order).
-  const int64_t numEdgeEdge = static_cast<int64_t>(candidates.edgeEdge.size());
+  // ipctk's order: vertex-vertex, edge-vertex, edge-edge, face-vertex.
+  const int64_t numVertexVertex =
+      static_cast<int64_t>(candidates.vertexVertex.size());
+  const int64_t numEdgeVertex =
+      numVertexVertex + static_cast<int64_t>(candidates.edgeVertex.size());
+  const int64_t numEdgeEdge =
+      numEdgeVertex + static_cast<int64_t>(candidates.edgeEdge.size());
   const int64_t count =
       numEdgeEdge + static_cast<int64_t>(candidates.faceVertex.size());
   int64_t blocks = blockCount(pool, count, 2048);
@@ -205,8 +238,14 @@ CollisionSet buildCollisionSet(const SurfaceMesh &mesh,
   forBlocks(pool, count, blocks, [&](int64_t b, int64_t begin, int64_t end) {
     Recorder out(mesh, found[b]);
     for (int64_t i = begin; i < end; ++i) {
-      if (i < numEdgeEdge) {
-        const auto &[ea, eb] = candidates.edgeEdge[i];
+      if (i < numVertexVertex) {
+        const auto &[a, b] = candidates.vertexVertex[i];
+        addVertexVertex(out, v, dhat2, a, b);
+      } else if (i < numEdgeVertex) {
+        const auto &[e, p] = candidates.edgeVertex[i - numVertexVertex];
+        addEdgeVertex(out, mesh, v, dhat2, e, p);
+      } else if (i < numEdgeEdge) {
+        const auto &[ea, eb] = candidates.edgeEdge[i - numEdgeVertex];
         addEdgeEdge(out, mesh, v, dhat2, ea, eb);
       } else {
         const auto &[f, p] = candidates.faceVertex[i - numEdgeEdge];

@@ -47,6 +47,9 @@ SurfaceMesh::SurfaceMesh(int64_t numVertices,
     edgeIds.emplace(edgeKey(a, b), static_cast<int32_t>(e));
     restLength2_.push_back(squaredNorm(rest[a] - rest[b]));
   }
+  std::vector<bool> onEdge(numVertices, false), onFace(edges_.size(), false);
+  for (const auto &[a, b] : edges_)
+    onEdge[a] = onEdge[b] = true;
   faceEdges_.reserve(faces_.size());
   for (const auto &face : faces_) {
     std::array<int32_t, 3> sides{};
@@ -58,9 +61,16 @@ SurfaceMesh::SurfaceMesh(int64_t numVertices,
             "SurfaceMesh: a face side (" + std::to_string(face[k]) + ", " +
             std::to_string(face[(k + 1) % 3]) + ") is not among the edges");
       sides[k] = found->second;
+      onFace[found->second] = true;
     }
     faceEdges_.push_back(sides);
   }
+  for (int32_t v = 0; v < numVertices; ++v)
+    if (!onEdge[v])
+      codimVertices_.push_back(v);
+  for (int32_t e = 0; e < static_cast<int32_t>(edges_.size()); ++e)
+    if (!onFace[e])
+      codimEdges_.push_back(e);
 }
 
 } // namespace yasps::runtime::contact

@@ -6,9 +6,11 @@
 // these candidates hold every pair that comes within that reach anywhere on
 // the path, so the step's CCD and the collision set of every line-search
 // candidate are narrow phases over them (IPC's own solver does the same).
-// In 3D these two kinds cover every closest-feature pair of a surface whose
-// edges all lie on faces: a vertex-vertex or edge-vertex contact is the
-// end of a face-vertex or edge-edge one.
+// In 3D these two kinds cover every closest-feature pair of a surface: a
+// vertex-vertex or edge-vertex contact is the end of a face-vertex or
+// edge-edge one. Codimensional points and edges (SurfaceMesh) add, as in
+// ipctk, vertex-vertex pairs among the points and edge-vertex pairs between
+// the edges and the points.
 //
 //===----------------------------------------------------------------------===//
 
@@ -29,8 +31,15 @@ struct Candidates {
   std::vector<std::array<int32_t, 2>> faceVertex;
   /// (edge a, edge b), a < b, sharing no vertex.
   std::vector<std::array<int32_t, 2>> edgeEdge;
+  /// (vertex a, vertex b), a < b, both codimensional points.
+  std::vector<std::array<int32_t, 2>> vertexVertex;
+  /// (edge, vertex), a codimensional edge and a codimensional point.
+  std::vector<std::array<int32_t, 2>> edgeVertex;
 
-  size_t size() const { return faceVertex.size() + edgeEdge.size(); }
+  size_t size() const {
+    return faceVertex.size() + edgeEdge.size() + vertexVertex.size() +
+           edgeVertex.size();
+  }
 };
 
 /// The candidates of the motion V0 -> V1 (V1 may be V0: a broad phase at

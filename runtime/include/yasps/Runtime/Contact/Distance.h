@@ -46,6 +46,9 @@ YASPS_HD inline Vec3 cross(Vec3 a, Vec3 b) {
 }
 YASPS_HD inline double squaredNorm(Vec3 a) { return dot(a, a); }
 
+/// The closest features of a point and an edge (e0, e1).
+enum class PointEdgeType : uint8_t { End0, End1, Inside };
+
 /// The closest features of a point and a triangle (t0, t1, t2). Edge k
 /// joins corner k and corner k + 1 (mod 3), as ipctk numbers them.
 enum class PointTriangleType : uint8_t {
@@ -77,6 +80,32 @@ enum class EdgeEdgeType : uint8_t {
 YASPS_HD inline double pointLineDistance2(Vec3 p, Vec3 e0, Vec3 e1) {
   Vec3 e = e1 - e0;
   return squaredNorm(cross(p - e0, e)) / squaredNorm(e);
+}
+
+/// Where p projects onto the edge's line: before e0, past e1, or between.
+YASPS_HD inline PointEdgeType pointEdgeType(Vec3 p, Vec3 e0, Vec3 e1) {
+  Vec3 e = e1 - e0;
+  double along = dot(p - e0, e);
+  if (along < 0)
+    return PointEdgeType::End0;
+  return along > squaredNorm(e) ? PointEdgeType::End1 : PointEdgeType::Inside;
+}
+
+YASPS_HD inline double pointEdgeDistance2(Vec3 p, Vec3 e0, Vec3 e1,
+                                          PointEdgeType type) {
+  switch (type) {
+  case PointEdgeType::End0:
+    return squaredNorm(p - e0);
+  case PointEdgeType::End1:
+    return squaredNorm(p - e1);
+  case PointEdgeType::Inside:
+    break;
+  }
+  return pointLineDistance2(p, e0, e1);
+}
+
+YASPS_HD inline double pointEdgeDistance2(Vec3 p, Vec3 e0, Vec3 e1) {
+  return pointEdgeDistance2(p, e0, e1, pointEdgeType(p, e0, e1));
 }
 
 /// Squared distance from p to the plane of (t0, t1, t2).

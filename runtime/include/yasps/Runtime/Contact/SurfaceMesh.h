@@ -3,7 +3,11 @@
 // The surface a contact scene's narrow phase and CCD work on: vertices,
 // edges and triangles (the edges of the triangles among the edges), the
 // edge of each triangle side, and each edge's squared rest length, which
-// fixes IPC's edge-edge mollifier threshold.
+// fixes IPC's edge-edge mollifier threshold. As in ipctk, a vertex on no
+// edge is a codimensional point and an edge on no face a codimensional
+// edge (a tet mesh's inner vertices are such points): they meet each other
+// through vertex-vertex and edge-vertex pairs, and the surface through the
+// face-vertex and edge-edge pairs every vertex and edge takes part in.
 //
 //===----------------------------------------------------------------------===//
 
@@ -45,6 +49,9 @@ public:
     return faceEdges_;
   }
   double restLength2(int32_t edge) const { return restLength2_[edge]; }
+  /// The vertices on no edge, and the edges on no face, in order.
+  const std::vector<int32_t> &codimVertices() const { return codimVertices_; }
+  const std::vector<int32_t> &codimEdges() const { return codimEdges_; }
 
 private:
   int64_t numVertices_;
@@ -52,6 +59,8 @@ private:
   std::vector<std::array<int32_t, 3>> faces_;
   std::vector<std::array<int32_t, 3>> faceEdges_;
   std::vector<double> restLength2_;
+  std::vector<int32_t> codimVertices_;
+  std::vector<int32_t> codimEdges_;
 };
 
 } // namespace yasps::runtime::contact
