@@ -16,12 +16,12 @@ from yasps.sim import (ImplicitEuler, add_elastic_tets, add_free_vertices,
                        box_tet_mesh)
 
 
-def squeezed_box(mass: float, seed: int = 0):
-    """A 2x2x2-cell tet box with rest shape 1.4x its size (compressed:
+def squeezed_box(mass: float, seed: int = 0, cells: int = 2):
+    """A tet box of cells^3 cells (2 by default) with rest shape 1.4x its size (compressed:
     stable Neo-Hookean's local Hessians are indefinite), its vertices
     jittered; inertia of ``mass`` per vertex. Returns (scene, x, x_hat,
     elastic energy)."""
-    verts, tets = box_tet_mesh(2, size=0.2)
+    verts, tets = box_tet_mesh(cells, size=0.2)
     rng = np.random.default_rng(seed)
     start = verts + rng.normal(scale=0.01, size=verts.shape)
     s = yasps.scene("squeezed_box")
@@ -33,12 +33,18 @@ def squeezed_box(mass: float, seed: int = 0):
     return s, body.x, body.x_hat, elastic
 
 
-def dense_system(scene, projected_dofs=None):
+def clamped(matrix: np.ndarray) -> np.ndarray:
+    """A symmetric matrix with its negative eigenvalues set to zero."""
+    values, vectors = np.linalg.eigh(matrix)
+    return (vectors * np.maximum(values, 0.0)) @ vectors.T
+
+
+def dense_system(scene, projected_dofs=None, project=None):
     """The gradient and Hessian over every DoF, assembled in NumPy from
     each energy's local derivatives: instances reading a True entry of
-    ``projected_dofs`` (all, if None) take their projected Hessian, the
-    others their exact one. Also returns how many instances were
-    projected."""
+    ``projected_dofs`` (all, if None) take their projected Hessian (or
+    ``project`` of their exact one on their live DoFs), the others their
+    exact one. Also returns how many instances were projected."""
     size = sum(t.owner.numInstances * t.rows * t.cols
                for t in scene.minimizeTargets)
     g, H, projected = np.zeros(size), np.zeros((size, size)), 0
@@ -49,11 +55,13 @@ def dense_system(scene, projected_dofs=None):
             live = dofs[i] >= 0
             index = dofs[i][live]
             chosen = projected_dofs is None or projected_dofs[index].any()
-            local = d.projectedHessian[i] if chosen else d.hessian[i]
+            local = d.hessian[i][np.ix_(live, live)]
+            if chosen:
+                local = d.projectedHessian[i][np.ix_(live, live)] \
+                    if project is None else project(local)
             projected += bool(chosen)
             np.add.at(g, index, d.gradient[i][live])
-            np.add.at(H, (index[:, None], index[None, :]),
-                      local[np.ix_(live, live)])
+            np.add.at(H, (index[:, None], index[None, :]), local)
     return g, H, projected
 
 
@@ -102,6 +110,39 @@ def test_exact_projected_and_mixed_directions_match_dense_solves():
     assert info["projectedInstances"] == projected
     assert info["descends"]
     assert info["gradientMax"] == pytest.approx(np.abs(g).max(), rel=1e-12)
+
+
+def test_few_chosen_instances_are_projected_alone(monkeypatch):
+    """Where the threshold picks at most a quarter of an energy's instances
+    (ROWS_FRACTION), only those are projected, each from its exact Hessian
+    with its negative eigenvalues clamped (NumPy's eigh here), and the
+    projection kernel over all instances does not run."""
+    from yasps.runtime.cpu import CpuBackend
+    from yasps.solve.derivatives import ROWS_FRACTION
+    scene, x, _, elastic = squeezed_box(mass=1.0, seed=3, cells=3)
+    g, _, _ = dense_system(scene, np.zeros(10**4, bool))
+    blocks = np.abs(g).reshape(-1, 3).max(axis=1)
+    threshold = np.sort(blocks)[-1] * (1 - 1e-9)   # the largest block only
+    chosen = blocks_over(g, threshold)
+    _, H_mixed, projected = dense_system(scene, chosen, project=clamped)
+    tets = len(scene.energyDerivatives(elastic).dofs())
+    # The tets around one vertex, and that vertex's inertia.
+    assert 1 < projected <= ROWS_FRACTION * tets
+    runs = []
+    original = CpuBackend.run
+
+    def counting(self, kernels, s, path, *args, **kwargs):
+        runs.append(path)
+        return original(self, kernels, s, path, *args, **kwargs)
+
+    monkeypatch.setattr(CpuBackend, "run", counting)
+    x.updateValue(x.value)
+    np.testing.assert_allclose(solve(scene, threshold),
+                               np.linalg.solve(H_mixed, g), rtol=1e-8,
+                               atol=1e-12)
+    assert scene.lastSolve["projectedInstances"] == projected
+    assert any(p.endswith("__hess") for p in runs)
+    assert not any(p.endswith("__hess_proj") for p in runs)
 
 
 def test_fixed_dofs_do_not_choose_projections():

@@ -54,13 +54,17 @@ def project_compressed(dofs: np.ndarray, hess: np.ndarray, method: str,
         if k == 0:
             continue
         kernels, path = _projector(int(k), method, precision)
-        projected = np.empty(matrices.size)
+        # The projector reads f64 and writes the scene's precision (f32
+        # for f32 scenes), widened back for the expansion.
+        projected = np.empty(matrices.size,
+                             dtype=kernels.kernel(path).out_dtype)
         # Symmetric matrices: row- and column-major storage agree.
         given = {"out": projected,
                  "attr": np.ascontiguousarray(matrices).reshape(-1)}
         kernels.launch(path, len(instances),
                        [given[a.kind] for a in kernels.kernel(path).arguments],
                        threads)
-        runtime.expand_local_hessians(dofs, int(k), instances,
-                                      projected.reshape(matrices.shape), out)
+        runtime.expand_local_hessians(
+            dofs, int(k), instances,
+            projected.astype(np.float64).reshape(matrices.shape), out)
     return out
