@@ -184,3 +184,7 @@ def test_contact_mesh_refuses_bad_input():
     mesh = native().ContactMesh(verts, edges, faces.astype(np.int32))
     with pytest.raises(ValueError, match="positions"):
         native().contact_candidates(mesh, verts[:3], verts[:3], 0.1)
+    broken = verts.copy()
+    broken[2, 1] = np.nan
+    with pytest.raises(ValueError, match="vertex 2 has a non-finite"):
+        native().contact_candidates(mesh, verts, broken, 0.1)

@@ -205,6 +205,22 @@ TEST(ContactBroadPhase, FindsEveryOverlappingPairOnce) {
   }
 }
 
+TEST(ContactBroadPhase, RefusesNonFinitePositions) {
+  TwoSheets sheets(4, 0.05, 0.0, 7);
+  SurfaceMesh mesh = sheets.mesh();
+  std::vector<double> bad = sheets.positions;
+  bad[3 * 5 + 1] = std::nan("");
+  Positions good = sheets.at(), broken{bad.data(), good.count};
+  Candidates c = sweptCandidates(mesh, good, good, 0.01);
+  EXPECT_THROW(sweptCandidates(mesh, good, broken, 0.01),
+               std::invalid_argument);
+  EXPECT_THROW(buildCollisionSet(mesh, c, broken, 0.01), std::invalid_argument);
+  EXPECT_THROW(additiveStepBound(mesh, c, good, broken, 1e-9),
+               std::invalid_argument);
+  bad[3 * 5 + 1] = INFINITY;
+  EXPECT_THROW(candidateMinDistance2(mesh, c, broken), std::invalid_argument);
+}
+
 TEST(ContactCollisionSet, HoldsThePairsCloserThanDhatWhateverTheThreads) {
   TwoSheets sheets(20, 0.02, 0.004, 5);
   SurfaceMesh mesh = sheets.mesh();

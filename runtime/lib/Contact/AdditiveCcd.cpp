@@ -127,6 +127,8 @@ double edgeEdgeImpact(const SurfaceMesh &mesh, Positions v0, Positions v1,
 double additiveStepBound(const SurfaceMesh &mesh, const Candidates &candidates,
                          Positions v0, Positions v1, double minDistance,
                          double rescaling, ThreadPool *pool) {
+  checkFinite(v0, "additiveStepBound");
+  checkFinite(v1, "additiveStepBound");
   // Each pair runs only up to the earliest impact found so far: the
   // minimum is the same in any order, and later pairs stop sooner.
   std::atomic<double> earliest(1.0);
@@ -173,6 +175,7 @@ double additiveStepBound(const SurfaceMesh &mesh, const Candidates &candidates,
 
 double candidateMinDistance2(const SurfaceMesh &mesh,
                              const Candidates &candidates, Positions v) {
+  checkFinite(v, "candidateMinDistance2");
   double least = std::numeric_limits<double>::infinity();
   for (const auto &[f, p] : candidates.faceVertex) {
     const auto &face = mesh.faces()[f];

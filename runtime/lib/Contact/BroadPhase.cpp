@@ -199,6 +199,8 @@ Candidates sweptCandidates(const SurfaceMesh &mesh, Positions v0, Positions v1,
         "sweptCandidates: positions of " + std::to_string(v0.count) + " and " +
         std::to_string(v1.count) + " vertices for a " + "mesh of " +
         std::to_string(mesh.numVertices()));
+  checkFinite(v0, "sweptCandidates");
+  checkFinite(v1, "sweptCandidates");
   std::vector<Box> vertices = vertexBoxes(v0, v1, inflation);
   std::vector<Box> edges = elementBoxes(mesh.edges(), vertices);
   std::vector<Box> faces = elementBoxes(mesh.faces(), vertices);

@@ -223,6 +223,7 @@ void addEdgeVertex(Recorder &out, const SurfaceMesh &mesh, Positions v,
 CollisionSet buildCollisionSet(const SurfaceMesh &mesh,
                                const Candidates &candidates, Positions v,
                                double dhat, ThreadPool *pool) {
+  checkFinite(v, "buildCollisionSet");
   const double dhat2 = dhat * dhat;
   // ipctk's order: vertex-vertex, edge-vertex, edge-edge, face-vertex.
   const int64_t numVertexVertex =

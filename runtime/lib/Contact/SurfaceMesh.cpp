@@ -2,6 +2,7 @@
 
 #include "yasps/Runtime/Contact/SurfaceMesh.h"
 
+#include <cmath>
 #include <stdexcept>
 #include <string>
 #include <unordered_map>
@@ -26,6 +27,14 @@ void checkVertex(int64_t v, int64_t count, const char *what) {
 }
 
 } // namespace
+
+void checkFinite(Positions v, const char *what) {
+  for (int64_t i = 0; i < 3 * v.count; ++i)
+    if (!std::isfinite(v.data[i]))
+      throw std::invalid_argument(
+          std::string(what) + ": vertex " + std::to_string(i / 3) +
+          " has a non-finite coordinate (" + std::to_string(v.data[i]) + ")");
+}
 
 SurfaceMesh::SurfaceMesh(int64_t numVertices,
                          std::vector<std::array<int32_t, 2>> edges,

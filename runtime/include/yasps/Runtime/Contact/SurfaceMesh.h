@@ -32,6 +32,11 @@ struct Positions {
   }
 };
 
+/// Throws std::invalid_argument naming `what` unless every coordinate of
+/// `v` is finite: a NaN or infinite position has no box, distance or time
+/// of impact, and would otherwise be skipped without a word.
+void checkFinite(Positions v, const char *what);
+
 class SurfaceMesh {
 public:
   /// `edges` (E pairs) must contain every side of every face (F triples);
