@@ -54,6 +54,18 @@ def rows_by_kind(found) -> dict:
     return out
 
 
+def step_bounds(detection: RuntimeDetection, V0: np.ndarray,
+                V1: np.ndarray):
+    """The runtime's additive-CCD bound of V0 -> V1 over its own broad
+    phase, and ipctk's over its own: (runtime's, ipctk's)."""
+    candidates = detection.candidates(V0, V1, 0.0)
+    bound = native().contact_step_bound(detection.native, candidates, V0, V1,
+                                        MIN_SEPARATION)
+    return bound, ipctk.compute_collision_free_stepsize(
+        detection.mesh, V0, V1, min_distance=MIN_SEPARATION,
+        narrow_phase_ccd=ipctk.AdditiveCCD())
+
+
 @pytest.mark.parametrize("seed, noise, dhat", [(0, 0.004, 0.01),
                                                (1, 0.008, 0.02),
                                                (2, 0.002, 0.005)])
@@ -81,13 +93,7 @@ def test_additive_ccd_bound_is_ipctks_and_collision_free(seed):
     assert not ipctk.has_intersections(mesh, V0)
     rng = np.random.default_rng(10 + seed)
     V1 = V0 + 0.02 * rng.standard_normal(V0.shape)
-    detection = RuntimeDetection(mesh, 0.01)
-    candidates = detection.candidates(V0, V1, 0.0)
-    bound = native().contact_step_bound(detection.native, candidates, V0, V1,
-                                        MIN_SEPARATION)
-    want = ipctk.compute_collision_free_stepsize(
-        mesh, V0, V1, min_distance=MIN_SEPARATION,
-        narrow_phase_ccd=ipctk.AdditiveCCD())
+    bound, want = step_bounds(RuntimeDetection(mesh, 0.01), V0, V1)
     assert ipctk.is_step_collision_free(mesh, V0, V1) is False
     assert 0.0 < bound < 1.0
     assert bound == pytest.approx(want, rel=1e-9)
@@ -148,13 +154,8 @@ def test_points_and_rods_equal_ipctks():
         collision_pairs(reference, mesh.edges, mesh.faces))
     assert closest2 == pytest.approx(
         reference.compute_minimum_distance(mesh, V), rel=1e-12)
-    V1 = V + 0.01 * rng.standard_normal(V.shape)
-    moving = detection.candidates(V, V1, 0.0)
-    bound = native().contact_step_bound(detection.native, moving, V, V1,
-                                        MIN_SEPARATION)
-    want = ipctk.compute_collision_free_stepsize(
-        mesh, V, V1, min_distance=MIN_SEPARATION,
-        narrow_phase_ccd=ipctk.AdditiveCCD())
+    bound, want = step_bounds(detection, V,
+                              V + 0.01 * rng.standard_normal(V.shape))
     assert bound == pytest.approx(want, rel=1e-9)
 
 

@@ -65,6 +65,21 @@ def dense_system(scene, projected_dofs=None, project=None):
     return g, H, projected
 
 
+def kernel_runs(monkeypatch) -> list:
+    """The paths of the kernels the CPU backend runs from now on, in a
+    list that fills as they run."""
+    from yasps.runtime.cpu import CpuBackend
+    runs = []
+    original = CpuBackend.run
+
+    def counting(self, kernels, s, path, *args, **kwargs):
+        runs.append(path)
+        return original(self, kernels, s, path, *args, **kwargs)
+
+    monkeypatch.setattr(CpuBackend, "run", counting)
+    return runs
+
+
 def blocks_over(g: np.ndarray, threshold: float) -> np.ndarray:
     """DoFs of the 3-blocks whose gradient reaches ``threshold``."""
     return np.repeat(np.abs(g).reshape(-1, 3).max(axis=1) >= threshold, 3)
@@ -117,7 +132,6 @@ def test_few_chosen_instances_are_projected_alone(monkeypatch):
     (ROWS_FRACTION), only those are projected, each from its exact Hessian
     with its negative eigenvalues clamped (NumPy's eigh here), and the
     projection kernel over all instances does not run."""
-    from yasps.runtime.cpu import CpuBackend
     from yasps.solve.derivatives import ROWS_FRACTION
     scene, x, _, elastic = squeezed_box(mass=1.0, seed=3, cells=3)
     g, _, _ = dense_system(scene, np.zeros(10**4, bool))
@@ -128,14 +142,7 @@ def test_few_chosen_instances_are_projected_alone(monkeypatch):
     tets = len(scene.energyDerivatives(elastic).dofs())
     # The tets around one vertex, and that vertex's inertia.
     assert 1 < projected <= ROWS_FRACTION * tets
-    runs = []
-    original = CpuBackend.run
-
-    def counting(self, kernels, s, path, *args, **kwargs):
-        runs.append(path)
-        return original(self, kernels, s, path, *args, **kwargs)
-
-    monkeypatch.setattr(CpuBackend, "run", counting)
+    runs = kernel_runs(monkeypatch)
     x.updateValue(x.value)
     np.testing.assert_allclose(solve(scene, threshold),
                                np.linalg.solve(H_mixed, g), rtol=1e-8,
@@ -202,16 +209,8 @@ def test_unknown_projection_is_refused():
 def test_a_retry_at_the_same_point_reuses_the_derivatives(monkeypatch):
     """Another projection at the same point runs no derivative kernel
     again; any new value (even an equal one) or setting does."""
-    from yasps.runtime.cpu import CpuBackend
     scene, x, *_ = squeezed_box(mass=1.0)
-    runs = []
-    original = CpuBackend.run
-
-    def counting(self, kernels, s, path, *args, **kwargs):
-        runs.append(path)
-        return original(self, kernels, s, path, *args, **kwargs)
-
-    monkeypatch.setattr(CpuBackend, "run", counting)
+    runs = kernel_runs(monkeypatch)
     first = solve(scene, float("inf"))
     assert any(p.endswith("__hess") for p in runs)
     runs.clear()
