@@ -9,7 +9,9 @@
 using namespace yasps;
 
 runtime::ThreadPool &yasps::python::poolFor(unsigned threads) {
-  if (threads == 0)
+  // One pool per size: two pools of the same size would each keep threads
+  // polling after their jobs and steal the cores the other one runs on.
+  if (threads == 0 || threads == runtime::defaultThreadCount())
     return runtime::defaultThreadPool();
   static std::mutex lock;
   static std::map<unsigned, std::unique_ptr<runtime::ThreadPool>> pools;

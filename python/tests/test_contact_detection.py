@@ -157,6 +157,17 @@ def test_points_and_rods_equal_ipctks():
     bound, want = step_bounds(detection, V,
                               V + 0.01 * rng.standard_normal(V.shape))
     assert bound == pytest.approx(want, rel=1e-9)
+    # The closest pair a point and a rod's middle, or two points: the
+    # candidates' smallest distance (the CCD's close-range test) sees it.
+    for near in (0.5 * (V[first_rod] + V[first_rod + 1]), V[first_rod - 2]):
+        V[first_rod - 1] = near + [0.0, 0.0, 3e-7]
+        candidates = detection.candidates(V, V, 0.5 * dhat)
+        reference.build(mesh, V, dhat)
+        closest2 = native().contact_min_distance2(detection.native,
+                                                  candidates, V)
+        assert closest2 == pytest.approx(
+            reference.compute_minimum_distance(mesh, V), rel=1e-9)
+        assert closest2 < 1e-12
 
 
 def test_contact_chooses_its_detection():

@@ -12,8 +12,9 @@ using namespace yasps::runtime;
 
 // Diagonal blocks per chunk when building and applying the preconditioner.
 static constexpr std::int64_t kBlocksPerChunk = 64;
-// Diagonal blocks per segment of applyDot's sum.
-static constexpr std::int64_t kBlocksPerSegment = 1024;
+// Diagonal blocks per segment of applyDot's sum: small enough to share out
+// evenly among a PCG team's threads (Pcg.cpp).
+static constexpr std::int64_t kBlocksPerSegment = 256;
 
 BlockJacobi::BlockJacobi(const HessianParts &parts, const std::uint8_t *fixed,
                          ThreadPool &pool)
@@ -141,30 +142,37 @@ void BlockJacobi::apply(const double *r, double *z, ThreadPool &pool) const {
                    });
 }
 
+std::int64_t BlockJacobi::numSegments() const {
+  return (layout_.numBlocks() + kBlocksPerSegment - 1) / kBlocksPerSegment;
+}
+
+template <int NumSums, typename Body>
+void BlockJacobi::sumSegments(std::int64_t begin, std::int64_t end,
+                              double *partial, Body body) const {
+  const std::int64_t numBlocks = layout_.numBlocks();
+  for (std::int64_t segment = begin; segment < end; ++segment) {
+    // Three running sums each, the DoFs of a block spread over them: one
+    // made every term wait for the previous addition. Fixed by the
+    // segment, so the same on every thread count.
+    double sums[NumSums][3] = {};
+    body(segment * kBlocksPerSegment,
+         std::min(numBlocks, (segment + 1) * kBlocksPerSegment), sums);
+    for (int k = 0; k < NumSums; ++k)
+      partial[segment * NumSums + k] = (sums[k][0] + sums[k][1]) + sums[k][2];
+  }
+}
+
 template <int NumSums, typename Body>
 std::array<double, NumSums>
 BlockJacobi::sumOverBlockRanges(std::vector<double> &partial, ThreadPool &pool,
                                 Body body) const {
-  const std::int64_t numBlocks = layout_.numBlocks();
-  const std::int64_t numSegments =
-      (numBlocks + kBlocksPerSegment - 1) / kBlocksPerSegment;
-  partial.assign(static_cast<std::size_t>(NumSums * numSegments), 0.0);
-  pool.parallelFor(
-      0, numSegments, 1, [&](std::int64_t begin, std::int64_t end) {
-        for (std::int64_t segment = begin; segment < end; ++segment) {
-          // Three running sums each, the DoFs of a block spread over them:
-          // one made every term wait for the previous addition. Fixed by
-          // the segment, so the same on every thread count.
-          double sums[NumSums][3] = {};
-          body(segment * kBlocksPerSegment,
-               std::min(numBlocks, (segment + 1) * kBlocksPerSegment), sums);
-          for (int k = 0; k < NumSums; ++k)
-            partial[segment * NumSums + k] =
-                (sums[k][0] + sums[k][1]) + sums[k][2];
-        }
-      });
+  const std::int64_t count = numSegments();
+  partial.assign(static_cast<std::size_t>(NumSums * count), 0.0);
+  pool.parallelFor(0, count, 1, [&](std::int64_t begin, std::int64_t end) {
+    sumSegments<NumSums>(begin, end, partial.data(), body);
+  });
   std::array<double, NumSums> total{};
-  for (std::int64_t segment = 0; segment < numSegments; ++segment)
+  for (std::int64_t segment = 0; segment < count; ++segment)
     for (int k = 0; k < NumSums; ++k)
       total[k] += partial[segment * NumSums + k];
   return total;
@@ -223,29 +231,46 @@ static void stepVertexBlocks(std::int64_t begin, std::int64_t end, double alpha,
   rz[0] = rz0, rz[1] = rz1, rz[2] = rz2;
 }
 
+/// stepApplyDots' pass over blocks [begin, end).
+void BlockJacobi::stepBlocks(std::int64_t begin, std::int64_t end, double alpha,
+                             const double *p, const double *q, double *x,
+                             double *r, double *z, double (*sums)[3]) const {
+  if (allVertexBlocks_)
+    return stepVertexBlocks(begin, end, alpha, p, q, x, r, z, inverse_.data(),
+                            sums[0], sums[1]);
+  const std::int64_t *offset = layout_.blockOffset.data();
+  for (std::int64_t b = begin; b < end; ++b) {
+    const std::int64_t o = offset[b], s = offset[b + 1] - o;
+    for (std::int64_t i = 0; i < s; ++i) {
+      x[o + i] += alpha * p[o + i];
+      r[o + i] -= alpha * q[o + i];
+      sums[0][i % 3] += r[o + i] * r[o + i];
+    }
+    applyBlock(b, r, z, sums[1]);
+  }
+}
+
 BlockJacobi::StepDots BlockJacobi::stepApplyDots(double alpha, const double *p,
                                                  const double *q, double *x,
                                                  double *r, double *z,
                                                  std::vector<double> &partial,
                                                  ThreadPool &pool) const {
-  const std::int64_t *offset = layout_.blockOffset.data();
   std::array<double, 2> dots = sumOverBlockRanges<2>(
       partial, pool,
       [&](std::int64_t begin, std::int64_t end, double(*sums)[3]) {
-        if (allVertexBlocks_)
-          return stepVertexBlocks(begin, end, alpha, p, q, x, r, z,
-                                  inverse_.data(), sums[0], sums[1]);
-        for (std::int64_t b = begin; b < end; ++b) {
-          const std::int64_t o = offset[b], s = offset[b + 1] - o;
-          for (std::int64_t i = 0; i < s; ++i) {
-            x[o + i] += alpha * p[o + i];
-            r[o + i] -= alpha * q[o + i];
-            sums[0][i % 3] += r[o + i] * r[o + i];
-          }
-          applyBlock(b, r, z, sums[1]);
-        }
+        stepBlocks(begin, end, alpha, p, q, x, r, z, sums);
       });
   return {dots[0], dots[1]};
+}
+
+void BlockJacobi::stepSegments(std::int64_t begin, std::int64_t end,
+                               double alpha, const double *p, const double *q,
+                               double *x, double *r, double *z,
+                               double *partial) const {
+  sumSegments<2>(begin, end, partial,
+                 [&](std::int64_t first, std::int64_t last, double(*sums)[3]) {
+                   stepBlocks(first, last, alpha, p, q, x, r, z, sums);
+                 });
 }
 
 void BlockJacobi::measureDiagonal(const std::uint8_t *fixed) {

@@ -422,6 +422,16 @@ void BlockSparseMatrix::multiply(const double *x, double *y,
   multiplyValues(values_.data(), x, y, pool);
 }
 
+void BlockSparseMatrix::multiplyRows(const double *x, double *y, unsigned parts,
+                                     std::int64_t t) const {
+  const RowSplit &split = rowSplit(parts);
+  if (t < 0 || t + 1 >= static_cast<std::int64_t>(split.ranges.size()))
+    return;
+  if (hasSingleValues())
+    return multiplyRange(singleValues_.data(), split, t, x, y);
+  multiplyRange(values_.data(), split, t, x, y);
+}
+
 void BlockSparseMatrix::multiplyRounded(const std::vector<float> &rounded,
                                         const double *x, double *y,
                                         ThreadPool &pool) const {

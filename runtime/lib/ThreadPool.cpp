@@ -70,6 +70,8 @@ struct ThreadPool::Job {
   std::int64_t base;
   std::int64_t rem;
   std::int64_t numChunks;
+  /// Whether each thread takes at most one chunk (runTeam's members).
+  bool onePerThread = false;
   std::atomic<std::int64_t> nextChunk{0};
   std::atomic<bool> failed{false};
   std::mutex errorMutex;
@@ -143,6 +145,8 @@ void ThreadPool::runChunks(Job &job) {
         job.error = std::current_exception();
       job.failed.store(true, std::memory_order_relaxed);
     }
+    if (job.onePerThread)
+      return;
   }
 }
 
@@ -175,9 +179,30 @@ void ThreadPool::parallelFor(
   std::int64_t numChunks = std::min(
       n / minChunk, static_cast<std::int64_t>(size()) * kChunksPerThread);
 
+  Job job{body, begin, n / numChunks, n % numChunks, numChunks};
+  runJob(job);
+}
+
+void ThreadPool::runTeam(const std::function<void(unsigned, unsigned)> &body) {
+  if (workers_.empty() || currentPool == this) {
+    body(0, 1);
+    return;
+  }
+  const unsigned teamSize = size();
+  // Every worker takes part in every job, and each member takes one chunk:
+  // all teamSize chunks run at once, on distinct threads.
+  std::function<void(std::int64_t, std::int64_t)> member =
+      [&](std::int64_t index, std::int64_t) {
+        body(static_cast<unsigned>(index), teamSize);
+      };
+  Job job{member, 0, 1, 0, static_cast<std::int64_t>(teamSize)};
+  job.onePerThread = true;
+  runJob(job);
+}
+
+void ThreadPool::runJob(Job &job) {
   std::lock_guard<std::mutex> callLock(callMutex_);
   CurrentPoolScope scope(this);
-  Job job{body, begin, n / numChunks, n % numChunks, numChunks};
   job_.store(&job, std::memory_order_relaxed);
   pendingWorkers_.store(static_cast<unsigned>(workers_.size()),
                         std::memory_order_relaxed);
@@ -198,6 +223,28 @@ void ThreadPool::parallelFor(
   job_.store(nullptr, std::memory_order_relaxed);
   if (job.error)
     std::rethrow_exception(job.error);
+}
+
+bool TeamBarrier::wait() {
+  const std::uint64_t phase = phase_.load(std::memory_order_acquire);
+  if (arrived_.fetch_add(1, std::memory_order_acq_rel) + 1 == count_) {
+    // The last to arrive opens the next phase.
+    arrived_.store(0, std::memory_order_relaxed);
+    phase_.store(phase + 1, std::memory_order_release);
+    return !aborted_.load(std::memory_order_acquire);
+  }
+  for (unsigned spins = 0;; ++spins) {
+    if (phase_.load(std::memory_order_acquire) != phase)
+      return !aborted_.load(std::memory_order_acquire);
+    if (aborted_.load(std::memory_order_acquire))
+      return false;
+#if defined(__x86_64__) || defined(__i386__)
+    __builtin_ia32_pause();
+#endif
+    // A member held up for long was probably descheduled: give it the core.
+    if (spins >= 4096)
+      std::this_thread::yield();
+  }
 }
 
 unsigned yasps::runtime::defaultThreadCount() {

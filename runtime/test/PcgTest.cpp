@@ -529,6 +529,85 @@ TEST(Pcg, LargeSystemsGiveTheSameBitsOnEveryThreadCount) {
   }
 }
 
+TEST(Pcg, TeamSolvesGiveTheOneThreadBits) {
+  // On several threads a block-Jacobi solve runs as one team (each thread
+  // a share of the product's rows and of the vector steps, barriers
+  // between): with a Hessian in two parts (the dynamic one sparse), fixed
+  // DoFs, 12x12 blocks among the vertex blocks (the general step) or none,
+  // and both stopping rules, it takes the one-thread iterations to the
+  // one-thread bits.
+  for (bool vertexOnly : {true, false}) {
+    std::vector<std::int64_t> sizes(900, 3);
+    if (!vertexOnly)
+      for (std::size_t k = 40; k < sizes.size(); k += 97)
+        sizes[k] = 12;
+    BlockLayout layout = BlockLayout::fromSizes(sizes);
+    const std::int64_t numBlocks = layout.numBlocks();
+    std::mt19937 rng(vertexOnly ? 31 : 32);
+    std::uniform_real_distribution<double> value(-1.0, 1.0);
+    auto part = [&](const std::vector<Coord> &coords, double diagonal) {
+      std::vector<std::vector<double>> locals;
+      for (const Coord &c : coords) {
+        const std::int64_t rows = layout.blockSize(c.first);
+        const std::int64_t cols = layout.blockSize(c.second);
+        std::vector<double> local(static_cast<std::size_t>(rows * cols));
+        for (double &v : local)
+          v = 0.15 * value(rng);
+        if (c.first == c.second)
+          for (std::int64_t r = 0; r < rows; ++r) {
+            for (std::int64_t k = 0; k < r; ++k)
+              local[r * rows + k] = local[k * rows + r];
+            local[r * rows + r] += diagonal;
+          }
+        locals.push_back(std::move(local));
+      }
+      return assembled(layout, coords, locals);
+    };
+    std::vector<Coord> staticCoords, dynamicCoords;
+    for (std::int64_t i = 0; i < numBlocks; ++i) {
+      for (std::int64_t j : {i, i + 1, i + 9, i + 300})
+        if (j < numBlocks)
+          staticCoords.push_back({i, j});
+      if (i % 5 == 0 && i + 450 < numBlocks)
+        dynamicCoords.push_back({i, i + 450});
+    }
+    BlockSparseMatrix h = part(staticCoords, 4.0);
+    BlockSparseMatrix contact = part(dynamicCoords, 0.0);
+    std::vector<double> b = randomVector(rng, h.size());
+    std::vector<std::uint8_t> fixed(b.size(), 0);
+    for (std::size_t i = 0; i < fixed.size(); i += 37)
+      fixed[i] = 1;
+    for (PcgStopping stopping :
+         {PcgStopping::Residual, PcgStopping::EnergyNorm}) {
+      PcgOptions options;
+      options.relativeTolerance = 1e-9;
+      options.fixedDofs = &fixed;
+      options.stopping = stopping;
+      std::vector<double> first;
+      PcgResult firstResult;
+      for (unsigned threads : {1u, 2u, 3u}) {
+        ThreadPool pool(threads);
+        std::vector<double> x(b.size(), 0.0);
+        PcgResult result = solvePcg(yasps::runtime::HessianParts{&h, &contact},
+                                    b.data(), x.data(), options, pool);
+        ASSERT_TRUE(result.converged) << threads << " threads";
+        if (first.empty()) {
+          first = x;
+          firstResult = result;
+          EXPECT_GT(result.iterations, 5);
+          continue;
+        }
+        EXPECT_EQ(result.iterations, firstResult.iterations) << threads;
+        EXPECT_EQ(result.relativeResidual, firstResult.relativeResidual);
+        EXPECT_EQ(result.conditionEstimate, firstResult.conditionEstimate);
+        EXPECT_EQ(x, first) << threads << " threads";
+      }
+      for (std::size_t i = 0; i < fixed.size(); i += 37)
+        EXPECT_EQ(first[i], 0.0);
+    }
+  }
+}
+
 TEST(BlockJacobi, StepApplyDotsMatchesTheStepsDoneApart) {
   // PCG's fused step (x += alpha p, r -= alpha q, z = M^-1 r, r.r, r.z)
   // against the same steps one at a time: on vertex blocks only (its own

@@ -243,6 +243,76 @@ TEST(ThreadPool, NestedCallsRunInline) {
   EXPECT_EQ(total.load(), 6400);
 }
 
+TEST(ThreadPool, TeamMembersRunTogetherThroughBarriers) {
+  // Each member runs once, on its own thread, and the members pass many
+  // barriers in step: after each, every member sees what all wrote before.
+  for (unsigned threads : {1u, 2u, 4u}) {
+    ThreadPool pool(threads);
+    yasps::runtime::TeamBarrier barrier(pool.size());
+    const int rounds = 2000;
+    std::vector<int> written(threads, 0);
+    std::vector<std::thread::id> ids(threads);
+    std::atomic<int> members{0}, mismatches{0};
+    pool.runTeam([&](unsigned member, unsigned team) {
+      ASSERT_EQ(team, threads);
+      ++members;
+      ids[member] = std::this_thread::get_id();
+      for (int round = 1; round <= rounds; ++round) {
+        written[member] = round;
+        if (!barrier.wait())
+          return;
+        for (unsigned other = 0; other < team; ++other)
+          mismatches += written[other] != round;
+        if (!barrier.wait())
+          return;
+      }
+    });
+    EXPECT_EQ(members.load(), static_cast<int>(threads));
+    EXPECT_EQ(mismatches.load(), 0);
+    EXPECT_EQ(ids[0], std::this_thread::get_id());
+    EXPECT_EQ(std::set<std::thread::id>(ids.begin(), ids.end()).size(),
+              threads);
+  }
+}
+
+TEST(ThreadPool, TeamsRunInlineWhenNested) {
+  ThreadPool pool(3);
+  std::atomic<int> calls{0};
+  pool.parallelFor(0, 3, 1, [&](std::int64_t, std::int64_t) {
+    pool.runTeam([&](unsigned member, unsigned team) {
+      EXPECT_EQ(member, 0u);
+      EXPECT_EQ(team, 1u);
+      ++calls;
+    });
+  });
+  EXPECT_EQ(calls.load(), 3);
+}
+
+TEST(ThreadPool, AbortedBarriersReleaseTheTeamAndTheErrorComesOut) {
+  ThreadPool pool(3);
+  yasps::runtime::TeamBarrier barrier(pool.size());
+  std::atomic<int> released{0};
+  EXPECT_THROW(pool.runTeam([&](unsigned member, unsigned) {
+    if (member == 1) {
+      // Late enough that the others wait at the barrier.
+      std::this_thread::sleep_for(std::chrono::milliseconds(20));
+      barrier.abort();
+      throw std::runtime_error("member failed");
+    }
+    // The others would wait for member 1 for ever.
+    if (!barrier.wait())
+      ++released;
+  }),
+               std::runtime_error);
+  // Members that had not started when member 1 failed are skipped; those
+  // that had were released.
+  EXPECT_LE(released.load(), 2);
+  // The pool runs teams afterwards.
+  std::atomic<int> members{0};
+  pool.runTeam([&](unsigned, unsigned) { ++members; });
+  EXPECT_EQ(members.load(), 3);
+}
+
 TEST(ThreadPool, RejectsInvalidArguments) {
   ThreadPool pool(2);
   auto body = [](std::int64_t, std::int64_t) {};

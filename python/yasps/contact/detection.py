@@ -24,6 +24,7 @@ from typing import Dict, Optional, Tuple
 import ipctk
 import numpy as np
 
+from .. import config
 from ..runtime.native import native
 from .pairs import PAIR_TYPES, PairArrays, collision_pairs
 from .sweep import Sweep
@@ -66,7 +67,8 @@ class RuntimeDetection:
         """The pairs whose boxes, swept over V0 -> V1 and grown by
         ``inflation``, overlap."""
         return native().contact_candidates(self.native, _contiguous(V0),
-                                           _contiguous(V1), inflation)
+                                           _contiguous(V1), inflation,
+                                           threads=config.num_threads)
 
     def pairs(self, V: np.ndarray, sweep: Optional[Sweep]) -> Found:
         """The collision set at V as pair arrays (from the step's
@@ -75,7 +77,8 @@ class RuntimeDetection:
         candidates = sweep.candidates if sweep is not None and \
             sweep.holds(V) else self.candidates(V, V, 0.5 * self.dhat)
         kinds, min_distance2 = native().contact_collision_set(
-            self.native, candidates, V, self.dhat)
+            self.native, candidates, V, self.dhat,
+            threads=config.num_threads)
         return ({t.name: PairArrays(*arrays)
                  for t, arrays in zip(PAIR_TYPES, kinds)},
                 float(min_distance2))
@@ -95,7 +98,8 @@ class RuntimeDetection:
             return _close_range_bound(self.mesh, candidates, V0, V1,
                                       0.5 * float(np.sqrt(closest2)))
         return float(native().contact_step_bound(
-            self.native, sweep.candidates, V0, V1, MIN_SEPARATION))
+            self.native, sweep.candidates, V0, V1, MIN_SEPARATION,
+            threads=config.num_threads))
 
 
 class IpctkDetection:

@@ -187,6 +187,12 @@ double candidateMinDistance2(const SurfaceMesh &mesh,
     least =
         std::min(least, edgeEdgeDistance2(v[a[0]], v[a[1]], v[b[0]], v[b[1]]));
   }
+  for (const auto &[a, b] : candidates.vertexVertex)
+    least = std::min(least, squaredNorm(v[a] - v[b]));
+  for (const auto &[e, p] : candidates.edgeVertex) {
+    const auto &ends = mesh.edges()[e];
+    least = std::min(least, pointEdgeDistance2(v[p], v[ends[0]], v[ends[1]]));
+  }
   return least;
 }
 

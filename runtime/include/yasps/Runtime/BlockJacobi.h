@@ -55,6 +55,16 @@ public:
                          double *x, double *r, double *z,
                          std::vector<double> &partial, ThreadPool &pool) const;
 
+  /// stepApplyDots split among threads that the caller runs (PCG's team):
+  /// the blocks fall into numSegments() fixed segments; stepSegments does
+  /// the pass on segments [begin, end) and stores each segment s's r . r and
+  /// r . z at partial[2 s] and partial[2 s + 1]. Those partials added in
+  /// segment order are stepApplyDots' dots, bit for bit.
+  std::int64_t numSegments() const;
+  void stepSegments(std::int64_t begin, std::int64_t end, double alpha,
+                    const double *p, const double *q, double *x, double *r,
+                    double *z, double *partial) const;
+
   /// The largest over the smallest diagonal entry of H on the free DoFs
   /// (inf if one is <= 0, NaN if there is none), taken before inverting.
   double diagonalRatio() const { return diagonalRatio_; }
@@ -74,6 +84,16 @@ private:
   /// body(begin, end, sums) on each fixed segment [begin, end) of blocks,
   /// `sums` being NumSums x 3 running sums of the segment; returns the
   /// NumSums totals, each the segments' sums added in order.
+  /// body(begin, end, sums) on segments [begin, end), storing segment s's
+  /// NumSums sums at partial[s * NumSums + k].
+  template <int NumSums, typename Body>
+  void sumSegments(std::int64_t begin, std::int64_t end, double *partial,
+                   Body body) const;
+  /// stepApplyDots' pass over blocks [begin, end), adding to sums[0] (r . r)
+  /// and sums[1] (r . z).
+  void stepBlocks(std::int64_t begin, std::int64_t end, double alpha,
+                  const double *p, const double *q, double *x, double *r,
+                  double *z, double (*sums)[3]) const;
   template <int NumSums, typename Body>
   std::array<double, NumSums> sumOverBlockRanges(std::vector<double> &partial,
                                                  ThreadPool &pool,

@@ -134,6 +134,12 @@ public:
   /// in the one-thread order, so the result does not depend on the number
   /// of threads.
   void multiply(const double *x, double *y, ThreadPool &pool) const;
+  /// What multiply's thread t of `parts` does: the rows of range t of
+  /// rowRanges(parts) of y = H x (nothing where t is past the last range),
+  /// for callers that run the threads themselves (PCG's team). Each range
+  /// writes only its rows, so ranges may run at the same time.
+  void multiplyRows(const double *x, double *y, unsigned parts,
+                    std::int64_t t) const;
 
   /// multiply() of the matrix whose values are `rounded` (values().size()
   /// f32 entries in the values' order, as roundValuesForProduct takes

@@ -49,8 +49,22 @@ public:
   void parallelFor(std::int64_t begin, std::int64_t end, std::int64_t minChunk,
                    const std::function<void(std::int64_t, std::int64_t)> &body);
 
+  /// Runs `body(member, teamSize)` once on each of the pool's threads at
+  /// the same time, member 0 on the caller, and returns when all have
+  /// finished. Unlike parallelFor's chunks, the members run concurrently and
+  /// may wait for each other (at a TeamBarrier of teamSize threads). A pool
+  /// of one thread, or a call from inside a body of this pool, runs
+  /// body(0, 1) inline. If bodies throw, the first exception is rethrown
+  /// here once all have returned; a body that throws must first release
+  /// the others from any barrier they could wait at (TeamBarrier::abort).
+  void runTeam(const std::function<void(unsigned, unsigned)> &body);
+
 private:
   struct Job;
+
+  /// Posts `job` to the workers, runs it on the calling thread too, and
+  /// waits for the workers to finish it.
+  void runJob(Job &job);
 
   void workerLoop();
   void stopWorkers();
@@ -71,6 +85,27 @@ private:
   // on the caller's stack until this is 0.
   std::atomic<unsigned> pendingWorkers_{0};
   std::atomic<bool> stopping_{false};
+};
+
+/// A barrier for the members of ThreadPool::runTeam: each wait() returns
+/// once all `count` members have arrived. Waiting threads poll, then yield
+/// the core (a member the system has descheduled gets it back), so a wait
+/// costs a fraction of a microsecond when all members are running.
+class TeamBarrier {
+public:
+  explicit TeamBarrier(unsigned count) : count_(count) {}
+
+  /// Waits for all members; false once abort() was called (the caller
+  /// should return: the team's work is off).
+  bool wait();
+  /// Releases every member waiting now or later with false.
+  void abort() { aborted_.store(true, std::memory_order_release); }
+
+private:
+  const unsigned count_;
+  std::atomic<unsigned> arrived_{0};
+  std::atomic<std::uint64_t> phase_{0};
+  std::atomic<bool> aborted_{false};
 };
 
 /// The size defaultThreadPool() gets: the positive integer in environment
