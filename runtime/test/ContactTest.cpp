@@ -179,9 +179,13 @@ TEST(ContactBroadPhase, FindsEveryOverlappingPairOnce) {
           overlap({t[0], t[1], t[2]}, {v}))
         want.insert({f, v});
   }
+  Candidates serial = sweptCandidates(mesh, v0, v1, r);
   for (ThreadPool *pool :
        {static_cast<ThreadPool *>(nullptr), &defaultThreadPool()}) {
     Candidates c = sweptCandidates(mesh, v0, v1, r, pool);
+    // The same pairs in the same order on any pool.
+    EXPECT_EQ(c.faceVertex, serial.faceVertex);
+    EXPECT_EQ(c.edgeEdge, serial.edgeEdge);
     got = std::set<std::array<int32_t, 2>>(c.faceVertex.begin(),
                                            c.faceVertex.end());
     EXPECT_EQ(got.size(), c.faceVertex.size());

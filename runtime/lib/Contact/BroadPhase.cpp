@@ -13,6 +13,7 @@ namespace yasps::runtime::contact {
 
 namespace {
 
+/// An axis-aligned box, closed: boxes that touch overlap.
 struct Box {
   std::array<double, 3> lo, hi;
 
@@ -22,14 +23,16 @@ struct Box {
       hi[k] = std::max(hi[k], other.hi[k]);
     }
   }
+  /// Branch-free: in the broad phase's cells most tests fail, on no
+  /// predictable axis.
   bool overlaps(const Box &other) const {
-    for (int k = 0; k < 3; ++k)
-      if (lo[k] > other.hi[k] || other.lo[k] > hi[k])
-        return false;
-    return true;
+    return (lo[0] <= other.hi[0]) & (other.lo[0] <= hi[0]) &
+           (lo[1] <= other.hi[1]) & (other.lo[1] <= hi[1]) &
+           (lo[2] <= other.hi[2]) & (other.lo[2] <= hi[2]);
   }
 };
 
+/// Each vertex's box over V0 -> V1, grown by `inflation`.
 std::vector<Box> vertexBoxes(Positions v0, Positions v1, double inflation) {
   std::vector<Box> boxes(v0.count);
   for (int64_t v = 0; v < v0.count; ++v) {
@@ -42,6 +45,7 @@ std::vector<Box> vertexBoxes(Positions v0, Positions v1, double inflation) {
   return boxes;
 }
 
+/// Each element's box: the union of its vertices' boxes.
 template <size_t N>
 std::vector<Box> elementBoxes(const std::vector<std::array<int32_t, N>> &elems,
                               const std::vector<Box> &vertices) {
@@ -56,68 +60,110 @@ std::vector<Box> elementBoxes(const std::vector<std::array<int32_t, N>> &elems,
   return boxes;
 }
 
-/// A uniform grid over boxes: each box is listed in every cell it touches
-/// (cells as wide as the boxes are on average, so each box touches few),
-/// and a query visits the boxes listed in the cells its own box touches.
-/// Unlike a sweep along one axis it stays local on flat, spread-out
-/// surfaces such as cloth.
-class BoxGrid {
+/// A box in a grid cell's list, with the primitive it bounds.
+struct Entry {
+  Box box;
+  int32_t id;
+};
+
+/// A uniform grid over boxes of two sets, A and B (B may be A itself), each
+/// box entered in every cell it touches with a copy of its bounds. Pairs
+/// are found cell by cell, every A entry of a cell against every B entry,
+/// reading the cell's lists front to back. A pair of overlapping boxes is
+/// kept only in the cell that holds the low corner of their overlap, so it
+/// comes once without a record of pairs already seen. Cells as wide as the
+/// boxes are on average keep the lists short, and unlike a sweep along one
+/// axis the grid stays local on flat, spread-out surfaces such as cloth.
+class PairGrid {
 public:
-  explicit BoxGrid(const std::vector<Box> &boxes) : boxes_(boxes) {
+  PairGrid(const std::vector<Box> &a, const std::vector<Box> *b) {
+    const std::vector<Box> &other = b ? *b : a;
     lo_.fill(1e300);
     std::array<double, 3> hi;
     hi.fill(-1e300);
     double width = 0;
-    for (const Box &box : boxes) {
-      for (int k = 0; k < 3; ++k) {
-        lo_[k] = std::min(lo_[k], box.lo[k]);
-        hi[k] = std::max(hi[k], box.hi[k]);
-        width += box.hi[k] - box.lo[k];
-      }
+    size_t count = 0;
+    for (const std::vector<Box> *set : {&a, &other}) {
+      for (const Box &box : *set)
+        for (int k = 0; k < 3; ++k) {
+          lo_[k] = std::min(lo_[k], box.lo[k]);
+          hi[k] = std::max(hi[k], box.hi[k]);
+          width += box.hi[k] - box.lo[k];
+        }
+      count += set->size();
+      if (!b)
+        break;
     }
-    if (boxes.empty())
+    if (count == 0)
       return;
-    double cell = std::max(width / (3.0 * boxes.size()), 1e-300);
-    // At most a few cells per box: a larger cell where the boxes are few
-    // and the scene is wide.
-    const double maxCells = 8.0 * boxes.size() + 64;
+    double cell = std::max(width / (3.0 * count), 1e-300);
+    // Cells no more than 16 per box: larger cells where the boxes are few
+    // and the scene is wide. A cap of 4 made the cells under a dense tet
+    // bunny on a wide cloth four times too wide (225 faces in one); a cap
+    // of 64 spent more on empty cells than it saved on tests.
+    const double maxCells = 16.0 * count + 64;
     for (;;) {
       double cells = 1;
       for (int k = 0; k < 3; ++k) {
-        dims_[k] = std::max(1.0, std::ceil((hi[k] - lo_[k]) / cell));
-        cells *= dims_[k];
+        dims_[k] = static_cast<int64_t>(
+            std::max(1.0, std::ceil((hi[k] - lo_[k]) / cell)));
+        cells *= static_cast<double>(dims_[k]);
       }
       if (cells <= maxCells)
         break;
       cell *= 2;
     }
     inverseCell_ = 1.0 / cell;
-    start_.assign(static_cast<size_t>(dims_[0] * dims_[1] * dims_[2]) + 1, 0);
-    for (const Box &box : boxes)
-      forCells(box, [&](int64_t c) { ++start_[c + 1]; });
-    for (size_t c = 1; c < start_.size(); ++c)
-      start_[c] += start_[c - 1];
-    items_.resize(start_.back());
-    std::vector<int64_t> fill(start_.begin(), start_.end() - 1);
-    for (int32_t i = 0; i < static_cast<int32_t>(boxes.size()); ++i)
-      forCells(boxes[i], [&](int64_t c) { items_[fill[c]++] = i; });
+    fill(a, startA_, entriesA_);
+    if (b)
+      fill(*b, startB_, entriesB_);
   }
 
-  /// Calls visit(i) for each box i listed in a cell that `box` touches (a
-  /// box touching several of those cells comes once per cell).
-  template <typename Visit> void query(const Box &box, Visit &&visit) const {
-    if (items_.empty())
-      return;
-    forCells(box, [&](int64_t c) {
-      for (int64_t at = start_[c]; at < start_[c + 1]; ++at)
-        visit(items_[at]);
-    });
+  int64_t numCells() const { return dims_[0] * dims_[1] * dims_[2]; }
+
+  /// Calls found(a, b) for each pair of an A box and a B box that overlap
+  /// and have the low corner of their overlap in one of cells [begin, end),
+  /// cell by cell; with B = A, for each overlapping pair of A boxes, the
+  /// lower id first.
+  template <typename Found>
+  void pairsInCells(int64_t begin, int64_t end, Found &&found) const {
+    const bool self = entriesB_.empty() && startB_.empty();
+    for (int64_t c = begin; c < end; ++c) {
+      const int64_t at[3] = {c % dims_[0], (c / dims_[0]) % dims_[1],
+                             c / (dims_[0] * dims_[1])};
+      // Whether the overlap of two boxes starts in this cell.
+      auto startsHere = [&](const Box &x, const Box &y) {
+        for (int k = 0; k < 3; ++k)
+          if (cellOf(std::max(x.lo[k], y.lo[k]), k) != at[k])
+            return false;
+        return true;
+      };
+      const Entry *firstA = entriesA_.data() + startA_[c];
+      const Entry *lastA = entriesA_.data() + startA_[c + 1];
+      if (self) {
+        for (const Entry *x = firstA; x != lastA; ++x)
+          for (const Entry *y = x + 1; y != lastA; ++y)
+            if (x->box.overlaps(y->box) && startsHere(x->box, y->box))
+              found(std::min(x->id, y->id), std::max(x->id, y->id));
+        continue;
+      }
+      const Entry *firstB = entriesB_.data() + startB_[c];
+      const Entry *lastB = entriesB_.data() + startB_[c + 1];
+      for (const Entry *x = firstA; x != lastA; ++x)
+        for (const Entry *y = firstB; y != lastB; ++y)
+          if (x->box.overlaps(y->box) && startsHere(x->box, y->box))
+            found(x->id, y->id);
+    }
   }
 
 private:
+  /// The cell of coordinate x on axis k. Every coordinate asked for is at
+  /// least lo_[k] (a box's, or the larger of two boxes' low corners), so
+  /// truncation floors it (std::floor was a library call: a third of the
+  /// pair tests' time).
   int64_t cellOf(double x, int k) const {
-    double at = std::floor((x - lo_[k]) * inverseCell_);
-    return static_cast<int64_t>(std::clamp(at, 0.0, dims_[k] - 1.0));
+    const double at = std::max(0.0, (x - lo_[k]) * inverseCell_);
+    return std::min(static_cast<int64_t>(at), dims_[k] - 1);
   }
 
   template <typename Visit> void forCells(const Box &box, Visit &&visit) const {
@@ -126,32 +172,49 @@ private:
       from[k] = cellOf(box.lo[k], k);
       to[k] = cellOf(box.hi[k], k);
     }
-    int64_t nx = static_cast<int64_t>(dims_[0]);
-    int64_t ny = static_cast<int64_t>(dims_[1]);
     for (int64_t z = from[2]; z <= to[2]; ++z)
       for (int64_t y = from[1]; y <= to[1]; ++y)
         for (int64_t x = from[0]; x <= to[0]; ++x)
-          visit((z * ny + y) * nx + x);
+          visit((z * dims_[1] + y) * dims_[0] + x);
   }
 
-  const std::vector<Box> &boxes_;
+  /// Lists each box in the cells it touches, by increasing id per cell.
+  void fill(const std::vector<Box> &boxes, std::vector<int64_t> &start,
+            std::vector<Entry> &entries) const {
+    start.assign(static_cast<size_t>(numCells()) + 1, 0);
+    for (const Box &box : boxes)
+      forCells(box, [&](int64_t c) { ++start[c + 1]; });
+    for (size_t c = 1; c < start.size(); ++c)
+      start[c] += start[c - 1];
+    entries.resize(static_cast<size_t>(start.back()));
+    std::vector<int64_t> next(start.begin(), start.end() - 1);
+    for (int32_t i = 0; i < static_cast<int32_t>(boxes.size()); ++i)
+      forCells(boxes[i], [&](int64_t c) {
+        entries[next[c]++] = Entry{boxes[i], i};
+      });
+  }
+
   std::array<double, 3> lo_;
-  std::array<double, 3> dims_{1, 1, 1};
+  std::array<int64_t, 3> dims_{1, 1, 1};
   double inverseCell_ = 1;
-  std::vector<int64_t> start_;
-  std::vector<int32_t> items_;
+  std::vector<int64_t> startA_, startB_;
+  std::vector<Entry> entriesA_, entriesB_;
 };
 
-/// Runs block(begin, end, found) over [0, count) in ordered blocks and
-/// appends what each found to `out`, in block order.
-template <typename Block>
-void inBlocks(ThreadPool *pool, int64_t count, Block &&block,
-              std::vector<std::array<int32_t, 2>> &out) {
-  // A block of primitives costs a few microseconds at least.
-  int64_t blocks = blockCount(pool, count, 256);
+/// The pairs of `grid` that `keep` accepts, appended to `out` in cell
+/// order, the cells in ordered blocks on `pool`.
+template <typename Keep>
+void gridPairs(ThreadPool *pool, const PairGrid &grid, Keep &&keep,
+               std::vector<std::array<int32_t, 2>> &out) {
+  const int64_t cells = grid.numCells();
+  // A block of cells costs a few microseconds at least.
+  const int64_t blocks = blockCount(pool, cells, 512);
   std::vector<std::vector<std::array<int32_t, 2>>> found(blocks);
-  forBlocks(pool, count, blocks, [&](int64_t b, int64_t begin, int64_t end) {
-    block(static_cast<int32_t>(begin), static_cast<int32_t>(end), found[b]);
+  forBlocks(pool, cells, blocks, [&](int64_t b, int64_t begin, int64_t end) {
+    grid.pairsInCells(begin, end, [&](int32_t x, int32_t y) {
+      if (keep(x, y))
+        found[b].push_back({x, y});
+    });
   });
   for (auto &part : found)
     out.insert(out.end(), part.begin(), part.end());
@@ -161,7 +224,8 @@ void inBlocks(ThreadPool *pool, int64_t count, Block &&block,
 /// codimensional edges (ipctk's extra candidates for points and rods). A
 /// codimensional point is on no edge, so no pair shares a vertex.
 void codimCandidates(const SurfaceMesh &mesh, const std::vector<Box> &vertices,
-                     const std::vector<Box> &edges, Candidates &out) {
+                     const std::vector<Box> &edges, ThreadPool *pool,
+                     Candidates &out) {
   const std::vector<int32_t> &points = mesh.codimVertices();
   if (points.empty())
     return;
@@ -169,25 +233,25 @@ void codimCandidates(const SurfaceMesh &mesh, const std::vector<Box> &vertices,
   pointBoxes.reserve(points.size());
   for (int32_t v : points)
     pointBoxes.push_back(vertices[v]);
-  BoxGrid grid(pointBoxes);
-  std::vector<int32_t> seen(points.size(), -1);
-  for (int32_t i = 0; i < static_cast<int32_t>(points.size()); ++i)
-    grid.query(pointBoxes[i], [&](int32_t j) {
-      if (j <= i || seen[j] == i)
-        return;
-      seen[j] = i;
-      if (pointBoxes[i].overlaps(pointBoxes[j]))
-        out.vertexVertex.push_back({points[i], points[j]});
-    });
-  seen.assign(points.size(), -1);
-  for (int32_t e : mesh.codimEdges())
-    grid.query(edges[e], [&](int32_t j) {
-      if (seen[j] == e)
-        return;
-      seen[j] = e;
-      if (edges[e].overlaps(pointBoxes[j]))
-        out.edgeVertex.push_back({e, points[j]});
-    });
+  std::vector<std::array<int32_t, 2>> pairs;
+  gridPairs(
+      pool, PairGrid(pointBoxes, nullptr),
+      [](int32_t, int32_t) { return true; }, pairs);
+  for (auto [i, j] : pairs)
+    out.vertexVertex.push_back({points[i], points[j]});
+  const std::vector<int32_t> &codimEdges = mesh.codimEdges();
+  if (codimEdges.empty())
+    return;
+  std::vector<Box> edgeBoxes;
+  edgeBoxes.reserve(codimEdges.size());
+  for (int32_t e : codimEdges)
+    edgeBoxes.push_back(edges[e]);
+  pairs.clear();
+  gridPairs(
+      pool, PairGrid(edgeBoxes, &pointBoxes),
+      [](int32_t, int32_t) { return true; }, pairs);
+  for (auto [e, j] : pairs)
+    out.edgeVertex.push_back({codimEdges[e], points[j]});
 }
 
 } // namespace
@@ -205,46 +269,21 @@ Candidates sweptCandidates(const SurfaceMesh &mesh, Positions v0, Positions v1,
   std::vector<Box> edges = elementBoxes(mesh.edges(), vertices);
   std::vector<Box> faces = elementBoxes(mesh.faces(), vertices);
   Candidates out;
-  BoxGrid vertexGrid(vertices);
-  BoxGrid edgeGrid(edges);
-
-  // Each face against the vertices in its cells; a stamp per vertex keeps
-  // a vertex met in several cells from coming twice.
-  auto faceBlock = [&](int32_t begin, int32_t end, auto &found) {
-    std::vector<int32_t> seen(vertices.size(), -1);
-    for (int32_t f = begin; f < end; ++f) {
-      const auto &corners = mesh.faces()[f];
-      vertexGrid.query(faces[f], [&](int32_t v) {
-        if (seen[v] == f || v == corners[0] || v == corners[1] ||
-            v == corners[2])
-          return;
-        seen[v] = f;
-        if (faces[f].overlaps(vertices[v]))
-          found.push_back({f, v});
-      });
-    }
-  };
-  // Each edge against the edges after it in its cells.
-  auto edgeBlock = [&](int32_t begin, int32_t end, auto &found) {
-    std::vector<int32_t> seen(edges.size(), -1);
-    for (int32_t a = begin; a < end; ++a) {
-      const auto &ends = mesh.edges()[a];
-      edgeGrid.query(edges[a], [&](int32_t b) {
-        if (b <= a || seen[b] == a)
-          return;
-        seen[b] = a;
-        const auto &other = mesh.edges()[b];
-        if (ends[0] == other[0] || ends[0] == other[1] || ends[1] == other[0] ||
-            ends[1] == other[1])
-          return;
-        if (edges[a].overlaps(edges[b]))
-          found.push_back({a, b});
-      });
-    }
-  };
-  inBlocks(pool, static_cast<int64_t>(faces.size()), faceBlock, out.faceVertex);
-  inBlocks(pool, static_cast<int64_t>(edges.size()), edgeBlock, out.edgeEdge);
-  codimCandidates(mesh, vertices, edges, out);
+  gridPairs(
+      pool, PairGrid(faces, &vertices),
+      [&](int32_t f, int32_t v) {
+        const auto &corners = mesh.faces()[f];
+        return v != corners[0] && v != corners[1] && v != corners[2];
+      },
+      out.faceVertex);
+  gridPairs(
+      pool, PairGrid(edges, nullptr),
+      [&](int32_t a, int32_t b) {
+        const auto &x = mesh.edges()[a], &y = mesh.edges()[b];
+        return x[0] != y[0] && x[0] != y[1] && x[1] != y[0] && x[1] != y[1];
+      },
+      out.edgeEdge);
+  codimCandidates(mesh, vertices, edges, pool, out);
   return out;
 }
 

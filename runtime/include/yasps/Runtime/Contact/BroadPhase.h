@@ -43,9 +43,9 @@ struct Candidates {
 };
 
 /// The candidates of the motion V0 -> V1 (V1 may be V0: a broad phase at
-/// rest) whose boxes grown by `inflation` overlap, found through a uniform
-/// grid of the boxes; the pairs come in a fixed order (by face, by edge),
-/// whatever `pool` (nullptr: this thread alone) runs the queries.
+/// rest) whose boxes grown by `inflation` overlap, found cell by cell in a
+/// uniform grid of the boxes; the pairs come in a fixed order (by grid
+/// cell), whatever `pool` (nullptr: this thread alone) runs the cells.
 Candidates sweptCandidates(const SurfaceMesh &mesh, Positions v0, Positions v1,
                            double inflation, ThreadPool *pool = nullptr);
 
