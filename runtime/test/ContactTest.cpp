@@ -209,6 +209,49 @@ TEST(ContactBroadPhase, FindsEveryOverlappingPairOnce) {
   }
 }
 
+TEST(ContactBroadPhase, MeshesWithoutFacesOrEdgesHaveTheirPairs) {
+  // Points alone (no edge, no face: every vertex a codimensional point),
+  // then rods (edges on no face) among them: empty sets of boxes leave
+  // their grids empty, and the pairs are brute force's.
+  std::mt19937 rng(9);
+  std::uniform_real_distribution<double> at(0.0, 0.1);
+  std::vector<double> positions(3 * 60);
+  for (double &x : positions)
+    x = at(rng);
+  Positions v{positions.data(), 60};
+  const double r = 0.01;
+  auto near = [&](int32_t a, int32_t b) {
+    for (int k = 0; k < 3; ++k)
+      if (std::abs(v[a][k] - v[b][k]) > 2 * r)
+        return false;
+    return true;
+  };
+  for (bool rods : {false, true}) {
+    std::vector<std::array<int32_t, 2>> edges;
+    if (rods)
+      for (int32_t i = 40; i < 60; i += 2)
+        edges.push_back({i, i + 1});
+    SurfaceMesh mesh(60, edges, {}, v);
+    Candidates c = sweptCandidates(mesh, v, v, r, &defaultThreadPool());
+    EXPECT_TRUE(c.faceVertex.empty());
+    std::set<std::array<int32_t, 2>> want;
+    const int32_t points = rods ? 40 : 60;
+    for (int32_t a = 0; a < points; ++a)
+      for (int32_t b = a + 1; b < points; ++b)
+        if (near(a, b))
+          want.insert({a, b});
+    ASSERT_FALSE(want.empty());
+    std::set<std::array<int32_t, 2>> got(c.vertexVertex.begin(),
+                                         c.vertexVertex.end());
+    EXPECT_EQ(got, want);
+    EXPECT_EQ(c.vertexVertex.size(), want.size());
+    if (rods)
+      EXPECT_FALSE(c.edgeVertex.empty());
+    else
+      EXPECT_TRUE(c.edgeEdge.empty() && c.edgeVertex.empty());
+  }
+}
+
 TEST(ContactBroadPhase, RefusesNonFinitePositions) {
   TwoSheets sheets(4, 0.05, 0.0, 7);
   SurfaceMesh mesh = sheets.mesh();

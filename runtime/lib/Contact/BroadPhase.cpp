@@ -114,12 +114,16 @@ public:
       cell *= 2;
     }
     inverseCell_ = 1.0 / cell;
-    fill(a, startA_, entriesA_);
+    const int64_t cells = dims_[0] * dims_[1] * dims_[2];
+    fill(a, cells, startA_, entriesA_);
     if (b)
-      fill(*b, startB_, entriesB_);
+      fill(*b, cells, startB_, entriesB_);
   }
 
-  int64_t numCells() const { return dims_[0] * dims_[1] * dims_[2]; }
+  /// The cells (none without boxes).
+  int64_t numCells() const {
+    return startA_.empty() ? 0 : dims_[0] * dims_[1] * dims_[2];
+  }
 
   /// Calls found(a, b) for each pair of an A box and a B box that overlap
   /// and have the low corner of their overlap in one of cells [begin, end),
@@ -179,9 +183,9 @@ private:
   }
 
   /// Lists each box in the cells it touches, by increasing id per cell.
-  void fill(const std::vector<Box> &boxes, std::vector<int64_t> &start,
-            std::vector<Entry> &entries) const {
-    start.assign(static_cast<size_t>(numCells()) + 1, 0);
+  void fill(const std::vector<Box> &boxes, int64_t cells,
+            std::vector<int64_t> &start, std::vector<Entry> &entries) const {
+    start.assign(static_cast<size_t>(cells) + 1, 0);
     for (const Box &box : boxes)
       forCells(box, [&](int64_t c) { ++start[c + 1]; });
     for (size_t c = 1; c < start.size(); ++c)
