@@ -229,11 +229,15 @@ def block_on_slope(angle_degrees: float, mu: float, steps: int,
 def test_block_sticks_below_the_friction_angle_and_slides_above():
     """mu = 0.5 (friction angle 26.6 degrees): on a 15-degree slope the
     block creeps at most eps_v per second; on a 40-degree one it slides
-    about as far as g (sin - mu cos) t^2 / 2; it never goes through."""
+    about as far as g (sin - mu cos) t^2 / 2; it never goes through. At a
+    velocity tolerance of 1e-3 m/s: at the default 1e-2 Newton stops while
+    the block still gathers speed, and it slides 0.55-0.62x as far,
+    depending on how its directions were solved."""
     steps, mu = 20, 0.5
     t = steps * 0.01
-    stuck, low_stuck = block_on_slope(15.0, mu, steps)
-    slid, low_slid = block_on_slope(40.0, mu, steps)
+    stuck, low_stuck = block_on_slope(15.0, mu, steps,
+                                      velocity_tolerance=1e-3)
+    slid, low_slid = block_on_slope(40.0, mu, steps, velocity_tolerance=1e-3)
     assert abs(stuck) < 2e-3 * t
     theta = np.radians(40.0)
     free = 0.5 * 9.81 * (np.sin(theta) - mu * np.cos(theta)) * t * t

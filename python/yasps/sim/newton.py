@@ -22,6 +22,7 @@ from ..runtime import current as current_backend
 from ..solve import SolverError, minimize_energy
 from ..solve.minimize import checked_fixed_mask
 from ..solve.prepare import compile_scene
+from .forcing import Forcing
 
 Targets = Union[Attribute, Sequence[Attribute]]
 
@@ -76,6 +77,10 @@ class NewtonReport:
         #: solves repeated with more instances projected (progressive
         #: projection), their CG iterations counted in ``cgIterations``
         self.projectionRetries = 0
+        #: directions solved again to ``cg_tolerance`` because, solved to
+        #: a looser forcing term, they would have ended the solve (their
+        #: CG iterations counted in ``cgIterations``)
+        self.tightenedSolves = 0
         self.seconds: Dict[str, float] = dict.fromkeys(STAGES, 0.0)
         #: the length of the last direction (world space with contact)
         #: over the tolerance: below 1 when converged
@@ -91,6 +96,7 @@ class NewtonReport:
         self.inexactDirections += other.inexactDirections
         self.frictionLags += other.frictionLags
         self.projectionRetries += other.projectionRetries
+        self.tightenedSolves += other.tightenedSolves
         self.cgIterations += other.cgIterations
         for stage, seconds in other.seconds.items():
             self.seconds[stage] = self.seconds.get(stage, 0.0) + seconds
@@ -165,7 +171,8 @@ def newton(scene, x: Targets, tolerance: float,
            cg_max_iterations: int = 1000,
            cg_stopping: str = "residual",
            compile_first: bool = True,
-           projection: str = "progressive") -> NewtonReport:
+           projection: str = "progressive",
+           cg_forcing: bool = True) -> NewtonReport:
     """Minimises the scene's energy over its targets ``x`` (one attribute,
     or the list of the scene's minimisation targets in order) by Newton's
     method: directions from ``minimizeEnergy``, the step limited by
@@ -183,7 +190,12 @@ def newton(scene, x: Targets, tolerance: float,
     stopping rule ("residual" or "energy_norm"). ``compile_first``: compile
     the scene's kernels (``yasps.compile``) before the first iteration,
     timed as the report's ``compile`` stage; a caller that did so already
-    passes False. ``projection``: one of PROJECTIONS."""
+    passes False. ``projection``: one of PROJECTIONS. ``cg_forcing``: solve
+    each direction only as tightly as an inexact Newton method needs
+    (:mod:`yasps.sim.forcing`: a relative residual between 1e-2 and
+    ``cg_tolerance``, tighter as the gradient falls against the solve's
+    first), re-solving to ``cg_tolerance`` a direction that would end the
+    solve; False: every direction to ``cg_tolerance``."""
     if projection not in PROJECTIONS:
         raise SceneError(f"newton: projection must be one of "
                          f"{', '.join(PROJECTIONS)}, got {projection!r}")
@@ -221,7 +233,14 @@ def newton(scene, x: Targets, tolerance: float,
     report.energies.append(current_energy)
     # Progressive projection: nothing projected (inf) until a solve needs it.
     threshold = _FIRST_THRESHOLD[projection]
-    for _ in range(max_iterations):
+    forcing = Forcing(cg_tolerance) if cg_forcing else None
+
+    def solve_direction(tolerance_of) -> Tuple[List[np.ndarray], int, bool]:
+        """A Newton direction, solved to ``tolerance_of(gradient max)``
+        (more projected where progressive projection needs it): the
+        directions, their CG iterations and whether PCG met the
+        tolerance."""
+        nonlocal threshold
         cg = 0
         while True:
             failed, inexact = False, False
@@ -231,8 +250,8 @@ def newton(scene, x: Targets, tolerance: float,
                 # costs iterations, which NewtonNotConverged reports, so
                 # minimizeEnergy's conditioning warning stays for users.
                 directions = minimize_energy(
-                    scene, current_backend(), cg_tolerance,
-                    cg_max_iterations, None, fixed, cg_stopping, threshold,
+                    scene, current_backend(), tolerance_of, cg_max_iterations,
+                    None, fixed, cg_stopping, threshold,
                     warn_conditioning=False)
             except SolverError as error:
                 # A CG iterate from zero on an SPD system is a descent
@@ -260,12 +279,11 @@ def newton(scene, x: Targets, tolerance: float,
                 threshold = 0.0
             report.projectionRetries += 1
         report.inexactDirections += inexact
-        if threshold is not None and threshold != _NONE:
-            threshold *= _RELEASE
-        steps = [-dx for dx in directions]
-        report.cgIterations.append(cg)
-        _totals["cg"] += cg
-        current = [t.value for t in targets]
+        return directions, cg, solve["tolerance"] <= cg_tolerance
+
+    def measure(steps: List[np.ndarray]) -> Tuple[float, float, float]:
+        """The largest safe fraction of ``steps``, their length (world
+        space with contact) and the contact's CCD bound (1 without)."""
         alpha = 1.0
         if step_bound is not None:
             alpha = min(alpha, step_bound(current[0], steps[0]) if
@@ -278,10 +296,29 @@ def newton(scene, x: Targets, tolerance: float,
             start = clock()
             bound, length = contact.stepBoundAndLength(steps)
             report.seconds["ccd"] += clock() - start
+            return min(alpha, bound), length, bound
+        return alpha, max(float(np.abs(p).max()) for p in steps), 1.0
+
+    for _ in range(max_iterations):
+        current = [t.value for t in targets]
+        directions, cg, tight = solve_direction(
+            forcing.tolerance if forcing is not None else cg_tolerance)
+        steps = [-dx for dx in directions]
+        alpha, length, bound = measure(steps)
+        if length < tolerance and not tight:
+            # A loosely solved direction would end the step: Newton stops
+            # only on a direction solved to the caller's tolerance.
+            directions, more, _ = solve_direction(lambda _: cg_tolerance)
+            cg += more
+            report.tightenedSolves += 1
+            steps = [-dx for dx in directions]
+            alpha, length, bound = measure(steps)
+        if threshold is not None and threshold != _NONE:
+            threshold *= _RELEASE
+        report.cgIterations.append(cg)
+        _totals["cg"] += cg
+        if contact is not None:
             report.stepBounds.append(bound)
-            alpha = min(alpha, bound)
-        else:
-            length = max(float(np.abs(p).max()) for p in steps)
         report.residual = length / tolerance if tolerance > 0 else \
             float("inf")
         report.residuals.append(report.residual)
@@ -339,7 +376,8 @@ class ImplicitEuler:
     whether Newton starts from the exact local Hessians and projects only
     where a solve needs it (SymX's and STARK's default, and ours: Newton
     converges quadratically where a cloth buckles), or projects every
-    instance's Hessian (projected Newton)."""
+    instance's Hessian (projected Newton). ``cg_forcing``: as for
+    :func:`newton` (on by default)."""
 
     def __init__(self, scene, x: Optional[Targets] = None,
                  x_hat: Optional[Targets] = None, dt: Optional[float] = None,
@@ -353,7 +391,7 @@ class ImplicitEuler:
                  friction_iterations: int = 1,
                  *, targets: Optional[Sequence[Attribute]] = None,
                  predicted: Optional[Sequence[Attribute]] = None,
-                 projection: str = "progressive"):
+                 projection: str = "progressive", cg_forcing: bool = True):
         # targets= and predicted= are the multi-target spelling of x, x_hat.
         if targets is not None or predicted is not None:
             if x is not None or x_hat is not None:
@@ -401,6 +439,7 @@ class ImplicitEuler:
             raise SceneError(f"ImplicitEuler: projection must be one of "
                              f"{', '.join(PROJECTIONS)}, got {projection!r}")
         self.projection = projection
+        self.cg_forcing = bool(cg_forcing)
         self.velocities = [np.zeros_like(t.value) for t in self.targets]
         self._warned = False
 
@@ -483,7 +522,8 @@ class ImplicitEuler:
                            cg_max_iterations=self.cg_max_iterations,
                            cg_stopping=self.cg_stopping,
                            compile_first=False,
-                           projection=self.projection)
+                           projection=self.projection,
+                           cg_forcing=self.cg_forcing)
             solve.seconds["collisions"] += lag_seconds
             solve.frictionLags = int(friction)
             if report is None:

@@ -7,7 +7,7 @@ from __future__ import annotations
 
 import time
 import warnings
-from typing import Dict, List, Optional
+from typing import Callable, Dict, List, Optional, Union
 
 import numpy as np
 
@@ -91,7 +91,8 @@ _STOP_REASONS = {
 }
 
 
-def minimize_energy(scene, backend: Backend, tolerance: float = 1e-6,
+def minimize_energy(scene, backend: Backend,
+                    tolerance: Union[float, Callable[[float], float]] = 1e-6,
                     maxIterations: int = 1000, threads: Optional[int] = None,
                     fixed: Optional[list] = None,
                     stopping: str = "residual",
@@ -99,12 +100,15 @@ def minimize_energy(scene, backend: Backend, tolerance: float = 1e-6,
                     warn_conditioning: bool = True) -> List[np.ndarray]:
     """Solves H dx = g for the assembled projected Hessian and gradient,
     with dx = 0 at the ``fixed`` DoFs (see fixed_dof_mask), on ``backend``;
+    ``tolerance``: PCG's relative tolerance, or a function giving it from
+    the gradient's largest free entry (an inexact Newton method's forcing
+    term, :mod:`yasps.sim.forcing`);
     ``stopping``: one of STOPPING_RULES; ``projection_threshold``: project
     only the instances that read a DoF block whose free gradient reaches it
     (:class:`GradientThreshold`; None: all). ``warn_conditioning=False``
     (Newton loops, which judge their directions themselves) leaves out the
     IllConditionedSolve warning; ``lastSolve['errorBound']`` still has it."""
-    if not (tolerance >= 0):
+    if not callable(tolerance) and not (tolerance >= 0):
         raise ValueError(f"minimizeEnergy: tolerance must be >= 0, got {tolerance}")
     if stopping not in STOPPING_RULES:
         raise ValueError(f"minimizeEnergy: stopping must be one of "
@@ -145,6 +149,18 @@ def minimize_energy(scene, backend: Backend, tolerance: float = 1e-6,
                 "Translate the scene toward the origin or compute it in "
                 "f64 (warned once per scene)", PrecisionWarning,
                 stacklevel=4)
+    gradient_max = None
+    if projection is not None or callable(tolerance):
+        # What progressively projected Newton and a forcing term decide by:
+        # the gradient's scale.
+        gradient = np.empty(system.size)
+        system.gradient(gradient)
+        gradient_max = free_gradient_max(gradient, mask)
+    if callable(tolerance):
+        tolerance = tolerance(gradient_max)
+        if not (tolerance >= 0):
+            raise ValueError(f"minimizeEnergy: the tolerance function gave "
+                             f"{tolerance}, not a number >= 0")
     x = np.zeros(system.size)
     start = time.perf_counter()
     pcg = backend.solve(system, x, float(tolerance), int(maxIterations),
@@ -162,13 +178,12 @@ def minimize_energy(scene, backend: Backend, tolerance: float = 1e-6,
             "errorBound": bound,
             "residualReplacements": int(pcg.residual_replacements),
             "preconditionerLevels": int(pcg.levels),
+            "tolerance": float(tolerance),
             "seconds": timings, "backend": backend.name, **report}
+    if gradient_max is not None:
+        info["gradientMax"] = gradient_max
     if projection is not None:
-        # What progressively projected Newton decides by: the gradient's
-        # scale and whether the direction descends (H may be indefinite).
-        gradient = np.empty(system.size)
-        system.gradient(gradient)
-        info["gradientMax"] = free_gradient_max(gradient, mask)
+        # Whether the direction descends (H may be indefinite).
         info["descends"] = bool(float(gradient @ x) > 0.0)
     scene.lastSolve = info
     solution = layout.split(x)
