@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <stdexcept>
 #include <string>
 
@@ -60,30 +61,45 @@ std::vector<Box> elementBoxes(const std::vector<std::array<int32_t, N>> &elems,
   return boxes;
 }
 
-/// A box in a grid cell's list, with the primitive it bounds.
-struct Entry {
-  Box box;
-  int32_t id;
+/// Boxes listed per grid cell (every box in every cell it touches), one
+/// array per bound: a cell's boxes are tested against another box a few at
+/// a time. The bounds are f32 rounded outward (an f32 overlap holds
+/// wherever the f64 boxes overlap), and each entry also has its box's id
+/// and the cell of its box's low corner.
+struct CellLists {
+  /// Cell c's entries are [start[c], start[c + 1]).
+  std::vector<int32_t> start;
+  std::array<std::vector<float>, 3> lo, hi;
+  std::array<std::vector<int32_t>, 3> lowCell;
+  std::vector<int32_t> id;
 };
 
-/// A uniform grid over boxes of two sets, A and B (B may be A itself), each
-/// box entered in every cell it touches with a copy of its bounds. Pairs
-/// are found cell by cell, every A entry of a cell against every B entry,
-/// reading the cell's lists front to back. A pair of overlapping boxes is
-/// kept only in the cell that holds the low corner of their overlap, so it
-/// comes once without a record of pairs already seen. Cells as wide as the
-/// boxes are on average keep the lists short, and unlike a sweep along one
-/// axis the grid stays local on flat, spread-out surfaces such as cloth.
+/// `x` in f32, no larger than x (`down`) or no smaller. Moved 2^-23 of
+/// itself outward first, more than rounding to nearest moves back.
+float roundedOutward(double x, bool down) {
+  const double shift = std::abs(x) * 0x1p-23;
+  return static_cast<float>(down ? x - shift : x + shift);
+}
+
+/// A uniform grid over boxes of two sets, A and B (B may be A itself).
+/// Pairs are found cell by cell: each A box of a cell against the cell's
+/// B boxes, first in f32 over the cell's bound arrays, then the few whose
+/// f32 boxes overlap in f64. A pair of overlapping boxes is kept only in
+/// the cell that holds the low corner of their overlap (the larger of
+/// their low corners' cells on each axis), so it comes once without a
+/// record of pairs already seen. Cells as wide as the boxes are on average
+/// keep the lists short, and unlike a sweep along one axis the grid stays
+/// local on flat, spread-out surfaces such as cloth.
 class PairGrid {
 public:
-  PairGrid(const std::vector<Box> &a, const std::vector<Box> *b) {
-    const std::vector<Box> &other = b ? *b : a;
+  PairGrid(const std::vector<Box> &a, const std::vector<Box> *b)
+      : a_(a), b_(b ? *b : a), self_(!b) {
     lo_.fill(1e300);
     std::array<double, 3> hi;
     hi.fill(-1e300);
     double width = 0;
     size_t count = 0;
-    for (const std::vector<Box> *set : {&a, &other}) {
+    for (const std::vector<Box> *set : {&a_, &b_}) {
       for (const Box &box : *set)
         for (int k = 0; k < 3; ++k) {
           lo_[k] = std::min(lo_[k], box.lo[k]);
@@ -91,7 +107,7 @@ public:
           width += box.hi[k] - box.lo[k];
         }
       count += set->size();
-      if (!b)
+      if (self_)
         break;
     }
     if (count == 0)
@@ -115,14 +131,14 @@ public:
     }
     inverseCell_ = 1.0 / cell;
     const int64_t cells = dims_[0] * dims_[1] * dims_[2];
-    fill(a, cells, startA_, entriesA_);
-    if (b)
-      fill(*b, cells, startB_, entriesB_);
+    fill(a_, cells, listsA_);
+    if (!self_)
+      fill(b_, cells, listsB_);
   }
 
   /// The cells (none without boxes).
   int64_t numCells() const {
-    return startA_.empty() ? 0 : dims_[0] * dims_[1] * dims_[2];
+    return listsA_.start.empty() ? 0 : dims_[0] * dims_[1] * dims_[2];
   }
 
   /// Calls found(a, b) for each pair of an A box and a B box that overlap
@@ -131,40 +147,52 @@ public:
   /// lower id first.
   template <typename Found>
   void pairsInCells(int64_t begin, int64_t end, Found &&found) const {
-    const bool self = entriesB_.empty() && startB_.empty();
+    const CellLists &la = listsA_, &lb = self_ ? listsA_ : listsB_;
+    std::vector<int32_t> hits;
     for (int64_t c = begin; c < end; ++c) {
-      const int64_t at[3] = {c % dims_[0], (c / dims_[0]) % dims_[1],
-                             c / (dims_[0] * dims_[1])};
-      // Whether the overlap of two boxes starts in this cell.
-      auto startsHere = [&](const Box &x, const Box &y) {
-        for (int k = 0; k < 3; ++k)
-          if (cellOf(std::max(x.lo[k], y.lo[k]), k) != at[k])
-            return false;
-        return true;
-      };
-      const Entry *firstA = entriesA_.data() + startA_[c];
-      const Entry *lastA = entriesA_.data() + startA_[c + 1];
-      if (self) {
-        for (const Entry *x = firstA; x != lastA; ++x)
-          for (const Entry *y = x + 1; y != lastA; ++y)
-            if (x->box.overlaps(y->box) && startsHere(x->box, y->box))
-              found(std::min(x->id, y->id), std::max(x->id, y->id));
+      const int32_t firstA = la.start[c], lastA = la.start[c + 1];
+      const int32_t lastB = lb.start[c + 1];
+      if (firstA == lastA || lb.start[c] == lastB)
         continue;
+      const int32_t at[3] = {static_cast<int32_t>(c % dims_[0]),
+                             static_cast<int32_t>((c / dims_[0]) % dims_[1]),
+                             static_cast<int32_t>(c / (dims_[0] * dims_[1]))};
+      hits.resize(static_cast<size_t>(lastB - lb.start[c]));
+      for (int32_t i = firstA; i < lastA; ++i) {
+        const int32_t firstB = self_ ? i + 1 : lb.start[c];
+        const float x0 = la.lo[0][i], x1 = la.lo[1][i], x2 = la.lo[2][i];
+        const float y0 = la.hi[0][i], y1 = la.hi[1][i], y2 = la.hi[2][i];
+        // The B entries whose f32 boxes overlap entry i's and whose
+        // overlap starts in this cell, gathered without a branch per entry.
+        const int32_t c0 = la.lowCell[0][i], c1 = la.lowCell[1][i],
+                      c2 = la.lowCell[2][i];
+        size_t n = 0;
+        for (int32_t j = firstB; j < lastB; ++j) {
+          hits[n] = j;
+          n += (x0 <= lb.hi[0][j]) & (lb.lo[0][j] <= y0) & (x1 <= lb.hi[1][j]) &
+               (lb.lo[1][j] <= y1) & (x2 <= lb.hi[2][j]) & (lb.lo[2][j] <= y2) &
+               (std::max(c0, lb.lowCell[0][j]) == at[0]) &
+               (std::max(c1, lb.lowCell[1][j]) == at[1]) &
+               (std::max(c2, lb.lowCell[2][j]) == at[2]);
+        }
+        const int32_t idA = la.id[i];
+        for (size_t h = 0; h < n; ++h) {
+          const int32_t idB = lb.id[hits[h]];
+          if (!a_[idA].overlaps(b_[idB]))
+            continue;
+          if (self_)
+            found(std::min(idA, idB), std::max(idA, idB));
+          else
+            found(idA, idB);
+        }
       }
-      const Entry *firstB = entriesB_.data() + startB_[c];
-      const Entry *lastB = entriesB_.data() + startB_[c + 1];
-      for (const Entry *x = firstA; x != lastA; ++x)
-        for (const Entry *y = firstB; y != lastB; ++y)
-          if (x->box.overlaps(y->box) && startsHere(x->box, y->box))
-            found(x->id, y->id);
     }
   }
 
 private:
   /// The cell of coordinate x on axis k. Every coordinate asked for is at
-  /// least lo_[k] (a box's, or the larger of two boxes' low corners), so
-  /// truncation floors it (std::floor was a library call: a third of the
-  /// pair tests' time).
+  /// least lo_[k] (a box's low corner), so truncation floors it
+  /// (std::floor was a library call).
   int64_t cellOf(double x, int k) const {
     const double at = std::max(0.0, (x - lo_[k]) * inverseCell_);
     return std::min(static_cast<int64_t>(at), dims_[k] - 1);
@@ -184,25 +212,53 @@ private:
 
   /// Lists each box in the cells it touches, by increasing id per cell.
   void fill(const std::vector<Box> &boxes, int64_t cells,
-            std::vector<int64_t> &start, std::vector<Entry> &entries) const {
-    start.assign(static_cast<size_t>(cells) + 1, 0);
-    for (const Box &box : boxes)
-      forCells(box, [&](int64_t c) { ++start[c + 1]; });
-    for (size_t c = 1; c < start.size(); ++c)
+            CellLists &lists) const {
+    // Counts at start[c + 1], summed: start[c + 1] is where cell c ends.
+    // Each entry is then placed at --start[c + 1], boxes from the last, so
+    // start[c + 1] ends up where cell c begins; the front slot is dropped.
+    std::vector<int32_t> &start = lists.start;
+    start.assign(static_cast<size_t>(cells) + 2, 0);
+    std::vector<std::array<int32_t, 3>> low(boxes.size());
+    for (size_t i = 0; i < boxes.size(); ++i) {
+      forCells(boxes[i], [&](int64_t c) { ++start[c + 1]; });
+      for (int k = 0; k < 3; ++k)
+        low[i][k] = static_cast<int32_t>(cellOf(boxes[i].lo[k], k));
+    }
+    for (size_t c = 1; c + 1 < start.size(); ++c)
       start[c] += start[c - 1];
-    entries.resize(static_cast<size_t>(start.back()));
-    std::vector<int64_t> next(start.begin(), start.end() - 1);
-    for (int32_t i = 0; i < static_cast<int32_t>(boxes.size()); ++i)
+    start.back() = start[start.size() - 2];
+    const size_t entries = static_cast<size_t>(start.back());
+    for (int k = 0; k < 3; ++k) {
+      lists.lo[k].resize(entries);
+      lists.hi[k].resize(entries);
+      lists.lowCell[k].resize(entries);
+    }
+    lists.id.resize(entries);
+    for (int32_t i = static_cast<int32_t>(boxes.size()) - 1; i >= 0; --i) {
+      float lo[3], hi[3];
+      for (int k = 0; k < 3; ++k) {
+        lo[k] = roundedOutward(boxes[i].lo[k], true);
+        hi[k] = roundedOutward(boxes[i].hi[k], false);
+      }
       forCells(boxes[i], [&](int64_t c) {
-        entries[next[c]++] = Entry{boxes[i], i};
+        const int32_t at = --start[c + 1];
+        for (int k = 0; k < 3; ++k) {
+          lists.lo[k][at] = lo[k];
+          lists.hi[k][at] = hi[k];
+          lists.lowCell[k][at] = low[i][k];
+        }
+        lists.id[at] = i;
       });
+    }
+    start.erase(start.begin());
   }
 
+  const std::vector<Box> &a_, &b_;
+  const bool self_;
   std::array<double, 3> lo_;
   std::array<int64_t, 3> dims_{1, 1, 1};
   double inverseCell_ = 1;
-  std::vector<int64_t> startA_, startB_;
-  std::vector<Entry> entriesA_, entriesB_;
+  CellLists listsA_, listsB_;
 };
 
 /// The pairs of `grid` that `keep` accepts, appended to `out` in cell
