@@ -85,6 +85,23 @@ public:
                 &::yasps::python::poolFor(threads));
   }
 
+  void addToInstances(size_t energy, Int64Array instances,
+                      DoubleArray hessians) {
+    if (energy >= system->numEnergies())
+      throw std::invalid_argument("no energy " + std::to_string(energy));
+    auto [count, n] = shape(energy);
+    (void)count;
+    const size_t k = instances.size();
+    if (hessians.size() != k * size_t(n * n))
+      throw std::invalid_argument(
+          "energy " + std::to_string(energy) + " expects " + std::to_string(k) +
+          " Hessians of " + std::to_string(n) + "x" + std::to_string(n) +
+          " for its " + std::to_string(k) + " instances");
+    nb::gil_scoped_release release;
+    system->addToInstances(energy, instances.data(), int64_t(k),
+                           hessians.data());
+  }
+
   void addFactored(size_t energy, DoubleArray gradients, DoubleArray maps,
                    DoubleArray inner, int64_t m, unsigned threads) {
     if (energy >= system->numEnergies())
@@ -377,6 +394,10 @@ NB_MODULE(_yasps_runtime, m) {
            "across threads (atomic adds)")
       .def("add", &PySystem::add<PySystem::FloatArray>, nb::arg("energy"),
            nb::arg("gradients"), nb::arg("hessians"), nb::arg("threads") = 0)
+      .def("add_to_instances", &PySystem::addToInstances, nb::arg("energy"),
+           nb::arg("instances"), nb::arg("hessians"),
+           "Adds local Hessians (f64, k x n x n) to the k listed instances "
+           "of an energy only, nothing to the gradient")
       .def("gradient", &PySystem::gradient, nb::arg("out"))
       .def("dense", &PySystem::dense, nb::arg("out"))
       .def_prop_ro("non_zeros", &PySystem::nonZeros)

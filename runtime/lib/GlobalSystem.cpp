@@ -198,6 +198,27 @@ void GlobalSystem::addLocal(std::size_t energy, const T *gradients,
   });
 }
 
+void GlobalSystem::addToInstances(std::size_t energy,
+                                  const std::int64_t *instances,
+                                  std::int64_t count, const double *hessians) {
+  Part *part;
+  const EnergyMap *map;
+  std::tie(part, map) = energyMap(energy);
+  part->matrix.dropSingleValues();
+  const std::int64_t n = map->numParams;
+  // The gradient gets zeros (a -0.0 entry becomes +0.0, nothing else).
+  std::vector<double> noGradient(static_cast<std::size_t>(n), 0.0);
+  const RowRange all{0, part->matrix.numBlocks()};
+  for (std::int64_t k = 0; k < count; ++k) {
+    const std::int64_t i = instances[k];
+    if (i < 0 || i >= map->count)
+      throw std::out_of_range("addToInstances: instance " + std::to_string(i) +
+                              " of an energy of " + std::to_string(map->count));
+    addInstance(*part, *map, i, noGradient.data(), hessians + k * n * n,
+                gradientValues, all);
+  }
+}
+
 void GlobalSystem::addFactored(std::size_t energy, const double *gradients,
                                const double *maps, const double *inner,
                                std::int64_t m, ThreadPool *pool) {

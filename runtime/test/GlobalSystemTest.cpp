@@ -126,6 +126,45 @@ TEST(GlobalSystem, AssemblesLikeADenseReference) {
   }
 }
 
+TEST(GlobalSystem, AddsToListedInstancesAsAFullAddWithZerosElsewhere) {
+  // Instances 1 and 3 of the edges, and body 0 (with its padding): the
+  // same system as adding every instance's Hessian with zeros for the
+  // others, and the gradient untouched.
+  Scene scene;
+  std::mt19937 rng(8);
+  auto he = randomSpd(rng, scene.edgeN, scene.edgeCount);
+  auto hb = randomSpd(rng, scene.bodyN, scene.bodyCount);
+  std::vector<double> ge(scene.edgeCount * scene.edgeN, 0.5),
+      gb(scene.bodyCount * scene.bodyN, -0.25);
+  GlobalSystem listed(scene.layout, scene.maps()),
+      full(scene.layout, scene.maps());
+  for (GlobalSystem *system : {&listed, &full}) {
+    system->setZero();
+    system->add(0, ge.data(), he.data());
+    system->add(1, gb.data(), hb.data());
+  }
+  const std::int64_t edges[2] = {1, 3}, bodies[1] = {0};
+  const int64_t ne = scene.edgeN * scene.edgeN, nb = scene.bodyN * scene.bodyN;
+  std::vector<double> edgeUpdate(he.begin() + ne, he.begin() + 2 * ne);
+  edgeUpdate.insert(edgeUpdate.end(), he.begin() + 3 * ne, he.begin() + 4 * ne);
+  listed.addToInstances(0, edges, 2, edgeUpdate.data());
+  listed.addToInstances(1, bodies, 1, hb.data());
+  std::vector<double> edgesFull(he.size(), 0.0), bodiesFull(hb.size(), 0.0);
+  for (int64_t i : edges)
+    std::copy(he.begin() + i * ne, he.begin() + (i + 1) * ne,
+              edgesFull.begin() + i * ne);
+  std::copy(hb.begin(), hb.begin() + nb, bodiesFull.begin());
+  std::vector<double> noEdgeGradient(ge.size(), 0.0),
+      noBodyGradient(gb.size(), 0.0);
+  full.add(0, noEdgeGradient.data(), edgesFull.data());
+  full.add(1, noBodyGradient.data(), bodiesFull.data());
+  EXPECT_EQ(listed.toDense(), full.toDense());
+  EXPECT_EQ(listed.gradient(), full.gradient());
+  const std::int64_t outside[1] = {scene.edgeCount};
+  EXPECT_THROW(listed.addToInstances(0, outside, 1, he.data()),
+               std::out_of_range);
+}
+
 TEST(GlobalSystem, AssemblesF32LocalDerivativesAsWidened) {
   // f32 local derivatives are widened exactly and summed in f64 in the
   // same order: the system is, to the bit, that of the widened values.

@@ -126,6 +126,15 @@ class CpuBackend:
         add_host_arrays(system, energy_index, inputs, (_threads(threads),),
                         f32=True)
 
+    def add_to_instances(self, system, energy_index: int,
+                         instances: np.ndarray, hessians: np.ndarray) -> None:
+        """Adds f64 local Hessians (k x n x n) to the k listed instances of
+        an energy only (progressive projection's update), nothing to the
+        gradient."""
+        system.add_to_instances(energy_index,
+                                np.ascontiguousarray(instances, np.int64),
+                                _f64(hessians))
+
     def finish_assembly(self, system) -> None:
         """Ends an assembly. With ``config.hessian_storage`` "f32" the
         solve's products read the Hessian's blocks rounded to f32 (f64

@@ -265,7 +265,8 @@ def assemble(scene: Scene, backend: Backend, threads: Optional[int] = None,
         chosen = projection.projected_dofs(last.gradient)
         if chosen.any() and backend is backend.host:
             # Assembly adds: only the chosen instances' projected minus
-            # exact Hessians are added to what is there (SymX's update).
+            # exact Hessians are added to what is there (SymX's update),
+            # to those instances alone.
             start = clock()
             updates = [(k, c.projection_update(chosen))
                        for k, c in enumerate(contributions)]
@@ -273,7 +274,8 @@ def assemble(scene: Scene, backend: Backend, threads: Optional[int] = None,
             start = clock()
             for k, update in updates:
                 if update is not None:
-                    backend.add(system, k, update, threads)
+                    backend.add_to_instances(system, k, update.instances,
+                                             update.hessians)
             backend.finish_assembly(system)
             spent["assembly"] += clock() - start
         elif chosen.any():

@@ -5,6 +5,7 @@ backend's memory for assembly (:func:`assembly_inputs`)."""
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 from typing import Callable, Dict, List, Optional, Tuple
 
 import numpy as np
@@ -222,6 +223,14 @@ class _Outputs:
                            inner_size=plan.inner_size, slot_factors=slots)
 
 
+@dataclass(frozen=True)
+class InstanceUpdate:
+    """Local Hessians to add to some instances of an energy only:
+    ``instances`` (k,) and ``hessians`` (k, n * n, row-major)."""
+    instances: np.ndarray
+    hessians: np.ndarray
+
+
 class Contribution:
     """What assembly needs of one energy: its local gradients and Hessians
     in the memory of the backend that differentiated it, and its DoF map.
@@ -287,23 +296,21 @@ class Contribution:
         return self._grad
 
     def projection_update(self, projected_dofs: np.ndarray
-                          ) -> Optional[LocalInputs]:
+                          ) -> Optional[InstanceUpdate]:
         """What turns this energy's exact contribution into that of
-        ``inputs(projected_dofs)`` when added to it: no gradient, and the
-        projected minus the exact Hessians of the instances that read a
-        True entry (zero elsewhere); None where that is nothing."""
+        ``inputs(projected_dofs)`` when added to it: for the instances that
+        read a True entry, their projected minus their exact Hessians (no
+        gradient); None where that is nothing."""
         if not self.selective:
             return None
         reads = self._reads(projected_dofs)
         if not reads.any() or self._method == "none":
             return None
-        outputs = self._outputs
-        count, n, _ = outputs.shape("hess")
+        count, n, _ = self._outputs.shape("hess")
         exact = self._exact_hessians().reshape(count, n * n)
-        update = np.zeros((count, n * n))
-        update[reads] = self._projected_of(reads) - exact[reads]
-        return LocalInputs(outputs.backend, count, n, np.zeros((count, n)),
-                           update)
+        rows = np.flatnonzero(reads)
+        return InstanceUpdate(rows.astype(np.int64),
+                              self._projected_of(reads) - exact[rows])
 
     def _reads(self, projected_dofs: np.ndarray) -> np.ndarray:
         """Per instance, whether it reads a True entry of

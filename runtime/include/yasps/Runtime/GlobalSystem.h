@@ -79,6 +79,14 @@ public:
   void add(std::size_t energy, const float *gradients, const float *hessians,
            ThreadPool *pool = nullptr);
 
+  /// Adds local Hessians (count x n x n, row-major) to the instances
+  /// `instances[0..count)` of energy `energy` only, and nothing to the
+  /// gradient: progressive projection's update, the projected minus the
+  /// exact Hessians of the few instances it chose, without a pass over the
+  /// others. Throws std::out_of_range for an instance outside the energy.
+  void addToInstances(std::size_t energy, const std::int64_t *instances,
+                      std::int64_t count, const double *hessians);
+
   /// add() for an energy whose local Hessians are kept as factors (paper
   /// 7.2, 10.9): instance i's Hessian is J_i^T P_i J_i, with `maps` the
   /// inner maps J (count x m x n, each row-major) and `inner` the projected
