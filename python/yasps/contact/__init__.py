@@ -66,7 +66,17 @@ class Contact:
     ``eps_v`` (m/s; the displacement threshold is eps_v dt), lagged by
     ``update(lag=True, dt=...)`` once per time step. ``detection``
     ("runtime" or "ipctk", :mod:`.detection`) finds the pairs and bounds
-    steps: the runtime's by default, ipctk's for a cross-check."""
+    steps: the runtime's by default, ipctk's for a cross-check.
+
+    ``points`` says which vertices on no face or edge take part, as IPC's
+    codimensional points: all of them (True, the default: particles, and a
+    tet mesh's inner vertices), none (False: only the faces' and edges'
+    vertices, as ipctk's ``build_from_full_mesh``), or those where a
+    boolean mask over the vertices is set. A tet mesh's inner vertices
+    cannot touch another body while its surface holds, so dropping them
+    costs no guarantee and saves their share of detection; it also keeps
+    an inner vertex within dhat of its own surface from being pushed off
+    it by the barrier."""
 
     def __init__(self, scene: Scene,
                  vertices: Union[Primitive, PrimitiveUnion],
@@ -77,7 +87,8 @@ class Contact:
                  position: str = "position", name: str = "contact",
                  projection: str = "clamp", halfspaces=(),
                  friction: float = 0.0, eps_v: float = 1e-3,
-                 detection: str = "runtime"):
+                 detection: str = "runtime",
+                 points: Union[bool, np.ndarray] = True):
         if position not in vertices:
             raise SceneError(f"Contact: {vertices.describe()} has no "
                              f"attribute {position!r} (its world positions)")
@@ -111,7 +122,17 @@ class Contact:
                 raise SceneError(f"Contact: {what} index vertices outside "
                                  f"0..{count - 1} of {vertices.describe()}")
         rest = self.world()
-        self.mesh = ipctk.CollisionMesh(rest, edges, faces)
+        #: the vertices that take part (None: all), ascending: ipctk's
+        #: collision mesh and the detection number them 0, 1, ... in order
+        self.included: Optional[np.ndarray] = _included(points, count,
+                                                         edges, faces)
+        if self.included is None:
+            self.mesh = ipctk.CollisionMesh(rest, edges, faces)
+        else:
+            mask = np.zeros(count, dtype=bool)
+            mask[self.included] = True
+            self.mesh = ipctk.CollisionMesh(mask.tolist(), [False] * count,
+                                            rest, edges, faces)
         #: ipctk's collision set, built where friction is lagged (its
         #: tangential set starts from it)
         self.collisions = ipctk.NormalCollisions()
@@ -159,6 +180,19 @@ class Contact:
         kernels."""
         return np.ascontiguousarray(self.positions.compute().value[:, :, 0])
 
+    def colliding(self, V: np.ndarray) -> np.ndarray:
+        """The rows of world positions V (N, 3) of the vertices that take
+        part (``self.mesh``'s vertices, in its order)."""
+        if self.included is None:
+            return V
+        return np.ascontiguousarray(V[self.included])
+
+    def _full(self, vertices: np.ndarray) -> np.ndarray:
+        """Collision-mesh vertex ids as the ``vertices``' own."""
+        if self.included is None:
+            return vertices
+        return self.included[vertices]
+
     def update(self, lag: bool = False, dt: Optional[float] = None,
                step_start: Optional[np.ndarray] = None) -> Dict[str, int]:
         """Rebuilds the pairs from the collision set (``self.detection``'s;
@@ -196,11 +230,17 @@ class Contact:
         built), with tangential motion measured from ``start``."""
         self.eps_u.updateValue([self.eps_v * dt])
         barrier = ipctk.BarrierPotential(self.dhat, self.kappa)
-        self.collisions.build(self.mesh, V, self.dhat)
+        Vc = self.colliding(V)
+        self.collisions.build(self.mesh, Vc, self.dhat)
         tangential = ipctk.TangentialCollisions()
-        tangential.build(self.mesh, V, self.collisions, barrier, self.friction)
+        tangential.build(self.mesh, Vc, self.collisions, barrier,
+                         self.friction)
         pairs = {arity: FrictionPairs(arity) for arity in ARITIES}
-        tangential_pairs(tangential, self.mesh, V, start, pairs)
+        tangential_pairs(tangential, self.mesh, Vc, self.colliding(start),
+                         pairs)
+        for found in pairs.values():
+            found.vertices = [self._full(np.asarray(ids)).tolist()
+                              for ids in found.vertices]
         self.halfspaces.friction_pairs(V, start, barrier, self.friction,
                                        pairs[1])
         for arity, found in pairs.items():
@@ -210,12 +250,14 @@ class Contact:
     def _normal_pairs(self, V: np.ndarray) -> Dict[str, int]:
         """The barrier pairs of the collision set at positions V (from the
         last step's candidates where they cover V)."""
-        found, min_distance2 = self.detection.pairs(V, self._sweep)
+        found, min_distance2 = self.detection.pairs(self.colliding(V),
+                                                    self._sweep)
         self._last_pairs = (V, min_distance2)
         for kind, pairs in found.items():
             p = self.primitives[kind]
             p.updateNumInstances(len(pairs.vertices))
-            p.connectivities["v"].updateConnectivity(pairs.vertices)
+            p.connectivities["v"].updateConnectivity(
+                self._full(pairs.vertices))
             p["eps_x"].updateValue(pairs.eps_x.reshape(-1, 1))
             p["weight"].updateValue(pairs.weight.reshape(-1, 1))
         return {kind: len(pairs.vertices) for kind, pairs in found.items()}
@@ -270,11 +312,12 @@ class Contact:
             scale = max(length, 1e-300)
             straight = np.abs(middle - 0.5 * (V0 + V1)).max() <= 1e-9 * scale
             if straight:
-                self._sweep = Sweep(self.detection.candidates, V0, V1,
+                C0, C1 = self.colliding(V0), self.colliding(V1)
+                self._sweep = Sweep(self.detection.candidates, C0, C1,
                                     self.dhat)
                 return min(self.halfspaces.step_bound(V0, V1),
-                           self.detection.swept_bound(self._sweep, V0,
-                                                      V1)), length
+                           self.detection.swept_bound(self._sweep, C0,
+                                                      C1)), length
             self._sweep = None
             previous = V0
             for k in range(pieces):
@@ -296,7 +339,8 @@ class Contact:
         at least ``margin`` apart (and from the half-spaces)."""
         return min(self.halfspaces.step_bound(V0, V1, margin), float(
             ipctk.compute_collision_free_stepsize(
-                self.mesh, V0, V1, min_distance=margin,
+                self.mesh, self.colliding(V0), self.colliding(V1),
+                min_distance=margin,
                 narrow_phase_ccd=NARROW_PHASE_CCD)))
 
     @property
@@ -341,16 +385,39 @@ class Contact:
         lies below a half-space, now."""
         V = self.world()
         return (self.halfspaces.intersecting(V)
-                or bool(ipctk.has_intersections(self.mesh, V)))
+                or bool(ipctk.has_intersections(self.mesh,
+                                                self.colliding(V))))
 
     def minDistance(self) -> float:
         """The smallest distance between surface primitives now, among
         those closer than dhat (inf if none are)."""
         V = self.world()
+        C = self.colliding(V)
         collisions = ipctk.NormalCollisions()
-        collisions.build(self.mesh, V, self.dhat)
+        collisions.build(self.mesh, C, self.dhat)
         planes = self.halfspaces.min_distance(V)
         if collisions.empty():
             return planes if planes < self.dhat else float("inf")
         return min(planes, float(np.sqrt(
-            collisions.compute_minimum_distance(self.mesh, V))))
+            collisions.compute_minimum_distance(self.mesh, C))))
+
+
+def _included(points: Union[bool, np.ndarray], count: int,
+              edges: np.ndarray, faces: np.ndarray) -> Optional[np.ndarray]:
+    """The ascending ids of the vertices that take part, by Contact's
+    ``points`` (None: all of them)."""
+    if isinstance(points, (bool, np.bool_)) and points:
+        return None
+    on_surface = np.zeros(count, dtype=bool)
+    on_surface[edges.reshape(-1)] = True
+    on_surface[faces.reshape(-1)] = True
+    if isinstance(points, (bool, np.bool_)):
+        extra = np.zeros(count, dtype=bool)
+    else:
+        extra = np.asarray(points)
+        if extra.dtype != bool or extra.shape != (count,):
+            raise SceneError(f"Contact: points must be True, False or a "
+                             f"boolean mask of {count} vertices, got "
+                             f"{extra.dtype} of shape {extra.shape}")
+    keep = on_surface | extra
+    return None if keep.all() else np.flatnonzero(keep)
