@@ -147,7 +147,40 @@ static bool touches(const GlobalSystem::EnergyMap &map, std::int64_t i,
   return false;
 }
 
-/// Runs body(rows) once per range of block rows of `matrix`, ranges on
+/// Block-row ranges, one per thread, that split `map`'s blocks evenly: an
+/// energy touches only its own bodies' rows (the cloth's, the bunny's), so
+/// the matrix's own even split (rowRanges) could leave one thread nearly
+/// all of an energy's instances. Cached in the map.
+static const std::vector<std::int64_t> &
+energyRanges(const GlobalSystem::EnergyMap &map, std::int64_t numBlocks,
+             std::int64_t threads) {
+  if (map.splitThreads == threads)
+    return map.splitRanges;
+  std::vector<std::int64_t> perRow(static_cast<std::size_t>(numBlocks), 0);
+  std::int64_t total = 0;
+  for (std::int64_t block : map.globalBlock)
+    if (block >= 0) {
+      ++perRow[block];
+      ++total;
+    }
+  std::vector<std::int64_t> &ranges = map.splitRanges;
+  ranges.assign(1, 0);
+  std::int64_t seen = 0;
+  for (std::int64_t row = 0; row < numBlocks; ++row) {
+    seen += perRow[row];
+    const auto next = static_cast<std::int64_t>(ranges.size());
+    // Close a range once it holds its share of the blocks, leaving at
+    // least one row to each range still to come.
+    if (next < threads && seen * threads >= next * total &&
+        numBlocks - (row + 1) >= threads - next)
+      ranges.push_back(row + 1);
+  }
+  ranges.push_back(numBlocks);
+  map.splitThreads = threads;
+  return ranges;
+}
+
+/// Runs body(rows) once per range of block rows (energyRanges), ranges on
 /// the pool's threads, or once over all rows when there is no pool, one
 /// thread or little work. A body adds, of every instance in order, only the
 /// entries whose block row is in its range (and the gradient entries of
@@ -156,11 +189,12 @@ static bool touches(const GlobalSystem::EnergyMap &map, std::int64_t i,
 /// need no atomics. An instance across ranges is read by each of them.
 template <typename Body>
 static void forRowRanges(ThreadPool *pool, const BlockSparseMatrix &matrix,
-                         std::int64_t count, Body body) {
+                         const GlobalSystem::EnergyMap &map, Body body) {
   const GlobalSystem::RowRange all{0, matrix.numBlocks()};
-  if (!pool || pool->size() < 2 || count < kMinInstancesToSplit)
+  if (!pool || pool->size() < 2 || map.count < kMinInstancesToSplit)
     return body(all);
-  const std::vector<std::int64_t> &ranges = matrix.rowRanges(pool->size());
+  const std::vector<std::int64_t> &ranges = energyRanges(
+      map, matrix.numBlocks(), static_cast<std::int64_t>(pool->size()));
   const std::int64_t parts = static_cast<std::int64_t>(ranges.size()) - 1;
   if (parts == 1)
     return body(all);
@@ -190,7 +224,7 @@ void GlobalSystem::addLocal(std::size_t energy, const T *gradients,
   // New values: until finishAssembly, products read the f64 ones.
   part->matrix.dropSingleValues();
   const std::int64_t n = map->numParams;
-  forRowRanges(pool, part->matrix, map->count, [&](RowRange rows) {
+  forRowRanges(pool, part->matrix, *map, [&](RowRange rows) {
     for (std::int64_t i = 0; i < map->count; ++i)
       if (touches(*map, i, rows))
         addInstance(*part, *map, i, gradients + i * n, hessians + i * n * n,
@@ -229,7 +263,7 @@ void GlobalSystem::addFactored(std::size_t energy, const double *gradients,
   // New values: until finishAssembly, products read the f64 ones.
   part->matrix.dropSingleValues();
   const std::int64_t n = map->numParams;
-  forRowRanges(pool, part->matrix, map->count, [&](RowRange rows) {
+  forRowRanges(pool, part->matrix, *map, [&](RowRange rows) {
     std::vector<double> pj(static_cast<std::size_t>(m * n)),
         h(static_cast<std::size_t>(n * n));
     for (std::int64_t i = 0; i < map->count; ++i) {
@@ -299,7 +333,7 @@ void GlobalSystem::addSlotFactored(std::size_t energy,
   const std::int64_t n = map->numParams, m = factors.numInner;
   factors.check(map->count, n);
   requireCovered(*map, factors);
-  forRowRanges(pool, part->matrix, map->count, [&](RowRange rows) {
+  forRowRanges(pool, part->matrix, *map, [&](RowRange rows) {
     // Per range, not per instance: only the slots' entries are written
     // (padding is skipped by addInstance), so nothing is cleared.
     std::vector<double> g(n), h(n * n), scratch(m * n);

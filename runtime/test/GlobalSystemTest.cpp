@@ -431,9 +431,12 @@ TEST(GlobalSystem, ThreadedAssemblyGivesTheSequentialBits) {
   for (unsigned threads : {2u, 3u, 5u}) {
     ThreadPool pool(threads);
     GlobalSystem threaded = scene.assemble(&pool);
-    // The work really is split: one range per thread, in both parts.
-    EXPECT_EQ(threaded.staticHessian().rowRanges(threads).size(), threads + 1);
-    EXPECT_EQ(threaded.dynamicHessian().rowRanges(threads).size(), threads + 1);
+    // The work really is split: one range per thread, for the tets'
+    // energies and the pairs'.
+    for (std::size_t energy : {0u, 3u, 4u})
+      EXPECT_EQ(threaded.energyStructure(energy).splitRanges.size(),
+                threads + 1)
+          << "energy " << energy;
     EXPECT_EQ(threaded.staticHessian().values(),
               sequential.staticHessian().values())
         << threads << " threads";
@@ -585,4 +588,47 @@ TEST(GlobalSystem, MergesParametersOfOneDof) {
     ASSERT_NEAR(got[k], want[k], 1e-12 * (1 + std::abs(want[k]))) << k;
   for (std::size_t k = 0; k < wantGradient.size(); ++k)
     ASSERT_NEAR(system.gradient()[k], wantGradient[k], 1e-12);
+}
+
+TEST(GlobalSystem, SplitsEachEnergysOwnRowsEvenly) {
+  // Two bodies of 1,000 vertices, an edge energy on each: the matrix's even
+  // split would leave each energy to one thread; each energy's own ranges
+  // give both threads half of its blocks, with the sequential bits.
+  constexpr std::int64_t kVertices = 2000, kEdges = 999;
+  BlockLayout layout =
+      BlockLayout::fromSizes(std::vector<std::int64_t>(kVertices, 3));
+  std::vector<std::int64_t> first, second;
+  for (std::int64_t i = 0; i < kEdges; ++i)
+    for (std::int64_t v : {i, i + 1})
+      for (std::int64_t e = 0; e < 3; ++e) {
+        first.push_back(3 * v + e);
+        second.push_back(3 * (v + kVertices / 2) + e);
+      }
+  std::mt19937 rng(5);
+  std::vector<double> g(kEdges * 6, 1.0);
+  std::vector<double> h = randomSpd(rng, 6, kEdges);
+  auto assemble = [&](ThreadPool *pool) {
+    GlobalSystem system(
+        layout, {{kEdges, 6, first.data()}, {kEdges, 6, second.data()}});
+    system.setZero();
+    system.add(0, g.data(), h.data(), pool);
+    system.add(1, g.data(), h.data(), pool);
+    return system;
+  };
+  GlobalSystem sequential = assemble(nullptr);
+  ThreadPool pool(2);
+  GlobalSystem threaded = assemble(&pool);
+  EXPECT_EQ(threaded.staticHessian().values(),
+            sequential.staticHessian().values());
+  EXPECT_EQ(threaded.gradient(), sequential.gradient());
+  for (std::size_t energy : {0u, 1u}) {
+    const std::vector<std::int64_t> &ranges =
+        threaded.energyStructure(energy).splitRanges;
+    ASSERT_EQ(ranges.size(), 3u);
+    const std::int64_t start = energy * kVertices / 2;
+    // Its 1,000 vertices' blocks (1,998 block uses) cut in the middle.
+    EXPECT_NEAR(static_cast<double>(ranges[1]),
+                static_cast<double>(start + kVertices / 4), 1.0)
+        << "energy " << energy;
+  }
 }

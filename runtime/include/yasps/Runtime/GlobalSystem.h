@@ -132,6 +132,11 @@ public:
     std::vector<std::int32_t> localBlock, offset;
     std::vector<std::int64_t> globalBlock; // count x maxBlocks, -1 padded
     std::vector<BlockSlot> pairSlot;       // count x maxBlocks x maxBlocks
+    /// The block-row ranges a split assembly of this energy gives its
+    /// threads (splitRanges[t] .. splitRanges[t + 1]), computed for
+    /// splitThreads threads at the first split (0: not yet).
+    mutable std::vector<std::int64_t> splitRanges;
+    mutable std::int64_t splitThreads = 0;
   };
   /// Block rows [lo, hi): what one thread of a split assembly writes, the
   /// stored blocks of those rows and the gradient entries of those blocks.
