@@ -12,7 +12,8 @@ import yasps
 from yasps import energies as E
 from yasps.contact import surface_of
 from yasps.sim import (box_tet_mesh, cloth_corners, cloth_grid, hinges_of,
-                       read_tet_mesh, signed_tet_volumes)
+                       locality_order, read_tet_mesh, reorder_mesh,
+                       signed_tet_volumes)
 
 BUNNY = Path("/work/shared/data/bunny-1.8k.msh")
 
@@ -194,7 +195,7 @@ def test_read_tet_mesh_round_trip(tmp_path, suffix, file_format):
     verts, tets = box_tet_mesh(2, 0.5)
     path = tmp_path / f"box{suffix}"
     write_tets(path, verts, tets, file_format)
-    read_verts, read_tets = read_tet_mesh(path)
+    read_verts, read_tets = read_tet_mesh(path, reorder=False)
     assert read_tets.dtype == np.int32
     np.testing.assert_allclose(read_verts, verts)
     np.testing.assert_array_equal(read_tets, tets)
@@ -209,7 +210,7 @@ def test_read_tet_mesh_turns_inverted_tets_and_drops_unused_points(tmp_path):
     points = np.concatenate([[[9.0, 9.0, 9.0]], verts])
     path = tmp_path / "inverted.vtu"
     write_tets(path, points, inverted + 1, "vtu")
-    read_verts, read_tets = read_tet_mesh(path)
+    read_verts, read_tets = read_tet_mesh(path, reorder=False)
     np.testing.assert_allclose(read_verts, verts)
     volumes = signed_tet_volumes(read_verts, read_tets)
     assert np.all(volumes > 0)
@@ -234,3 +235,57 @@ def test_read_the_bunny():
     # A closed surface: every boundary edge in two boundary triangles.
     faces = surface_of(tets)
     assert len(hinges_of(faces)) == 3 * len(faces) // 2
+
+
+def tets_by_coordinates(verts, tets) -> set:
+    """Each tet as its four vertices' coordinates, in the tet's order."""
+    return {tuple(map(tuple, np.round(verts[t], 12))) for t in tets}
+
+
+def index_spread(tets) -> float:
+    """The mean gap between the vertex numbers of a tet's vertices."""
+    return float(np.mean(tets.max(axis=1) - tets.min(axis=1)))
+
+
+def test_reorder_mesh_gathers_scattered_numbers_and_keeps_the_tets():
+    verts, tets = box_tet_mesh(5, 0.5)
+    shuffle = np.random.default_rng(0).permutation(len(verts))
+    scattered_verts = verts[shuffle]
+    inverse = np.empty_like(shuffle)
+    inverse[shuffle] = np.arange(len(shuffle))
+    scattered = inverse[tets]
+    new_verts, new_tets, order = reorder_mesh(scattered_verts, scattered)
+    np.testing.assert_array_equal(np.sort(order), np.arange(len(verts)))
+    np.testing.assert_array_equal(new_verts, scattered_verts[order])
+    # The same oriented tets, numbered as close as the box's own layered
+    # numbering (a third of the shuffle's spread), sorted by lowest vertex.
+    assert tets_by_coordinates(new_verts, new_tets) == \
+        tets_by_coordinates(verts, tets)
+    assert np.all(signed_tet_volumes(new_verts, new_tets) > 0)
+    assert index_spread(new_tets) <= index_spread(tets)
+    assert index_spread(new_tets) < 0.35 * index_spread(scattered)
+    assert np.all(np.diff(new_tets.min(axis=1)) >= 0)
+    assert new_tets.dtype == scattered.dtype
+    with pytest.raises(ValueError, match="permutation of the 216"):
+        reorder_mesh(verts, tets, order=np.zeros(len(verts), dtype=int))
+
+
+def test_locality_order_puts_unused_vertices_last():
+    order = locality_order(np.array([[3, 1, 4]]), 6)
+    assert sorted(order[:3].tolist()) == [1, 3, 4]
+    assert order[3:].tolist() == [0, 2, 5]
+
+
+def test_read_tet_mesh_reorders_by_default(tmp_path):
+    verts, tets = box_tet_mesh(4, 0.5)
+    shuffle = np.random.default_rng(1).permutation(len(verts))
+    inverse = np.empty_like(shuffle)
+    inverse[shuffle] = np.arange(len(shuffle))
+    path = tmp_path / "scattered.vtu"
+    write_tets(path, verts[shuffle], inverse[tets], "vtu")
+    read_verts, read_tets = read_tet_mesh(path)
+    file_verts, file_tets = read_tet_mesh(path, reorder=False)
+    assert tets_by_coordinates(read_verts, read_tets) == \
+        tets_by_coordinates(file_verts, file_tets)
+    assert index_spread(read_tets) <= index_spread(tets)
+    assert index_spread(read_tets) < 0.35 * index_spread(file_tets)

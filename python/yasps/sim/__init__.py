@@ -9,7 +9,8 @@ from .bodies import (AffineBody, FreeVertices, add_affine_body,
                      material_constant)
 from .meshes import (HEX_CORNERS, Cage, box_tet_mesh, cage_grid,
                      cloth_corners, cloth_grid, hex_tets, hinges_of,
-                     orient_tets, polyline_segments, read_tet_mesh,
+                     locality_order, orient_tets, polyline_segments,
+                     read_tet_mesh, reorder_mesh,
                      signed_tet_volumes, trilinear_weights, tube_mesh,
                      zigzag_spring)
 from .newton import (ImplicitEuler, NewtonNotConverged, NewtonReport,
@@ -26,5 +27,6 @@ __all__ = ["AffineBody", "Body", "Cage", "FreeVertices", "HEX_CORNERS",
            "SurfaceRecorder", "add_affine_body", "add_affine_inertia",
            "add_cloth", "add_elastic_tets",
            "box_tet_mesh", "cloth_corners", "cloth_grid", "hinges_of",
-           "iteration_totals", "newton", "orient_tets", "read_tet_mesh", "render_surfaces",
+           "iteration_totals", "locality_order", "newton", "orient_tets",
+           "read_tet_mesh", "reorder_mesh", "render_surfaces",
            "render_surfaces_array", "signed_tet_volumes", "write_video"]
