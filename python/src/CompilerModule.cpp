@@ -9,8 +9,6 @@
 //
 //===----------------------------------------------------------------------===//
 
-#include "ThreadPools.h"
-
 #include "mlir/AsmParser/AsmParser.h"
 #include "mlir/IR/Diagnostics.h"
 #include "mlir/IR/MLIRContext.h"
@@ -31,7 +29,6 @@
 #include "yasps/Dialect/Yasps/Transforms/Passes.h"
 #include "yasps/Dialect/Yasps/Transforms/Pipelines.h"
 #include "yasps/Runtime/CpuKernel.h"
-#include "yasps/Runtime/ThreadPool.h"
 #include "yasps/Target/CPU/CpuCompiler.h"
 #include "yasps/Target/CPU/CpuSourceCache.h"
 #include "yasps/Target/GPU/GpuCompiler.h"
@@ -345,38 +342,22 @@ compileGpu(const std::string &ir, const std::vector<std::string> &attributes,
   return result;
 }
 
-using Buffer = nb::ndarray<nb::c_contig, nb::device::cpu>;
-
-/// Runs the kernel of `attribute` on `numInstances` instances; `buffers`
-/// follow the kernel's argument list (float64 for out/attr, int32 for
-/// conn, int64 for offsets and dof_offsets).
-void launchCpu(const CpuLibrary &self, const std::string &attribute,
-               int64_t numInstances, const std::vector<Buffer> &buffers,
-               unsigned threads) {
-  const mlir::yasps::CpuKernel *kernel = &self.kernel(attribute);
-  if (buffers.size() != kernel->arguments.size())
-    throw std::invalid_argument("kernel for " + attribute + " takes " +
-                                std::to_string(kernel->arguments.size()) +
-                                " buffers, got " +
-                                std::to_string(buffers.size()));
-  std::vector<::yasps::runtime::KernelBuffer> args;
-  for (size_t i = 0; i < buffers.size(); ++i) {
-    const std::string &kind = kernel->arguments[i].kind;
-    nb::dlpack::dtype expected =
-        kind == "conn"                               ? nb::dtype<int32_t>()
-        : kind == "offsets" || kind == "dof_offsets" ? nb::dtype<int64_t>()
-        : kind == "out" && kernel->outType == "f32"  ? nb::dtype<float>()
-                                                     : nb::dtype<double>();
-    if (buffers[i].dtype() != expected || buffers[i].ndim() != 1)
-      throw std::invalid_argument("buffer " + std::to_string(i) + " (" + kind +
-                                  " " + kernel->arguments[i].path +
-                                  ") has the wrong dtype or rank");
-    args.push_back({buffers[i].data(), (int64_t)buffers[i].shape(0)});
+/// A CPU kernel's entry point and the type of each of its buffers, for the
+/// runtime module's launch_cpu_kernel: int32 (i) for conn, int64 (q) for
+/// offsets and dof_offsets, float32 (f) for an f32 kernel's out, float64
+/// (d) for the rest.
+std::pair<std::uintptr_t, std::string> cpuEntry(const CpuLibrary &self,
+                                                const std::string &attribute) {
+  const mlir::yasps::CpuKernel &kernel = self.kernel(attribute);
+  std::string codes;
+  for (const auto &argument : kernel.arguments) {
+    const std::string &kind = argument.kind;
+    codes += kind == "conn"                               ? 'i'
+             : kind == "offsets" || kind == "dof_offsets" ? 'q'
+             : kind == "out" && kernel.outType == "f32"   ? 'f'
+                                                          : 'd';
   }
-  nb::gil_scoped_release release;
-  ::yasps::runtime::launchCpuKernel(kernel->packed, args, numInstances,
-                                    ::yasps::python::poolFor(threads),
-                                    /*minChunk=*/256);
+  return {reinterpret_cast<std::uintptr_t>(kernel.packed), codes};
 }
 
 /// The `yasps.params` of attributes after running `pipeline`: one list of
@@ -505,9 +486,9 @@ NB_MODULE(_yasps_compiler, m) {
             return d;
           },
           "how the compilation went (cache hits, times, cache key)")
-      .def("launch", &launchCpu, nb::arg("attribute"), nb::arg("num_instances"),
-           nb::arg("buffers"), nb::arg("threads") = 0,
-           "Evaluates an attribute's kernel on num_instances instances.");
+      .def("entry", &cpuEntry, nb::arg("attribute"),
+           "(entry point, buffer codes) of an attribute's kernel, for the "
+           "runtime's launch_cpu_kernel; valid while the library lives");
 
   nb::class_<GpuLibrary>(m, "GpuLibrary",
                          "Compiled GPU kernels of a scene's attributes.")

@@ -9,6 +9,7 @@
 
 #include "ContactBindings.h"
 #include "GpuRuntimeBindings.h"
+#include "KernelBindings.h"
 #include "PcgBindings.h"
 #include "ThreadPools.h"
 
@@ -352,6 +353,7 @@ NB_MODULE(_yasps_runtime, m) {
             "Hessian compression and the CUDA backend (no compiler).";
 
   ::yasps::python::bindPcg(m);
+  ::yasps::python::bindKernelLaunch(m);
   ::yasps::python::bindContact(m);
   ::yasps::python::bindGpuRuntime(m);
   nb::class_<PySystem>(m, "GlobalSystem",

@@ -4,7 +4,7 @@ on disk); this module keeps the compiled libraries of this process."""
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Callable, Dict, List, Optional, Sequence
+from typing import Callable, Dict, List, Optional, Sequence, Tuple
 
 import numpy as np
 
@@ -56,10 +56,15 @@ class CpuKernels:
         """The local parameter groups of a derivative kernel."""
         return decode_params(self.library.params(path))
 
-    def launch(self, path: str, count: int, buffers: list,
-               threads: int) -> None:
-        """Runs the kernel of ``path`` on instances [0, count)."""
-        self.library.launch(path, count, buffers, threads)
+    def entry(self, path: str) -> Tuple[int, str]:
+        """The kernel of ``path``'s entry point and buffer codes, which the
+        runtime launches (``launch_cpu_kernel``); valid while this library
+        lives."""
+        entries = _entries.setdefault(id(self.library), {})
+        found = entries.get(path)
+        if found is None:
+            found = entries[path] = tuple(self.library.entry(path))
+        return found
 
 
 def kernels_compiled() -> int:
@@ -91,6 +96,10 @@ _libraries: Dict[tuple, object] = {}
 #: What each library's kernels take, by id(library) (libraries stay
 #: alive in _libraries for the life of the process).
 _infos: Dict[int, Dict[str, KernelInfo]] = {}
+
+#: Each library's kernels' entry points and buffer codes, by id(library):
+#: code that lives as long as the library, hence the process.
+_entries: Dict[int, Dict[str, Tuple[int, str]]] = {}
 
 
 def _key(ir: str, paths: Sequence[str], pipeline: str) -> tuple:

@@ -38,6 +38,14 @@ def _threads(threads: Optional[int]) -> int:
     return config.num_threads if threads is None else threads
 
 
+def launch(kernels: CpuKernels, path: str, count: int, buffers: list,
+           threads: int) -> None:
+    """Runs the compiled kernel of ``path`` on instances [0, count) on the
+    runtime's threads (``buffers`` in the kernel's argument order)."""
+    entry, codes = kernels.entry(path)
+    native().launch_cpu_kernel(entry, codes, count, buffers, threads)
+
+
 class CpuBackend:
     """Kernels and the Newton system on the host."""
 
@@ -102,7 +110,7 @@ class CpuBackend:
                                   kernel.out_dtype)
         buffers = [out if a.kind == "out" else given
                    for a, given in zip(kernel.arguments, inputs)]
-        kernels.launch(path, count, buffers, _threads(threads))
+        launch(kernels, path, count, buffers, _threads(threads))
         return out
 
     def to_host(self, array: np.ndarray, shape: Shape) -> np.ndarray:

@@ -13,6 +13,7 @@ import numpy as np
 from ..frontend.scene import Scene
 from ..ir import emit_scene
 from ..runtime import cpu_backend
+from ..runtime.cpu import launch
 from ..runtime.native import native
 
 _projectors: Dict[Tuple[int, str, str], tuple] = {}
@@ -61,9 +62,9 @@ def project_compressed(dofs: np.ndarray, hess: np.ndarray, method: str,
         # Symmetric matrices: row- and column-major storage agree.
         given = {"out": projected,
                  "attr": np.ascontiguousarray(matrices).reshape(-1)}
-        kernels.launch(path, len(instances),
-                       [given[a.kind] for a in kernels.kernel(path).arguments],
-                       threads)
+        launch(kernels, path, len(instances),
+               [given[a.kind] for a in kernels.kernel(path).arguments],
+               threads)
         runtime.expand_local_hessians(
             dofs, int(k), instances,
             projected.astype(np.float64).reshape(matrices.shape), out)
