@@ -352,3 +352,26 @@ def test_a_kernel_past_the_operation_limit_is_an_ir_error():
     with pytest.raises(yasps.IRError, match=r"'yasps.matmul' op makes kernel "
                        r"\S+ exceed 524288 scalar operations per instance"):
         y.compute()
+
+
+def test_kernel_launch_checks_its_buffers():
+    """The runtime checks a compiled kernel's buffers against its codes
+    before it calls the kernel: their number, dtype and rank."""
+    from yasps.compiler.cpu import compile_cpu
+    from yasps.compiler.specs import scene_kernel_paths
+    from yasps.ir import emit_scene
+    from yasps.runtime.native import native
+
+    s = running_example()
+    path = scene_kernel_paths(s)[0]
+    kernels = compile_cpu(emit_scene(s), [path], "launch_check")
+    entry, codes = kernels.entry(path)
+    assert entry and set(codes) <= set("iqfd")
+    launch = native().launch_cpu_kernel
+    with pytest.raises(ValueError, match=f"takes {len(codes)} buffers, got 0"):
+        launch(entry, codes, 1, [])
+    wrong = [np.zeros(4, dtype=np.int8) for _ in codes]
+    with pytest.raises(ValueError, match="kernel buffer 0 must be 1-D"):
+        launch(entry, codes, 1, wrong)
+    with pytest.raises(ValueError, match="unknown kernel buffer code 'x'"):
+        launch(entry, "x", 1, [np.zeros(1)])
