@@ -38,6 +38,7 @@ from ..solve import assemble
 from .friction import (ARITIES, FrictionPairs, add_friction_primitives,
                        tangential_pairs)
 from .halfspace import HalfSpaces
+from .masses import MASS, average_vertex_mass
 from .detection import (DETECTIONS, MIN_SEPARATION, NARROW_PHASE_CCD,
                         IpctkDetection, RuntimeDetection)
 from .pairs import PAIR_TYPES, barrier_energy
@@ -59,8 +60,9 @@ class Contact:
     ``name`` to the scene with one dynamic pair primitive per pair type and
     its barrier energy ``kappa * b(d, dhat)`` (ipctk's BarrierPotential:
     dhat a distance, d squared distances). ``kappa`` is fixed if given;
-    otherwise IPC's adaptive stiffness (:meth:`adaptStiffness`), which needs
-    the bodies' ``average_mass`` per vertex. ``halfspaces``: planes
+    otherwise IPC's adaptive stiffness (:meth:`adaptStiffness`), which reads
+    the bodies' average mass per vertex: ``average_mass`` if given, else the
+    mean of the ``mass`` their vertex primitives record (:mod:`.masses`). ``halfspaces``: planes
     (origin, normal) the vertices stay above. ``friction`` > 0 adds IPC's
     lagged friction with coefficient mu = friction and smoothing velocity
     ``eps_v`` (m/s; the displacement threshold is eps_v dt), lagged by
@@ -107,9 +109,14 @@ class Contact:
         self.friction, self.eps_v = float(friction), float(eps_v)
         self.scene, self.vertices, self.dhat = scene, vertices, float(dhat)
         if kappa is None and average_mass is None:
-            raise ValueError("Contact: give a fixed barrier stiffness kappa, "
-                             "or the bodies' average vertex mass "
-                             "(average_mass) for IPC's adaptive one")
+            average_mass = average_vertex_mass(vertices)
+            if average_mass is None:
+                raise SceneError(
+                    f"Contact: give a fixed barrier stiffness kappa, or the "
+                    f"bodies' average vertex mass (average_mass) for IPC's "
+                    f"adaptive one: no primitive of {vertices.describe()} "
+                    f"records its vertices' masses (a 1x1 stored '{MASS}', "
+                    f"as add_free_vertices and add_affine_body keep)")
         self.adaptive = None if kappa is not None else \
             AdaptiveStiffness(self.dhat, average_mass)
         count = vertices.numInstances

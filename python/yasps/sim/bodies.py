@@ -192,6 +192,10 @@ def add_affine_body(mesh: Mesh, rest: np.ndarray, masses: np.ndarray,
     t_hat.updateValue(t.value)
     v = mesh.addPrimitive("v", numInstances=len(rest))
     v.addConstant("rest", rows=3).updateValue(rest)
+    # Read by a contact's adaptive stiffness (yasps.contact.masses).
+    v.addConstant("mass", rows=1).updateValue(
+        np.broadcast_to(np.asarray(masses, float).reshape(-1, 1),
+                        (len(rest), 1)).copy())
     link = v.addConnectivity("v2b", body, np.zeros((len(rest), 1), np.int64),
                              1)
     v.addAttribute("position", computed_attribute=v.addAttribute(
