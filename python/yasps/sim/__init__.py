@@ -13,6 +13,7 @@ from .meshes import (HEX_CORNERS, Cage, box_tet_mesh, cage_grid,
                      read_tet_mesh, reorder_mesh,
                      signed_tet_volumes, trilinear_weights, tube_mesh,
                      zigzag_spring)
+from .motion import Motion, affine_motion, affine_velocity, vertex_motion
 from .newton import (ImplicitEuler, NewtonNotConverged, NewtonReport,
                      iteration_totals, newton)
 from .output import (RecordedFrame, SurfaceRecorder, render_surfaces,
@@ -20,6 +21,7 @@ from .output import (RecordedFrame, SurfaceRecorder, render_surfaces,
 from .run import Body, RunSummary, simulate
 
 __all__ = ["AffineBody", "Body", "Cage", "FreeVertices", "HEX_CORNERS",
+           "Motion", "affine_motion", "affine_velocity", "vertex_motion",
            "add_caged_surface", "add_free_vertices", "add_hex8_neo_hookean",
            "cage_grid", "hex8_gauss_points", "hex_tets", "lumped_masses",
            "material_constant",

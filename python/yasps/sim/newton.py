@@ -349,6 +349,38 @@ def newton(scene, x: Targets, tolerance: float,
     return report
 
 
+def initial_velocities(targets: Sequence[Attribute], given,
+                       single: bool) -> List[np.ndarray]:
+    """ImplicitEuler's starting velocities: ``given`` (one array or None
+    per target; one array for a single target) as arrays shaped as the
+    targets' values, zero where None."""
+    if given is None:
+        given = [None] * len(targets)
+    elif single and not isinstance(given, (list, tuple)):
+        given = [given]
+    given = list(given)
+    if len(given) != len(targets):
+        raise SceneError(f"ImplicitEuler: {len(given)} velocities for "
+                         f"{len(targets)} targets (give one array or None "
+                         f"per target)")
+    out = []
+    for t, v in zip(targets, given):
+        value = t.value
+        if v is None:
+            out.append(np.zeros_like(value))
+            continue
+        v = np.asarray(v, dtype=float)
+        if v.size != value.size:
+            raise SceneError(f"ImplicitEuler: the velocity of "
+                             f"{t.describe()} has shape {v.shape}; its value "
+                             f"is {value.shape}")
+        if not np.isfinite(v).all():
+            raise SceneError(f"ImplicitEuler: the velocity of "
+                             f"{t.describe()} is not finite")
+        out.append(v.reshape(value.shape).copy())
+    return out
+
+
 class ImplicitEuler:
     """Implicit Euler time stepping of the scene's minimisation targets
     (``x``: one attribute or the list of them, in the scene's order), whose
@@ -379,6 +411,14 @@ class ImplicitEuler:
     instance's Hessian (projected Newton). ``cg_forcing``: as for
     :func:`newton` (on by default).
 
+    ``velocities``: the targets' velocities at the start, one array (the
+    target's value shape, or (N, rows) for column targets) or None (at
+    rest) per target, or one array for a single target; for an affine
+    body's A and t, :func:`yasps.sim.affine_velocity` gives them from an
+    angular and a linear velocity. ``stepper.velocities`` holds them after
+    each step (``(x_new - x_old) / dt``, one array per target shaped as its
+    value) and may be set between steps.
+
     ``warm_start`` (on by default): Newton starts from the positions the
     last velocities carry the targets to, ``x + dt v``, cut to the fraction
     of that motion the step bounds allow (CCD with contact, ``step_bound``),
@@ -400,7 +440,7 @@ class ImplicitEuler:
                  *, targets: Optional[Sequence[Attribute]] = None,
                  predicted: Optional[Sequence[Attribute]] = None,
                  projection: str = "progressive", cg_forcing: bool = True,
-                 warm_start: bool = True):
+                 warm_start: bool = True, velocities=None):
         # targets= and predicted= are the multi-target spelling of x, x_hat.
         if targets is not None or predicted is not None:
             if x is not None or x_hat is not None:
@@ -450,7 +490,8 @@ class ImplicitEuler:
         self.projection = projection
         self.cg_forcing = bool(cg_forcing)
         self.warm_start = bool(warm_start)
-        self.velocities = [np.zeros_like(t.value) for t in self.targets]
+        self.velocities = initial_velocities(self.targets, velocities,
+                                             single)
         self._warned = False
 
     def run(self, frames: int, on_frame: Optional[Callable[[int, NewtonReport],
