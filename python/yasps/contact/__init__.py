@@ -251,8 +251,19 @@ class Contact:
         self.halfspaces.friction_pairs(V, start, barrier, self.friction,
                                        pairs[1])
         for arity, found in pairs.items():
+            found.sort()
             found.store(self.friction_primitives[arity])
         return {f"friction{a}": len(f.vertices) for a, f in pairs.items()}
+
+    def forgetCandidates(self) -> None:
+        """Drops the last step bound's broad phase and the last collision
+        set's closest distance, which later collision sets reuse where they
+        can: ImplicitEuler starts every time step without them, so that a
+        step depends on the scene's state alone (a restored run continues
+        bit for bit; reused candidates would list the same pairs in
+        another order)."""
+        self._sweep = None
+        self._last_pairs = None
 
     def _normal_pairs(self, V: np.ndarray) -> Dict[str, int]:
         """The barrier pairs of the collision set at positions V (from the

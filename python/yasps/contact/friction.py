@@ -80,6 +80,16 @@ class FrictionPairs:
         self.lagged.append(self.basis[-1].T @ (np.asarray(start).T @ coef))
         self.scale.append(float(scale))
 
+    def sort(self) -> None:
+        """Orders the pairs by their vertex ids: ipctk builds its sets on
+        several threads, in an order that varies from run to run, and the
+        pairs' order is the order their terms are summed in."""
+        order = sorted(range(len(self.vertices)),
+                       key=lambda k: self.vertices[k])
+        for name in ("vertices", "coef", "basis", "lagged", "scale"):
+            values = getattr(self, name)
+            setattr(self, name, [values[k] for k in order])
+
     def store(self, p: Primitive) -> None:
         """Writes the pairs into their dynamic primitive."""
         n, k = len(self.vertices), self.arity

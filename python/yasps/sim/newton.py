@@ -22,7 +22,10 @@ from ..runtime import current as current_backend
 from ..solve import SolverError, minimize_energy
 from ..solve.minimize import checked_fixed_mask
 from ..solve.prepare import compile_scene
+from . import checkpoint
 from .forcing import Forcing
+from .prescribed import (Prescription, entry_mask, fixed_with_prescribed,
+                         move_prescribed, prescription)
 
 Targets = Union[Attribute, Sequence[Attribute]]
 
@@ -81,6 +84,10 @@ class NewtonReport:
         #: a looser forcing term, they would have ended the solve (their
         #: CG iterations counted in ``cgIterations``)
         self.tightenedSolves = 0
+        #: how far (the largest entry) the prescribed entries were left
+        #: short of ``fn(time)`` because CCD stopped them (ImplicitEuler's
+        #: ``prescribe``; a run's: the largest of its steps')
+        self.prescribedLag = 0.0
         self.seconds: Dict[str, float] = dict.fromkeys(STAGES, 0.0)
         #: the length of the last direction (world space with contact)
         #: over the tolerance: below 1 when converged
@@ -97,6 +104,7 @@ class NewtonReport:
         self.frictionLags += other.frictionLags
         self.projectionRetries += other.projectionRetries
         self.tightenedSolves += other.tightenedSolves
+        self.prescribedLag = max(self.prescribedLag, other.prescribedLag)
         self.cgIterations += other.cgIterations
         for stage, seconds in other.seconds.items():
             self.seconds[stage] = self.seconds.get(stage, 0.0) + seconds
@@ -490,6 +498,10 @@ class ImplicitEuler:
         self.projection = projection
         self.cg_forcing = bool(cg_forcing)
         self.warm_start = bool(warm_start)
+        #: the entries that follow a function of time (:meth:`prescribe`)
+        self.prescriptions: List[Prescription] = []
+        #: the time at the end of the last step (0 at construction)
+        self.time = 0.0
         self.velocities = initial_velocities(self.targets, velocities,
                                              single)
         self._warned = False
@@ -528,22 +540,60 @@ class ImplicitEuler:
                 NewtonNotConverged, stacklevel=2)
         return total
 
-    def _start_from_velocities(self, previous: List[np.ndarray]) -> float:
-        """Moves the targets from ``previous`` towards ``previous + dt v``
-        as far as the step bounds allow (warm_start); returns the seconds
-        the bounds took."""
-        if not any(v.any() for v in self.velocities):
-            return 0.0
-        clock = time.perf_counter()
-        steps = [self.dt * v for v in self.velocities]
+    def save(self, path) -> None:
+        """Writes what the next step reads to ``path`` (.npz): the scene's
+        stored values and dynamic pairs, the velocities, the contact's
+        adaptive stiffness (:mod:`yasps.sim.checkpoint`)."""
+        checkpoint.save(self, path)
+
+    def restore(self, path) -> None:
+        """Reads a :meth:`save` of a stepper of the same scene structure
+        and dt: the run then continues bit for bit as the saved one did."""
+        checkpoint.restore(self, path)
+
+    def prescribe(self, target: Attribute, fn: Callable[[float], np.ndarray],
+                  mask=None) -> None:
+        """Makes entries of ``target`` (one of the stepper's targets; with
+        ``mask``, a boolean mask of its instances or entries, those only)
+        follow ``fn(time)``, which gives their values at that time (the
+        masked entries' values in order, any shape of that size):
+        kinematic pins that move, a motor turning an affine body's A, a
+        scripted obstacle. Each step moves them to ``fn(time + dt)`` before
+        Newton, as far as CCD allows (the rest left for later steps,
+        reported as ``report.prescribedLag``), and Newton keeps them fixed
+        (:mod:`yasps.sim.prescribed`). ``stepper.time`` counts from 0 at
+        construction."""
+        self.prescriptions.append(prescription(self.targets, target, fn,
+                                               mask))
+
+    def _bound(self, steps: List[np.ndarray]) -> float:
+        """The safe fraction of the motion ``steps`` (one per target) from
+        the targets' values now: ``step_bound``'s and the contact's CCD."""
         alpha = 1.0
+        now = [t.value for t in self.targets]
         if self.step_bound is not None:
-            alpha = self.step_bound(previous[0], steps[0]) \
-                if len(steps) == 1 else self.step_bound(previous, steps)
+            alpha = self.step_bound(now[0], steps[0]) \
+                if len(steps) == 1 else self.step_bound(now, steps)
         if self.contact is not None and alpha > 0.0:
             alpha = min(alpha, self.contact.stepBound(steps))
-        for t, value, step in zip(self.targets, previous, steps):
-            t.updateValue(value + alpha * step)
+        return alpha
+
+    def _start_from_velocities(self, fixed) -> float:
+        """Moves the targets' free entries (not in ``fixed``, Newton's
+        masks) from their values towards ``+ dt v`` as far as the step
+        bounds allow (warm_start); returns the seconds the bounds took."""
+        steps = [self.dt * v for v in self.velocities]
+        for k, mask in enumerate(fixed or []):
+            if mask is not None:
+                steps[k] = np.where(entry_mask(self.targets[k], mask,
+                                               "ImplicitEuler"), 0.0,
+                                    steps[k])
+        if not any(step.any() for step in steps):
+            return 0.0
+        clock = time.perf_counter()
+        alpha = self._bound(steps)
+        for t, step in zip(self.targets, steps):
+            t.updateValue(t.value + alpha * step)
         return time.perf_counter() - clock
 
     @property
@@ -558,6 +608,8 @@ class ImplicitEuler:
         # Before friction's lag, which computes world positions: no stage
         # but ``compile`` includes compiling.
         compile_seconds = compile_kernels(self.scene, self.contact, False)
+        if self.contact is not None:
+            self.contact.forgetCandidates()
         previous = [t.value for t in self.targets]
         for value, v, g, mask, hat in zip(previous, self.velocities,
                                           self.gravity, self.fixed,
@@ -567,7 +619,8 @@ class ImplicitEuler:
             if mask is not None:
                 pull[mask] = 0.0
             hat.updateValue(value + self.dt * v + self.dt * self.dt * pull)
-        fixed = None if all(m is None for m in self.fixed) else self.fixed
+        fixed = fixed_with_prescribed(self.fixed, self.prescriptions,
+                                      self.targets)
         friction = self.contact is not None and self.contact.friction > 0
         start_world = (self.contact.world() if friction
                        and self.friction_iterations > 1 else None)
@@ -582,8 +635,14 @@ class ImplicitEuler:
                 self.contact.update(lag=True, dt=self.dt,
                                     step_start=start_world if lag else None)
                 lag_seconds = time.perf_counter() - clock
-            guess_seconds = self._start_from_velocities(previous) \
-                if lag == 0 and self.warm_start else 0.0
+            guess_seconds = 0.0
+            if lag == 0:
+                clock = time.perf_counter()
+                lagging = move_prescribed(self.prescriptions, self.targets,
+                                          self.time + self.dt, self._bound)
+                prescribed_seconds = time.perf_counter() - clock
+                if self.warm_start:
+                    guess_seconds = self._start_from_velocities(fixed)
             solve = newton(self.scene, self.targets,
                            tolerance=self.velocity_tolerance * self.dt,
                            step_bound=self.step_bound,
@@ -596,7 +655,8 @@ class ImplicitEuler:
                            projection=self.projection,
                            cg_forcing=self.cg_forcing)
             solve.seconds["collisions"] += lag_seconds
-            solve.seconds["ccd"] += guess_seconds
+            solve.seconds["ccd"] += guess_seconds + (prescribed_seconds
+                                                     if lag == 0 else 0.0)
             solve.frictionLags = int(friction)
             if report is None:
                 report = solve
@@ -613,6 +673,8 @@ class ImplicitEuler:
                 break
         self.velocities = [(t.value - p) / self.dt
                            for t, p in zip(self.targets, previous)]
+        self.time += self.dt
+        report.prescribedLag = lagging
         report.seconds["compile"] += compile_seconds
         if warn and not report.converged and not self._warned:
             self._warned = True

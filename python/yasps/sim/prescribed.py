@@ -1,0 +1,123 @@
+"""Prescribed motion: target entries that follow a function of time
+(pins that move, a motor turning an affine body, a scripted obstacle)
+inside an implicit-Euler step.
+
+Before each step the prescribed entries move to their values at the step's
+end, ``fn(t + dt)``, as far as the contact's CCD (and the stepper's
+``step_bound``) lets them without crossing a surface: where it stops them
+short (another body in the way, as IPC's kinematic boundary conditions can
+be), they move 0.9 of the safe fraction and the rest is left for the next
+steps, the lag reported. Newton then keeps them fixed, so the barrier and
+friction push the free bodies out of their way.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Callable, List, Optional, Sequence
+
+import numpy as np
+
+from ..frontend.attribute import Attribute
+from ..frontend.errors import SceneError
+from ..solve.minimize import checked_fixed_mask
+
+#: The fraction of CCD's safe step a cut prescribed motion takes (as IPC's
+#: line search backs off its CCD bound).
+CUT_FRACTION = 0.9
+
+
+@dataclass
+class Prescription:
+    """Entries of target ``index`` (``mask`` over its value's entries) that
+    take ``fn(time)`` (their values, in the order of the masked entries)."""
+    index: int
+    fn: Callable[[float], np.ndarray]
+    mask: np.ndarray
+
+
+def prescription(targets: Sequence[Attribute], target: Attribute,
+                 fn: Callable[[float], np.ndarray],
+                 mask=None) -> Prescription:
+    """A checked :class:`Prescription` of ``target`` (one of ``targets``);
+    ``mask`` as ImplicitEuler's fixed masks (instances or entries; None:
+    every entry)."""
+    for index, t in enumerate(targets):
+        if t is target:
+            break
+    else:
+        raise SceneError(f"prescribe: {target.describe()} is not one of the "
+                         f"stepper's targets")
+    if not callable(fn):
+        raise SceneError(f"prescribe: fn must be a function of time, got "
+                         f"{fn!r}")
+    entries = np.ones(target.value.shape, dtype=bool) if mask is None \
+        else entry_mask(target, mask, "prescribe")
+    if not entries.any():
+        raise SceneError(f"prescribe: the mask of {target.describe()} holds "
+                         f"no entry")
+    return Prescription(index, fn, entries)
+
+
+def entry_mask(target: Attribute, mask, where: str) -> np.ndarray:
+    """A fixed mask (of instances or of entries) as one over the target's
+    value's entries (N, rows, cols)."""
+    given = checked_fixed_mask(target, mask, where)
+    if given.ndim == 1:
+        given = np.broadcast_to(given[:, None, None], target.value.shape)
+    return given.copy()
+
+
+def wanted_values(p: Prescription, value: np.ndarray,
+                  time: float) -> np.ndarray:
+    """The target's value with the prescribed entries at ``fn(time)``."""
+    given = np.asarray(p.fn(time), dtype=float)
+    count = int(p.mask.sum())
+    if given.size != count:
+        raise SceneError(f"prescribe: fn({time:g}) gave {given.size} values "
+                         f"for {count} prescribed entries")
+    if not np.isfinite(given).all():
+        raise SceneError(f"prescribe: fn({time:g}) gave a value that is not "
+                         f"finite")
+    out = value.copy()
+    out[p.mask] = given.reshape(-1)
+    return out
+
+
+def move_prescribed(prescriptions: List[Prescription],
+                    targets: Sequence[Attribute], time: float,
+                    bound: Callable[[List[np.ndarray]], float]) -> float:
+    """Moves the prescribed entries towards their values at ``time`` as far
+    as ``bound(steps)`` (the safe fraction of a motion, one step per
+    target) allows; returns the largest distance an entry is left short."""
+    if not prescriptions:
+        return 0.0
+    values = [t.value for t in targets]
+    steps = [np.zeros_like(v) for v in values]
+    for p in prescriptions:
+        wanted = wanted_values(p, values[p.index], time)
+        steps[p.index][p.mask] = (wanted - values[p.index])[p.mask]
+    if not any(s.any() for s in steps):
+        return 0.0
+    safe = bound(steps)
+    fraction = 1.0 if safe >= 1.0 else CUT_FRACTION * safe
+    for t, value, step in zip(targets, values, steps):
+        if step.any():
+            t.updateValue(value + fraction * step)
+    return float(max(np.abs(s).max() for s in steps) * (1.0 - fraction))
+
+
+def fixed_with_prescribed(fixed: Sequence[Optional[np.ndarray]],
+                          prescriptions: List[Prescription],
+                          targets: Sequence[Attribute]
+                          ) -> Optional[List[Optional[np.ndarray]]]:
+    """Newton's fixed masks: the stepper's, with every prescribed entry
+    added (entry masks where a target has prescriptions); None if none."""
+    out: List[Optional[np.ndarray]] = list(fixed)
+    for p in prescriptions:
+        target = targets[p.index]
+        current = out[p.index]
+        base = np.zeros(target.value.shape, dtype=bool) if current is None \
+            else entry_mask(target, current, "ImplicitEuler")
+        out[p.index] = base | p.mask
+    return None if all(m is None for m in out) else out
