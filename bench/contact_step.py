@@ -48,7 +48,7 @@ def captured_steps(frames: int, measure: int):
     """Runs the twisting cloth; returns its contact and the (V0, V1) of
     every Newton step in the last ``measure`` frames."""
     mat_twist.DT["small"] = 0.01
-    stepper, contact, _, twister = mat_twist.build("small")
+    stepper, contact, _, _ = mat_twist.build("small")
     steps = []
     original = contact.stepBoundAndLength
 
@@ -67,12 +67,10 @@ def captured_steps(frames: int, measure: int):
 
     recording.on = False
     contact.stepBoundAndLength = recording
-    twister.advance()
     warnings.simplefilter("ignore")
     for frame in range(1, frames + 1):
         recording.on = frame > frames - measure
         stepper.step(warn=False)
-        twister.advance()
     return contact, steps
 
 
@@ -80,11 +78,9 @@ def whole_run(frames: int) -> None:
     """Steps the twisting cloth ``frames`` frames; prints the run's
     figures."""
     mat_twist.DT["small"] = 0.01
-    stepper, contact, _, twister = mat_twist.build("small")
-    twister.advance()
+    stepper, contact, _, _ = mat_twist.build("small")
     warnings.simplefilter("ignore")
-    total = stepper.run(frames, on_frame=lambda frame, report:
-                        twister.advance(), progress=False)
+    total = stepper.run(frames, progress=False)
     seconds = sum(v for k, v in total.seconds.items() if k != "compile")
     print(f"twisting cloth, 625 vertices, dt = 0.01 s, {frames} frames: "
           f"{seconds / frames:.3f} s/frame (compiling excluded), "

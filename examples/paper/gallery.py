@@ -50,7 +50,7 @@ STAGE_WORDS = [
                 "recorder", "print(", "imwrite", "savefig", "_lines(",
                 "ax.", "fig")),
     ("stepping", ("ImplicitEuler", "newton(", "Stepper", ".step(",
-                  "Twister", "advance(", "velocity")),
+                  "prescribe(", "TwistedEdges", "velocity")),
     ("collision", ("Contact(", "contact", "dhat", "halfspaces")),
     ("energies", ("add_cloth", "add_elastic_tets", "add_hex8", "addEnergy",
                   "add_affine_body", "add_free_vertices", "lame(",
@@ -196,10 +196,8 @@ SCENES = [
 
 
 def twist(args):
-    stepper, contact, bodies, twister = mat_twist.build("small")
-    twister.advance()
+    stepper, contact, bodies, _ = mat_twist.build("small")
     summary = run(args.name, args, stepper, bodies, contact,
-                  on_frame=lambda frame, report: twister.advance(),
                   bounds=((-0.6, -0.6, -0.6), (0.6, 0.6, 0.6)))
     return summary, vertex_count(bodies)
 

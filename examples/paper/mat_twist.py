@@ -3,9 +3,10 @@
 
 A square cloth is held at its left and right edges, which turn about the
 cloth's axis in opposite directions at 5 rad/s: the cloth twists into a rope
-in heavy self-contact. The edges' motion is prescribed: before each time
-step they turn by 5 rad/s * dt (at most as far as ipctk's CCD allows, the
-rest carried to the next step), and Newton keeps them fixed. The paper uses
+in heavy self-contact. The edges' motion is prescribed
+(``stepper.prescribe``): each time step turns them by 5 rad/s * dt (at
+most as far as CCD allows, the rest carried to the next step), and Newton
+keeps them fixed. The paper uses
 dt = 0.001 s for 2 s; the small scale takes dt = 0.004 s.
 
     python3 examples/paper/mat_twist.py [--frames 100] [--scale small|paper]
@@ -36,42 +37,42 @@ def rotation_x(angle: float) -> np.ndarray:
     return np.array([[1.0, 0.0, 0.0], [0.0, c, -s], [0.0, s, c]])
 
 
-class Twister:
-    """Turns the held edges (``held``: a mask of the cloth's vertices, with
-    ``sides`` +1 or -1 per vertex) about the x axis, limited by CCD."""
+class TwistedEdges:
+    """The held edges (``held``: a mask of the cloth's vertices, ``sides``
+    +1 or -1 per vertex) turning about the x axis at SPEED, in opposite
+    directions: the motion the stepper is told to follow."""
 
-    def __init__(self, x, held: np.ndarray, sides: np.ndarray, contact,
-                 dt: float):
-        self.x, self.held, self.sides = x, held, sides
-        self.contact, self.dt = contact, dt
-        self.rest = x.value[held, :, 0].copy()
-        self.angle = 0.0       # the angle the edges have reached
-        self.wanted = 0.0      # the angle they should have
+    def __init__(self, stepper, held: np.ndarray, sides: np.ndarray):
+        self.stepper, self.held, self.sides = stepper, held, sides
+        self.x = stepper.targets[0]
+        self.rest = self.x.value[held, :, 0].copy()
 
-    def positions(self, angle: float) -> np.ndarray:
+    def positions(self, time: float) -> np.ndarray:
+        """The held vertices at ``time``."""
         out = np.empty_like(self.rest)
         for side in (-1.0, 1.0):
             rows = self.sides[self.held] == side
-            out[rows] = self.rest[rows] @ rotation_x(side * angle).T
+            out[rows] = self.rest[rows] @ rotation_x(side * SPEED * time).T
         return out
 
-    def advance(self) -> None:
-        """Turns the edges towards the prescribed angle, as far as no
-        surface primitives cross (IPC's CCD, times 0.9)."""
-        self.wanted += SPEED * self.dt
-        step = np.zeros_like(self.x.value)
-        step[self.held, :, 0] = self.positions(self.wanted) - \
-            self.x.value[self.held, :, 0]
-        bound = self.contact.stepBound([step])
-        fraction = 1.0 if bound >= 1.0 else 0.9 * bound
-        value = self.x.value
-        value[self.held] += fraction * step[self.held]
-        self.x.updateValue(value)
-        self.angle += fraction * (self.wanted - self.angle)
+    @property
+    def wanted(self) -> float:
+        """The angle each edge should have turned by now."""
+        return SPEED * self.stepper.time
+
+    @property
+    def angle(self) -> float:
+        """The angle the right edge has turned (CCD may hold it back)."""
+        right = self.sides[self.held] > 0
+        now = self.x.value[self.held, :, 0][right]
+        turned = np.arctan2(now[:, 2], now[:, 1]) - \
+            np.arctan2(self.rest[right, 2], self.rest[right, 1])
+        wrapped = np.angle(np.exp(1j * (turned - self.wanted)))
+        return float(self.wanted + np.median(wrapped))
 
 
 def build(scale: str):
-    """The scene: (stepper, contact, {body: Body}, twister)."""
+    """The scene: (stepper, contact, {body: Body}, the twisted edges)."""
     dt = DT[scale]
     n = CLOTH_CELLS[scale]
     verts, faces = cloth_grid(n, size=1.0)
@@ -86,22 +87,20 @@ def build(scale: str):
                       average_mass=DENSITY / (n + 1) ** 2)
     s.addMinimizeTarget(cloth.x)
     stepper = ImplicitEuler(s, cloth.x, cloth.x_hat, dt=dt, gravity=(0, 0, 0),
-                            fixed=edge, contact=contact)
-    twister = Twister(cloth.x, edge, sides, contact, dt)
+                            contact=contact)
+    edges = TwistedEdges(stepper, edge, sides)
+    stepper.prescribe(cloth.x, edges.positions, mask=edge)
     bodies = {"cloth": Body(cloth.x, faces, (0.85, 0.75, 0.55))}
-    return stepper, contact, bodies, twister
+    return stepper, contact, bodies, edges
 
 
 def main() -> None:
     args = arguments(__doc__.split("\n")[0], frames=100)
-    stepper, contact, bodies, twister = build(args.scale)
-    # The edges turn before every step (the callback runs after a step).
-    twister.advance()
+    stepper, contact, bodies, edges = build(args.scale)
     summary = run("mat_twist", args, stepper, bodies, contact,
-                  on_frame=lambda frame, report: twister.advance(),
                   bounds=((-0.6, -0.6, -0.6), (0.6, 0.6, 0.6)))
-    print(f"mat_twist: edges turned {twister.angle:.2f} rad each "
-          f"(prescribed {twister.wanted:.2f})")
+    print(f"mat_twist: edges turned {edges.angle:.2f} rad each "
+          f"(prescribed {edges.wanted:.2f})")
     sys.exit(1 if summary.intersections else 0)
 
 

@@ -207,13 +207,12 @@ def test_mat_twist():
     import mat_twist
     stepper, contact, bodies, twister = mat_twist.build("small")
     rest = stepper.targets[0].value[:, :, 0].copy()
-
-    def turn(frame):
-        twister.advance()
-
-    twister.advance()
-    step_and_check(stepper, bodies, 12, turn)
+    step_and_check(stepper, bodies, 12, lambda frame: None)
+    assert twister.wanted == pytest.approx(12 * mat_twist.SPEED * stepper.dt)
     assert twister.angle == pytest.approx(twister.wanted)
+    np.testing.assert_allclose(
+        stepper.targets[0].value[twister.held, :, 0],
+        twister.positions(stepper.time), atol=1e-12)
     x = stepper.targets[0].value[:, :, 0]
     for side in (-1.0, 1.0):
         row = np.abs(rest[:, 0] - side * 0.25) < 0.03
