@@ -16,9 +16,10 @@ REPO = Path(__file__).resolve().parents[2]
 sys.path.insert(0, str(REPO / "python"))
 
 from yasps.contact import surface_of  # noqa: E402
-from yasps.sim import (FreeVertices, RunSummary, add_cloth,  # noqa: E402
+# lame: the scene scripts import it from here too.
+from yasps.sim import (FreeVertices, RunSummary, add_cloth,  # noqa: E402,F401
                        add_free_vertices, cloth_corners, cloth_grid,
-                       lumped_masses, read_tet_mesh, simulate)
+                       lame, lumped_masses, read_tet_mesh, simulate)
 
 DATA = REPO.parent / "shared" / "data"
 DT = 0.01
@@ -40,12 +41,6 @@ def arguments(description: str, frames: int,
                         help="default: out/paper/<scene>")
     parser.add_argument("--no-video", action="store_true")
     return parser.parse_args()
-
-
-def lame(young: float, poisson: float) -> Tuple[float, float]:
-    """Lame's (mu, lambda) from Young's modulus and Poisson's ratio."""
-    return (young / (2 * (1 + poisson)),
-            young * poisson / ((1 + poisson) * (1 - 2 * poisson)))
 
 
 def bunny(scale: str, height: float) -> Tuple[np.ndarray, np.ndarray, np.ndarray]:

@@ -64,6 +64,36 @@ def test_stable_neo_hookean_against_jax():
         assert_close(d.hessian[i], np.array(jax.hessian(psi)(*args)))
 
 
+def test_ipc_neo_hookean_against_jax():
+    """IPC's Neo-Hookean (log J terms) at deformations with J > 0: energy,
+    gradient and Hessian of JAX's autodiff of the same formula."""
+    base = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]], float)
+    rest = base[None] + rng.normal(scale=0.05, size=(COUNT, 4, 3))
+    cur = rest @ (np.eye(3) + rng.normal(scale=0.2, size=(COUNT, 3, 3)))
+    dm_inv = np.linalg.inv(np.stack([rest[:, k] - rest[:, 0]
+                                     for k in (1, 2, 3)], axis=2))
+    mu, lam = 1.7, 9.0
+    s, e, x, c = elements(4, cur)
+    inv = e.addConstant("inv", rows=3, cols=3)
+    inv.updateValue(dm_inv)
+    energy = E.neo_hookean(E.deformation_gradient(c, inv), mu, lam, 1.0)
+    d = derivatives(s, e, energy)
+
+    def psi(flat, dinv):
+        p = flat.reshape(4, 3)
+        F = jnp.stack([p[k] - p[0] for k in (1, 2, 3)], axis=1) @ dinv
+        log_j = jnp.log(jnp.linalg.det(F))
+        return 0.5 * mu * (jnp.sum(F * F) - 3) - mu * log_j \
+            + 0.5 * lam * log_j ** 2
+
+    values = s.m.e["energy"].compute().value.reshape(-1)
+    for i in range(COUNT):
+        args = (jnp.array(cur[i].reshape(-1)), jnp.array(dm_inv[i]))
+        assert values[i] == pytest.approx(float(psi(*args)), rel=1e-12)
+        assert_close(d.gradient[i], np.array(jax.grad(psi)(*args)))
+        assert_close(d.hessian[i], np.array(jax.hessian(psi)(*args)))
+
+
 def test_bending_and_cloth_against_jax():
     hinge = np.array([[0, 0, 0], [1, 0, 0], [0.3, 1, 0], [0.6, -1, 0.4]], float)[None] \
         + rng.normal(scale=0.05, size=(COUNT, 4, 3))

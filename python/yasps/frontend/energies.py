@@ -61,6 +61,19 @@ def stable_neo_hookean(F: Attribute, mu: Number, lam: Number,
     return volume * psi
 
 
+def neo_hookean(F: Attribute, mu: Number, lam: Number,
+                volume: Number) -> Attribute:
+    """IPC's Neo-Hookean energy density times rest volume (Li et al. 2020):
+    ``V [mu/2 (I_C - 3) - mu log J + lam/2 (log J)^2]`` with ``I_C =
+    |F|^2`` and ``J = det F``. Unlike stable Neo-Hookean it grows without
+    bound as J -> 0 and is undefined (NaN) past it, so a line search that
+    only accepts a lower energy never inverts a tet."""
+    ic = F.squaredNorm()
+    log_j = F.determinant().log()
+    psi = 0.5 * mu * (ic - 3.0) - mu * log_j + 0.5 * lam * log_j * log_j
+    return volume * psi
+
+
 def baraff_witkin(corners: Attribute, rest_uv_inverse: Attribute,
                   area: Number, stretch: Number, shear: Number) -> Attribute:
     """Baraff-Witkin cloth stretch and shear of a triangle: with ``W = Dx

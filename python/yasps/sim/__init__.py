@@ -5,14 +5,16 @@ and output (ParaView series, pictures, videos)."""
 from .bodies import (AffineBody, FreeVertices, add_affine_body,
                      add_affine_inertia, add_caged_surface, add_cloth,
                      add_elastic_tets, add_free_vertices,
-                     add_hex8_neo_hookean, hex8_gauss_points, lumped_masses,
-                     material_constant)
+                     add_hex8_neo_hookean, hex8_gauss_points, lame,
+                     lumped_masses, material_constant)
 from .meshes import (HEX_CORNERS, Cage, box_tet_mesh, cage_grid,
                      cloth_corners, cloth_grid, hex_tets, hinges_of,
                      locality_order, orient_tets, polyline_segments,
                      read_tet_mesh, reorder_mesh,
                      signed_tet_volumes, trilinear_weights, tube_mesh,
                      zigzag_spring)
+from .inversion import (combined_bound, inversion_bound,
+                        inversion_free_fraction)
 from .motion import Motion, affine_motion, affine_velocity, vertex_motion
 from .newton import (ImplicitEuler, NewtonNotConverged, NewtonReport,
                      iteration_totals, newton)
@@ -22,8 +24,10 @@ from .run import Body, RunSummary, simulate
 
 __all__ = ["AffineBody", "Body", "Cage", "FreeVertices", "HEX_CORNERS",
            "Motion", "affine_motion", "affine_velocity", "vertex_motion",
+           "combined_bound", "inversion_bound", "inversion_free_fraction",
            "add_caged_surface", "add_free_vertices", "add_hex8_neo_hookean",
-           "cage_grid", "hex8_gauss_points", "hex_tets", "lumped_masses",
+           "cage_grid", "hex8_gauss_points", "hex_tets", "lame",
+           "lumped_masses",
            "material_constant",
            "trilinear_weights", "tube_mesh", "polyline_segments", "zigzag_spring", "RunSummary", "simulate", "ImplicitEuler", "NewtonNotConverged", "NewtonReport", "RecordedFrame",
            "SurfaceRecorder", "add_affine_body", "add_affine_inertia",

@@ -9,12 +9,14 @@ values (a parameter sweep) reuses the compiled kernels, and
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Tuple
 
 import numpy as np
 
 from ..frontend import energies as E
 from ..frontend.energies import Number
 from ..frontend.attribute import Attribute
+from ..frontend.errors import SceneError
 from ..frontend.scene import Mesh, Primitive
 from .meshes import HEX_CORNERS, hinges_of
 
@@ -30,18 +32,38 @@ def material_constant(mesh: Mesh, name: str, value: Number) -> Attribute:
     return constant
 
 
+#: add_elastic_tets' materials: energy densities of (F, mu, lam, volume).
+MATERIALS = {"stable_neo_hookean": E.stable_neo_hookean,
+             "neo_hookean": E.neo_hookean}
+
+
+def lame(young: Number, poisson: Number) -> Tuple[float, float]:
+    """Lame's (mu, lambda) from Young's modulus and Poisson's ratio (3-D)."""
+    if not young > 0 or not -1.0 < poisson < 0.5:
+        raise ValueError(f"lame: need Young's modulus > 0 and -1 < Poisson's "
+                         f"ratio < 0.5, got {young} and {poisson}")
+    mu = young / (2.0 * (1.0 + poisson))
+    return mu, young * poisson / ((1.0 + poisson) * (1.0 - 2.0 * poisson))
+
+
 def add_elastic_tets(mesh: Mesh, positions: Attribute, rest: np.ndarray,
                      tets: np.ndarray, mu: Number, lam: Number,
                      scale: Number = 1.0, name: str = "t",
-                     projection: str = "clamp") -> Attribute:
+                     projection: str = "clamp",
+                     material: str = "stable_neo_hookean") -> Attribute:
     """Adds a primitive ``name`` of the tets (M, 4) of the vertices that
     ``positions`` belongs to, with their rest shape (the inverse of the rest
     edge matrix and the volume, from ``rest`` (N, 3)) and registers
-    ``scale`` times stable Neo-Hookean (``mu``, ``lam``, per unit volume) on
-    them as an energy (``scale``: dt^2 for implicit Euler), PSD-projected
+    ``scale`` times the ``material`` (one of MATERIALS: stable Neo-Hookean,
+    or IPC's Neo-Hookean, whose energy never lets a tet invert; ``mu``,
+    ``lam`` per unit volume, :func:`lame` from E and nu) on them as an
+    energy (``scale``: dt^2 for implicit Euler), PSD-projected
     by ``projection`` (as ``addEnergy``). ``mu``, ``lam`` and ``scale``
     are the mesh's constants ``name + "_mu"``, ``"_lam"``, ``"_scale"``
     (:func:`material_constant`). Returns it."""
+    if material not in MATERIALS:
+        raise SceneError(f"add_elastic_tets: material must be one of "
+                         f"{', '.join(MATERIALS)}, got {material!r}")
     tets = np.asarray(tets, dtype=np.int64).reshape(-1, 4)
     corners = np.asarray(rest, dtype=float)[tets]
     edges = np.stack([corners[:, k] - corners[:, 0] for k in (1, 2, 3)], axis=2)
@@ -55,7 +77,7 @@ def add_elastic_tets(mesh: Mesh, positions: Attribute, rest: np.ndarray,
                       for what, value in (("mu", mu), ("lam", lam),
                                           ("scale", scale)))
     energy = t.addAttribute("elastic", computed_attribute=scale *
-                            E.stable_neo_hookean(E.deformation_gradient(
+                            MATERIALS[material](E.deformation_gradient(
                                 gathered, t["inv"]), mu, lam, t["vol"]))
     mesh.scene.addEnergy(energy, projection=projection)
     return energy
