@@ -18,7 +18,11 @@ from typing import Any, Callable, Dict, List, Optional, Sequence
 from .. import config
 from .._native import BUILD_DIR
 from .manifest import Manifest, plain, run_id
-from .worker import execute
+from .worker import STARTED, execute
+
+#: Seconds a worker may take, beyond an attempt's time limit, to start it
+#: (Ray starts a fresh process where the last one was killed).
+STARTUP_SECONDS = 60.0
 
 
 @dataclass
@@ -92,7 +96,9 @@ def run(simulate: Callable[..., Dict[str, Any]],
       run and ``results.csv`` the table. Runs the manifest says finished
       are not run again (an interrupted sweep resumes).
     - ``retries``: further attempts of a run that raises or overruns.
-    - ``timeout``: seconds an attempt may take (the worker is killed).
+    - ``timeout``: seconds an attempt may take from when its worker starts
+      it (then the worker is killed); a worker that has not started it
+      STARTUP_SECONDS after the limit is stopped too.
     - The kernel cache is ``yasps.config.cache_dir``, shared by the
       workers (on a cluster it must be a folder every node sees); the first
       run goes alone so that the others find its kernels there.
@@ -123,7 +129,8 @@ def run(simulate: Callable[..., Dict[str, Any]],
     limit = workers or max(int(ray.cluster_resources().get("CPU", 1)), 1)
     task = ray.remote(num_cpus=1, max_retries=0)(execute)
     attempts: Dict[str, int] = {k: 0 for k in pending}
-    running: Dict[Any, tuple] = {}   # ref -> (key, start)
+    running: Dict[Any, tuple] = {}   # ref -> (key, submitted)
+    started_at: Dict[Any, float] = {}  # ref -> when its worker started it
     bar = tqdm(total=len(keys), initial=len(keys) - len(pending),
                desc="sweep", unit="run", disable=not progress)
     first = bool(pending)
@@ -131,8 +138,25 @@ def run(simulate: Callable[..., Dict[str, Any]],
     def submit(key: str) -> None:
         attempts[key] += 1
         directory = folder / "runs" / key
+        (directory / STARTED).unlink(missing_ok=True)
         ref = task.remote(simulate, by_key[key], str(directory), cache)
         running[ref] = (key, time.monotonic())
+
+    def overrun(ref, key: str, since: float, now: float) -> Optional[str]:
+        """Why the attempt ``ref`` of ``key`` (submitted at ``since``) is
+        stopped now, or None: the time limit counts from the start its
+        worker marks, which a worker has STARTUP_SECONDS to reach."""
+        begun = started_at.get(ref)
+        if begun is None and (folder / "runs" / key / STARTED).exists():
+            begun = started_at[ref] = now
+        if begun is not None:
+            return f"ran past the time limit of {timeout:g} s" \
+                if now - begun > timeout else None
+        if now - since > timeout + STARTUP_SECONDS:
+            return (f"did not start within {timeout + STARTUP_SECONDS:g} s "
+                    f"(the time limit of {timeout:g} s plus "
+                    f"{STARTUP_SECONDS:g} s for a worker to start)")
+        return None
 
     def finish(key: str, status: str, **entry) -> None:
         if status != "ok" and attempts[key] <= retries:
@@ -161,13 +185,13 @@ def run(simulate: Callable[..., Dict[str, Any]],
                     finish(key, "ok", error="", **plain(result))
             if timeout is not None:
                 now = time.monotonic()
-                for ref, (key, start) in list(running.items()):
-                    if now - start > timeout:
+                for ref, (key, since) in list(running.items()):
+                    why = overrun(ref, key, since, now)
+                    if why is not None:
                         ray.cancel(ref, force=True)
                         running.pop(ref)
                         first = False
-                        finish(key, "timeout", error=f"ran past the time "
-                               f"limit of {timeout:g} s")
+                        finish(key, "timeout", error=why)
     finally:
         bar.close()
         if started:

@@ -10,6 +10,9 @@ import time
 from pathlib import Path
 from typing import Any, Callable, Dict
 
+#: The file a run's folder gets when a worker starts the run.
+STARTED = ".started"
+
 
 def execute(simulate: Callable[..., Dict[str, Any]], params: Dict[str, Any],
             folder: str, cache_dir: str) -> Dict[str, Any]:
@@ -18,6 +21,11 @@ def execute(simulate: Callable[..., Dict[str, Any]], params: Dict[str, Any],
     ``yasps.config.cache_dir`` set to ``cache_dir``; returns its outputs,
     the seconds it took, the files it wrote and what it compiled and
     iterated. Exceptions propagate (the sweep records and retries them)."""
+    here = Path(folder)
+    here.mkdir(parents=True, exist_ok=True)
+    # The sweep's time limit counts from here, not from when Ray was asked
+    # for a worker (a new one takes seconds to start on a busy machine).
+    (here / STARTED).touch()
     from .. import config
     from ..compiler.cpu import kernels_compiled
     from ..sim.newton import iteration_totals
@@ -25,8 +33,6 @@ def execute(simulate: Callable[..., Dict[str, Any]], params: Dict[str, Any],
     if cache_dir:
         config.cache_dir = cache_dir
     compiled, iterations = kernels_compiled(), iteration_totals()
-    here = Path(folder)
-    here.mkdir(parents=True, exist_ok=True)
     cwd = os.getcwd()
     start = time.perf_counter()
     os.chdir(here)
@@ -40,7 +46,7 @@ def execute(simulate: Callable[..., Dict[str, Any]], params: Dict[str, Any],
         "outputs": dict(outputs or {}),
         "seconds": time.perf_counter() - start,
         "files": sorted(str(p.relative_to(here)) for p in here.rglob("*")
-                        if p.is_file()),
+                        if p.is_file() and p.name != STARTED),
         "kernels_compiled": kernels_compiled() - compiled,
         "newton_iterations": after["newton"] - iterations["newton"],
         "cg_iterations": after["cg"] - iterations["cg"],
