@@ -431,8 +431,8 @@ class ImplicitEuler:
     last velocities carry the targets to, ``x + dt v``, cut to the fraction
     of that motion the step bounds allow (CCD with contact, ``step_bound``),
     instead of from ``x``: in smooth motion its first direction then only
-    corrects the change of velocity (on the twisting cloth and the bunny
-    on a cloth, 10-15% fewer Newton iterations, docs/benchmarks.md). The
+    corrects the change of velocity (22% fewer Newton iterations on the
+    twisting cloth, 6% on the bunny on a cloth, docs/benchmarks.md). The
     solution is the same minimiser; False starts from ``x``, as IPC does."""
 
     def __init__(self, scene, x: Optional[Targets] = None,
