@@ -12,8 +12,8 @@ import yasps
 from yasps import energies as E
 from yasps.contact import surface_of
 from yasps.sim import (box_tet_mesh, cloth_corners, cloth_grid, hinges_of,
-                       locality_order, read_tet_mesh, reorder_mesh,
-                       signed_tet_volumes)
+                       locality_order, read_surface_mesh, read_tet_mesh,
+                       reorder_mesh, signed_tet_volumes)
 
 BUNNY = Path("/work/shared/data/bunny-1.8k.msh")
 
@@ -289,3 +289,50 @@ def test_read_tet_mesh_reorders_by_default(tmp_path):
         tets_by_coordinates(file_verts, file_tets)
     assert index_spread(read_tets) <= index_spread(tets)
     assert index_spread(read_tets) < 0.35 * index_spread(file_tets)
+
+
+def triangles_by_coordinates(verts, faces) -> set:
+    """Each triangle as its corners' coordinates, from its lowest corner on
+    (the same oriented triangle whatever corner a file starts at)."""
+    out = set()
+    for f in faces:
+        corners = [tuple(np.round(verts[i], 6)) for i in f]
+        k = corners.index(min(corners))
+        out.add(tuple(corners[k:] + corners[:k]))
+    return out
+
+
+# meshio's STL reader multiplies a uint32 count that overflows, harmlessly.
+@pytest.mark.filterwarnings("ignore:overflow encountered:RuntimeWarning")
+@pytest.mark.parametrize("suffix", [".obj", ".ply", ".stl", ".off"])
+def test_read_surface_mesh_round_trip(tmp_path, suffix):
+    verts, faces = cloth_grid(3, size=0.5)
+    path = tmp_path / f"cloth{suffix}"
+    meshio.write(path, meshio.Mesh(verts, [("triangle", faces)]))
+    read_verts, read_faces = read_surface_mesh(path)
+    assert read_faces.dtype == np.int32 and read_verts.shape == verts.shape
+    assert triangles_by_coordinates(read_verts, read_faces) == \
+        triangles_by_coordinates(verts, faces)
+
+
+def test_read_surface_mesh_merges_a_triangle_soup_and_splits_quads(tmp_path):
+    verts, faces = cloth_grid(2, size=0.5)
+    soup = tmp_path / "soup.vtu"
+    meshio.write(soup, meshio.Mesh(verts[faces].reshape(-1, 3),
+                                   [("triangle", np.arange(3 * len(faces))
+                                     .reshape(-1, 3))]))
+    read_verts, read_faces = read_surface_mesh(soup)
+    assert len(read_verts) == len(verts)
+    assert triangles_by_coordinates(read_verts, read_faces) == \
+        triangles_by_coordinates(verts, faces)
+    apart, _ = read_surface_mesh(soup, merge=False)
+    assert len(apart) == 3 * len(faces)
+    quad = tmp_path / "quad.vtu"
+    square = np.array([[0.0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0]])
+    meshio.write(quad, meshio.Mesh(square, [("quad", [[0, 1, 2, 3]])]))
+    _, split = read_surface_mesh(quad)
+    assert split.tolist() == [[0, 1, 2], [0, 2, 3]]
+    lines = tmp_path / "lines.vtu"
+    meshio.write(lines, meshio.Mesh(square, [("line", [[0, 1]])]))
+    with pytest.raises(ValueError, match=r"lines\.vtu.*line"):
+        read_surface_mesh(lines)

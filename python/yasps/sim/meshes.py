@@ -1,5 +1,6 @@
 """Meshes for first simulations and tests: a tet box, a cloth grid and its
-bending hinges, and tet meshes read from files (Gmsh, VTK, ... via meshio)."""
+bending hinges, and tet and surface meshes read from files (Gmsh, VTK, OBJ,
+PLY, STL, ... via meshio)."""
 
 from __future__ import annotations
 
@@ -185,6 +186,45 @@ def read_tet_mesh(path: Union[str, PathLike],
     if reorder:
         verts, tets, _ = reorder_mesh(verts, tets)
     return verts, tets
+
+
+def read_surface_mesh(path: Union[str, PathLike],
+                      file_format: Optional[str] = None,
+                      merge: bool = True) -> Tuple[np.ndarray, np.ndarray]:
+    """Reads the triangles of a surface mesh file (OBJ, PLY, STL, OFF, VTK,
+    ... anything meshio reads; ``file_format`` names meshio's reader where
+    the suffix does not), for obstacles, shells and cloth: vertices (N, 3)
+    float and triangles (M, 3) int32, each in the file's orientation. Quads
+    are split into two triangles. With ``merge`` (default), points at
+    identical coordinates become one vertex (STL stores every triangle's
+    corners apart, which would leave each triangle a mesh of its own);
+    points no triangle uses are dropped. Raises ValueError naming the file
+    and its cell types when it has no triangles or quads."""
+    import meshio  # here, so that importing yasps.sim does not need meshio
+
+    mesh = meshio.read(path, file_format=file_format)
+    blocks = [block.data for block in mesh.cells if block.type == "triangle"]
+    blocks += [block.data[:, [0, 1, 2, 0, 2, 3]].reshape(-1, 3)
+               for block in mesh.cells if block.type == "quad"]
+    if not blocks:
+        found = sorted({block.type for block in mesh.cells}) or ["none"]
+        raise ValueError(f"read_surface_mesh: {path} has no triangles or "
+                         f"quads (cell types found: {', '.join(found)})")
+    points = np.asarray(mesh.points, dtype=float)
+    if points.shape[1] == 2:
+        points = np.hstack([points, np.zeros((len(points), 1))])
+    faces = np.concatenate(blocks).astype(np.int64)
+    if merge:
+        # The distinct points in the order they first appear.
+        _, first, inverse = np.unique(points, axis=0, return_index=True,
+                                      return_inverse=True)
+        order = np.argsort(first)
+        rank = np.empty_like(order)
+        rank[order] = np.arange(len(order))
+        faces = rank[inverse.reshape(-1)][faces]
+        points = points[first[order]]
+    used, faces = np.unique(faces, return_inverse=True)
+    return points[used], faces.reshape(-1, 3).astype(np.int32)
 
 
 def signed_tet_volumes(verts: np.ndarray, tets: np.ndarray) -> np.ndarray:
