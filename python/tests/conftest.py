@@ -31,6 +31,32 @@ def ipctk_collisions(contact, V=None):
     return collisions
 
 
+def point_over_triangle(name: str, height: float):
+    """A fixed triangle at z = 0 (2 m wide) and a point of 0.01 kg
+    ``height`` above it, one primitive with contact (dhat 1e-2, kappa 10):
+    (stepper of dt 0.01 without gravity, the point's x, the contact)."""
+    from yasps import energies as E
+    from yasps.contact import Contact
+    from yasps.sim import ImplicitEuler
+
+    V = np.array([[-1.0, -1.0, 0.0], [1.0, -1.0, 0.0], [0.0, 1.0, 0.0],
+                  [0.05, 0.0, height]])
+    s = yasps.scene(name)
+    v = s.addMesh("m").addPrimitive("v", numInstances=4)
+    x = v.addAttribute("position", rows=3)
+    x.updateValue(V[:, :, None])
+    x_hat = v.addConstant("x_hat", rows=3)
+    x_hat.updateValue(V[:, :, None])
+    s.addEnergy(v.addAttribute("inertia",
+                               computed_attribute=E.inertia(x, x_hat, 0.01)))
+    contact = Contact(s, v, faces=np.array([[0, 1, 2]]), dhat=1e-2,
+                      kappa=10.0)
+    s.addMinimizeTarget([x])
+    stepper = ImplicitEuler(s, x, x_hat, 0.01, contact=contact, gravity=None,
+                            fixed=np.array([True, True, True, False]))
+    return stepper, x, contact
+
+
 def box_mesh(n: int = 2):
     """A unit cube of n^3 cells, each split into 6 positively oriented tets."""
     return box_tet_mesh(n)

@@ -14,6 +14,8 @@ from yasps.sim import (ImplicitEuler, add_affine_body, add_cloth,
                        add_elastic_tets, add_free_vertices, box_tet_mesh,
                        cloth_corners, cloth_grid, lumped_masses)
 
+from conftest import point_over_triangle
+
 RATE = 3.0  # rad/s
 
 
@@ -106,22 +108,7 @@ def test_ccd_stops_a_scripted_motion_short_and_says_so():
     """A point scripted to pass through a fixed triangle at 5 m/s, from
     0.2 m above it: it follows for three steps, then CCD stops it above,
     the lag is reported, and it never crosses."""
-    V = np.array([[-1.0, -1.0, 0.0], [1.0, -1.0, 0.0], [0.0, 1.0, 0.0],
-                  [0.05, 0.0, 0.2]])
-    s = yasps.scene("scripted")
-    v = s.addMesh("m").addPrimitive("v", numInstances=4)
-    x = v.addAttribute("position", rows=3)
-    x.updateValue(V[:, :, None])
-    x_hat = v.addConstant("x_hat", rows=3)
-    x_hat.updateValue(V[:, :, None])
-    from yasps import energies as E
-    s.addEnergy(v.addAttribute("inertia",
-                               computed_attribute=E.inertia(x, x_hat, 0.01)))
-    contact = Contact(s, v, faces=np.array([[0, 1, 2]]), dhat=1e-2,
-                      kappa=10.0)
-    s.addMinimizeTarget([x])
-    stepper = ImplicitEuler(s, x, x_hat, 0.01, contact=contact, gravity=None,
-                            fixed=np.array([True, True, True, False]))
+    stepper, x, contact = point_over_triangle("scripted", 0.2)
     point = np.array([False, False, False, True])
     stepper.prescribe(x, lambda time: [0.05, 0.0, 0.2 - 5.0 * time],
                       mask=point)

@@ -7,8 +7,9 @@ import numpy as np
 
 import yasps
 from yasps import energies as E
-from yasps.contact import Contact
 from yasps.sim import ImplicitEuler, box_tet_mesh
+
+from conftest import point_over_triangle
 
 
 def swinging_box(warm_start: bool):
@@ -72,22 +73,8 @@ def test_warm_start_is_cut_where_it_would_pass_through_a_surface():
     """A point at 30 m/s towards a fixed triangle 0.1 m below: x + dt v
     lies 0.2 m beyond it. The guess stops short of the triangle and the
     point never crosses it (ipctk)."""
-    V = np.array([[-1.0, -1.0, 0.0], [1.0, -1.0, 0.0], [0.0, 1.0, 0.0],
-                  [0.05, 0.0, 0.1]])
-    s = yasps.scene("warm_ccd")
-    v = s.addMesh("m").addPrimitive("v", numInstances=4)
-    x = v.addAttribute("position", rows=3)
-    x.updateValue(V[:, :, None])
-    x_hat = v.addConstant("x_hat", rows=3)
-    x_hat.updateValue(V[:, :, None])
-    s.addEnergy(v.addAttribute("inertia",
-                               computed_attribute=E.inertia(x, x_hat, 0.01)))
-    contact = Contact(s, v, faces=np.array([[0, 1, 2]]), dhat=1e-2,
-                      kappa=10.0)
-    s.addMinimizeTarget([x])
-    fixed = np.array([True, True, True, False])
-    stepper = ImplicitEuler(s, x, x_hat, 0.01, fixed=fixed, contact=contact,
-                            gravity=None)
+    stepper, x, contact = point_over_triangle("warm_ccd", 0.1)
+    V = x.value[:, :, 0].copy()
     stepper.velocities[0][3, 2, 0] = -30.0
     mesh = ipctk.CollisionMesh(V, np.array([[0, 1], [1, 2], [2, 0]]),
                                np.array([[0, 1, 2]]))
