@@ -548,7 +548,9 @@ class ImplicitEuler:
 
     def restore(self, path) -> None:
         """Reads a :meth:`save` of a stepper of the same scene structure
-        and dt: the run then continues bit for bit as the saved one did."""
+        and dt: the run then continues bit for bit as the saved one did
+        (with the contact's default detection; ipctk's lists pairs in a
+        thread-dependent order)."""
         checkpoint.restore(self, path)
 
     def prescribe(self, target: Attribute, fn: Callable[[float], np.ndarray],

@@ -21,11 +21,6 @@ def execute(simulate: Callable[..., Dict[str, Any]], params: Dict[str, Any],
     ``yasps.config.cache_dir`` set to ``cache_dir``; returns its outputs,
     the seconds it took, the files it wrote and what it compiled and
     iterated. Exceptions propagate (the sweep records and retries them)."""
-    here = Path(folder)
-    here.mkdir(parents=True, exist_ok=True)
-    # The sweep's time limit counts from here, not from when Ray was asked
-    # for a worker (a new one takes seconds to start on a busy machine).
-    (here / STARTED).touch()
     from .. import config
     from ..compiler.cpu import kernels_compiled
     from ..sim.newton import iteration_totals
@@ -33,6 +28,12 @@ def execute(simulate: Callable[..., Dict[str, Any]], params: Dict[str, Any],
     if cache_dir:
         config.cache_dir = cache_dir
     compiled, iterations = kernels_compiled(), iteration_totals()
+    here = Path(folder)
+    here.mkdir(parents=True, exist_ok=True)
+    # The sweep's time limit counts from here, not from when Ray was asked
+    # for a worker: a new one takes seconds to start, and to import yasps,
+    # on a busy machine.
+    (here / STARTED).touch()
     cwd = os.getcwd()
     start = time.perf_counter()
     os.chdir(here)
