@@ -3,39 +3,115 @@
 # machine (docs/gpu.md, "On a GPU machine"): the runtime's unit tests with
 # the real driver (GPU solve against the CPU), the SpMV/PCG benchmark on
 # the bunny, cuSPARSE (through PyTorch) on the same matrix, stable
-# Neo-Hookean's generated derivative kernels against PyTorch and JAX, and
-# one Newton iteration of the bunny scene on the GPU, in stages.
+# Neo-Hookean's generated derivative kernels against PyTorch and JAX, one
+# Newton iteration of the bunny scene on the GPU, in stages, and the
+# real-driver tests again under compute-sanitizer (racecheck, synccheck,
+# memcheck: the races, barrier misuse and out-of-range accesses that the
+# stand-in driver of CI cannot show).
 #
 #   bash scripts/device_check.sh KIT [OUT]
 #
 # KIT is what scripts/device_kit.sh gathered; logs go to OUT (default: the
-# current folder).
+# current folder): summary.txt (each step's status and time, then the
+# measured lines) and logs.tar.gz, which replaces the single logs at the
+# end (a run cut short leaves them as they are). A GPU window is short, so no step can
+# cost the others: each has a time limit (STEP_LIMIT seconds, default 150),
+# each log is written as it is produced, and a failed step is recorded and
+# the next one runs. A missing or unusable driver, a failed check and a
+# real-driver test that skips are failures (exit status 1).
 set -uo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
 kit=$(cd "$1" && pwd)
-out=${2:-.}
+out=$(mkdir -p "${2:-.}" && cd "${2:-.}" && pwd)
+limit=${STEP_LIMIT:-150}
+summary=$out/summary.txt
 status=0
+: >"$summary"
 
-nvidia-smi --query-gpu=name,driver_version,memory.total --format=csv \
-  | tee "$out/gpu.log" || true
-echo "== runtime unit tests (stand-in and real driver)"
-YASPS_FAKE_CUDA="$kit/libYaspsFakeCuda.so" "$kit/YaspsRuntimeTests" \
-  2>&1 | tee "$out/gtest.log" | grep -E "^\[  (PASSED|FAILED|SKIPPED) |Failure" \
-  || status=1
-grep -q "FAILED" "$out/gtest.log" && status=1
-echo "== SpMV, assembly and PCG on the bunny"
-"$kit/yasps-spmv-bench" "$kit/bunny-19k.msh" --repeat 100 \
-  --export /tmp/yasps-bunny-hessian 2>&1 | tee "$out/spmv.log" || status=1
+# step NAME LOG COMMAND...: runs COMMAND under the time limit, its output
+# shown and kept in OUT/LOG, and records its status and time.
+step() {
+  local name=$1 log=$out/$2
+  shift 2
+  echo "== $name"
+  local start=$SECONDS
+  timeout --kill-after=10 "$limit" "$@" 2>&1 | tee "$log"
+  local rc=${PIPESTATUS[0]}
+  local verdict=ok
+  if [ "$rc" = 124 ] || [ "$rc" = 137 ]; then
+    verdict="TIMED OUT after ${limit} s"
+  elif [ "$rc" != 0 ]; then
+    verdict="FAILED (exit $rc)"
+  fi
+  [ "$verdict" = ok ] || status=1
+  printf '%-44s %-24s %4d s\n' "$name" "$verdict" $((SECONDS - start)) \
+    >>"$summary"
+}
+
+if ! nvidia-smi --query-gpu=name,driver_version,memory.total --format=csv \
+  >"$out/gpu.log" 2>&1; then
+  echo "no usable NVIDIA driver (nvidia-smi failed)" | tee -a "$out/gpu.log"
+  status=1
+fi
+cat "$out/gpu.log"
+cat "$out/gpu.log" >>"$summary"
+
+step "runtime unit tests (stand-in and real driver)" gtest.log \
+  env YASPS_FAKE_CUDA="$kit/libYaspsFakeCuda.so" "$kit/YaspsRuntimeTests"
+# The real-driver instances must run: a skip means the GPU was not used.
+skipped=$(grep -cE "^\[  SKIPPED \] .*ThisMachine" "$out/gtest.log")
+if [ "$skipped" != 0 ]; then
+  printf '%-44s %s\n' "real-driver tests skipped" \
+    "FAILED ($skipped skipped)" >>"$summary"
+  status=1
+fi
+
+step "SpMV, assembly and PCG on the bunny" spmv.log \
+  "$kit/yasps-spmv-bench" "$kit/bunny-19k.msh" --repeat 100 \
+  --export /tmp/yasps-bunny-hessian
 ms=$(awk '/GPU SpMV/ {print $3}' "$out/spmv.log")
-echo "== cuSPARSE on the same matrix"
-python3 "$root/bench/gpu_cusparse.py" /tmp/yasps-bunny-hessian \
-  ${ms:+--yasps-ms "$ms"} 2>&1 | tee "$out/cusparse.log" || status=1
-echo "== stable Neo-Hookean derivatives: yasps kernels, PyTorch, JAX"
-"$kit/yasps-kernel-bench" "$kit/snh" --repeat 100 2>&1 \
-  | tee "$out/kernels.log" || status=1
-python3 "$root/bench/gpu_peers.py" "$kit/snh" --yasps-log "$out/kernels.log" \
-  2>&1 | tee "$out/peers.log" || status=1
-echo "== one Newton iteration of the bunny scene, in stages"
-"$kit/yasps-newton-bench" "$kit/newton" 2>&1 | tee "$out/newton.log" \
-  || status=1
+
+step "cuSPARSE on the same matrix" cusparse.log \
+  python3 "$root/bench/gpu_cusparse.py" /tmp/yasps-bunny-hessian \
+  ${ms:+--yasps-ms "$ms"}
+
+step "stable Neo-Hookean kernels (yasps)" kernels.log \
+  "$kit/yasps-kernel-bench" "$kit/snh" --repeat 100
+
+step "stable Neo-Hookean with PyTorch and JAX" peers.log \
+  python3 "$root/bench/gpu_peers.py" "$kit/snh" --yasps-log "$out/kernels.log"
+
+step "one Newton iteration of the bunny, in stages" newton.log \
+  "$kit/yasps-newton-bench" "$kit/newton"
+
+sanitizer=$(command -v compute-sanitizer ||
+  ls /usr/local/cuda/bin/compute-sanitizer 2>/dev/null)
+if [ -n "$sanitizer" ]; then
+  # racecheck is the slow one: about 250 s on an H200 (138 s of it in
+  # SolvesLikeTheCpu), against 6 s for synccheck and 74 s for memcheck.
+  for tool in synccheck memcheck racecheck; do
+    [ "$tool" = racecheck ] && limit=${RACECHECK_LIMIT:-400}
+    step "real-driver tests under $tool" "$tool.log" \
+      "$sanitizer" --tool "$tool" --error-exitcode 3 \
+      "$kit/YaspsRuntimeTests" --gtest_filter='*ThisMachine*'
+  done
+else
+  printf '%-44s %s\n' "compute-sanitizer" "FAILED (not found)" >>"$summary"
+  status=1
+fi
+
+{
+  echo
+  echo "== measured"
+  grep -hE "ms|GB/s|within|iterations|FAILED|differs" \
+    "$out/spmv.log" "$out/cusparse.log" "$out/kernels.log" \
+    "$out/peers.log" "$out/newton.log" 2>/dev/null
+  grep -hE "^\[  (PASSED|FAILED) |ERROR SUMMARY|RACECHECK SUMMARY" \
+    "$out"/gtest.log "$out"/racecheck.log "$out"/synccheck.log \
+    "$out"/memcheck.log 2>/dev/null
+} >>"$summary"
+echo
+cat "$summary"
+logs=$(cd "$out" && ls *.log 2>/dev/null)
+tar -czf "$out/logs.tar.gz" -C "$out" $logs && (cd "$out" && rm -f $logs)
 exit $status

@@ -43,6 +43,8 @@ int run(int argc, char **argv) {
               runner.selectedImage().chip.c_str(),
               runner.selectedImage().format.c_str());
   std::fflush(stdout);
+  std::setvbuf(stdout, nullptr, _IOLBF, 0);
+  int failures = 0; // a mismatch is reported; the other kernels still run
   for (const KitKernel &kernel : kit.kernels) {
     runner.launch(kernel);
     context.synchronize();
@@ -60,11 +62,11 @@ int run(int argc, char **argv) {
                 kernel.label.c_str(), seconds * 1e3, (long long)kernel.count,
                 difference);
     if (!(difference <= 1e-10)) {
-      std::printf("  %s differs from the CPU\n", kernel.label.c_str());
-      return 1;
+      std::printf("  FAILED: %s differs from the CPU\n", kernel.label.c_str());
+      ++failures;
     }
   }
-  return 0;
+  return failures ? 1 : 0;
 }
 
 } // namespace

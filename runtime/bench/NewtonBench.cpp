@@ -9,9 +9,13 @@
 // (copied back), the block structure (built on the host), its upload,
 // assembly on the device and block-Jacobi PCG on the device. Every kernel
 // output is checked against the CPU kernels' first values and the Newton
-// direction against the CPU's, then the stages are timed; the CPU's
-// assembly and PCG on the same derivatives are timed for comparison.
-// Needs no MLIR or Python.
+// direction (solved to the kit's tight tolerance) against the CPU's; then
+// the stages are timed, PCG at the paper's relative tolerance 1e-4 after a
+// warm-up solve, and the CPU's assembly and PCG on the same derivatives
+// beside them. Each stage is printed as soon as it is measured, and a
+// failed check is reported and counted rather than ending the run (exit
+// status 1 at the end), so that a GPU window is not lost to the first
+// mismatch. Needs no MLIR or Python.
 //
 //===----------------------------------------------------------------------===//
 
@@ -45,12 +49,16 @@ int run(int argc, char **argv) {
   }
   int repeat = 10;
   bool check = true;
+  double tolerance = 1e-4; // the paper's and the CPU tables' PCG tolerance
   for (int a = 2; a < argc; ++a) {
     if (!std::strcmp(argv[a], "--repeat") && a + 1 < argc)
       repeat = std::atoi(argv[++a]);
     else if (!std::strcmp(argv[a], "--no-check"))
       check = false; // for running the stages where kernels do not run
+    else if (!std::strcmp(argv[a], "--tolerance") && a + 1 < argc)
+      tolerance = std::atof(argv[++a]);
   }
+  std::setvbuf(stdout, nullptr, _IOLBF, 0);
   Kit kit = readKit(argv[1]);
   if (kit.energies.empty() || kit.layout.empty() || kit.solution.empty())
     throw std::runtime_error(std::string(argv[1]) +
@@ -60,15 +68,24 @@ int run(int argc, char **argv) {
   driver.requireUsable();
   CudaContext context(driver, 0);
   KitRunner runner(kit, context);
+  const CudaDeviceInfo &device = driver.devices()[0];
+  std::printf("one Newton iteration on %s (%s)\n", device.name.c_str(),
+              device.chip().c_str());
   auto sync = [&] { context.synchronize(); };
+  int failures = 0;
   auto differs = [&](const KitKernel &kernel) {
     double difference = runner.differenceFromReference(kernel);
-    if (check && !(difference <= 1e-10))
-      throw std::runtime_error(kernel.label + " differs from the CPU by " +
-                               std::to_string(difference));
+    if (check && !(difference <= 1e-10)) {
+      std::printf("  FAILED: %s differs from the CPU by %.3g\n",
+                  kernel.label.c_str(), difference);
+      ++failures;
+    }
     return difference;
   };
   double largest = 0.0;
+  auto stage = [](const char *name, double seconds) {
+    std::printf("  %-34s %10.3f ms\n", name, seconds * 1e3);
+  };
 
   // Derivatives: gradient and projected Hessian kernels of every energy.
   auto derivatives = [&] {
@@ -85,7 +102,7 @@ int run(int argc, char **argv) {
   Clock::time_point start = Clock::now();
   for (int k = 0; k < repeat; ++k)
     derivatives();
-  double derivativeSeconds = secondsSince(start) / repeat;
+  stage("derivatives (GPU kernels)", secondsSince(start) / repeat);
 
   // Indices: the placement-index kernels, copied back for the structure.
   start = Clock::now();
@@ -100,9 +117,10 @@ int run(int argc, char **argv) {
     for (std::size_t i = 0; i < oneBased.size(); ++i)
       dofs.back()[i] = static_cast<std::int64_t>(oneBased[i]) - 1;
   }
-  double indexSeconds = secondsSince(start);
+  stage("indices (GPU kernels, copied back)", secondsSince(start));
   for (const KitEnergy &e : kit.energies)
     largest = std::max(largest, differs(kit.kernel(e.dofs)));
+  std::printf("  kernels within %.1e of the CPU's\n", largest);
 
   // The block structure, on the host, and its upload.
   Npy offsets = readNpy(kit.dir + "/" + kit.layout);
@@ -114,11 +132,13 @@ int run(int argc, char **argv) {
         {kit.energies[k].count, kit.energies[k].numParams, dofs[k].data()});
   start = Clock::now();
   GlobalSystem host(layout, maps);
-  double structureSeconds = secondsSince(start);
+  stage("block structure (host, first time)", secondsSince(start));
   start = Clock::now();
   GpuSystem gpu(context, host);
   sync();
-  double uploadSeconds = secondsSince(start);
+  stage("structure upload", secondsSince(start));
+  std::printf("  %lld DoFs, %zu stored blocks\n", (long long)host.size(),
+              gpu.storedBlocks());
 
   // Assembly and PCG on the device.
   auto assemble = [&] {
@@ -133,22 +153,39 @@ int run(int argc, char **argv) {
   for (int k = 0; k < repeat; ++k)
     assemble();
   double assemblySeconds = secondsSince(start) / repeat;
-  PcgOptions options;
-  options.relativeTolerance = kit.tolerance;
-  options.maxIterations = 10000;
+  stage("assembly (GPU)", assemblySeconds);
+
+  // The Newton direction, to the kit's tight tolerance, against the CPU's.
+  PcgOptions tight;
+  tight.relativeTolerance = kit.tolerance;
+  tight.maxIterations = 10000;
   DeviceBuffer x(context, host.size() * sizeof(double));
-  start = Clock::now();
-  PcgResult solved = gpu.solve(x.pointer(), options);
-  double solveSeconds = secondsSince(start);
+  PcgResult solved = gpu.solve(x.pointer(), tight);
   std::vector<double> direction(host.size());
   x.download(direction.data(), direction.size() * sizeof(double));
   Npy want = readNpy(kit.dir + "/" + kit.solution);
   double solutionDifference =
       relativeDifference(direction.data(), want.as<double>(), direction.size());
-  if (check && !(solved.converged && solutionDifference <= 1e-6))
-    throw std::runtime_error("the GPU's Newton direction differs from the "
-                             "CPU's by " +
-                             std::to_string(solutionDifference));
+  std::printf("  PCG to %.0e: %lld iterations to %.1e; Newton direction "
+              "within %.1e of the CPU's\n",
+              kit.tolerance, (long long)solved.iterations,
+              solved.relativeResidual, solutionDifference);
+  if (check && !(solved.converged && solutionDifference <= 1e-6)) {
+    std::printf("  FAILED: the GPU's Newton direction differs from the "
+                "CPU's\n");
+    ++failures;
+  }
+
+  // PCG at the working tolerance, timed after a warm-up solve.
+  PcgOptions options = tight;
+  options.relativeTolerance = tolerance;
+  gpu.solve(x.pointer(), options);
+  start = Clock::now();
+  PcgResult timed = gpu.solve(x.pointer(), options);
+  double solveSeconds = secondsSince(start);
+  std::printf("  %-34s %10.3f ms   (%lld iterations to %.1e)\n",
+              "PCG (GPU, block-Jacobi)", solveSeconds * 1e3,
+              (long long)timed.iterations, timed.relativeResidual);
 
   // The CPU's assembly and PCG on the same derivatives, every core.
   unsigned cores = std::max(1u, std::thread::hardware_concurrency());
@@ -169,33 +206,19 @@ int run(int argc, char **argv) {
     host.add(k, gradients[k].data(), hessians[k].data(), &pool);
   double cpuAssembly = secondsSince(start);
   std::vector<double> cpuDirection(host.size());
+  host.solve(cpuDirection.data(), options, pool);
   start = Clock::now();
   PcgResult cpuSolved = host.solve(cpuDirection.data(), options, pool);
   double cpuSolve = secondsSince(start);
-
-  const CudaDeviceInfo &device = driver.devices()[0];
-  std::printf("one Newton iteration on %s (%s): %lld DoFs, %zu stored "
-              "blocks; kernels within %.1e of the CPU's\n",
-              device.name.c_str(), device.chip().c_str(),
-              (long long)host.size(), gpu.storedBlocks(), largest);
-  std::printf("  %-34s %10.3f ms\n", "derivatives (GPU kernels)",
-              derivativeSeconds * 1e3);
-  std::printf("  %-34s %10.3f ms\n", "indices (GPU kernels, copied back)",
-              indexSeconds * 1e3);
-  std::printf("  %-34s %10.3f ms\n", "block structure (host, first time)",
-              structureSeconds * 1e3);
-  std::printf("  %-34s %10.3f ms\n", "structure upload", uploadSeconds * 1e3);
-  std::printf("  %-34s %10.3f ms   (CPU, %u threads: %.3f ms)\n",
-              "assembly (GPU)", assemblySeconds * 1e3, cores,
-              cpuAssembly * 1e3);
-  std::printf("  %-34s %10.3f ms   (CPU: %.3f ms, %lld iterations)\n",
-              "PCG (GPU)", solveSeconds * 1e3, cpuSolve * 1e3,
-              (long long)cpuSolved.iterations);
-  std::printf("  PCG: %lld iterations to %.1e; Newton direction within %.1e "
-              "of the CPU's\n",
-              (long long)solved.iterations, solved.relativeResidual,
-              solutionDifference);
-  return 0;
+  std::printf("  %-34s %10.3f ms   (%.1fx the GPU's)\n",
+              "CPU assembly", cpuAssembly * 1e3, cpuAssembly / assemblySeconds);
+  std::printf("  %-34s %10.3f ms   (%u threads, %lld iterations; %.1fx the "
+              "GPU's)\n",
+              "CPU PCG (block-Jacobi)", cpuSolve * 1e3, cores,
+              (long long)cpuSolved.iterations, cpuSolve / solveSeconds);
+  if (failures)
+    std::printf("%d check(s) FAILED\n", failures);
+  return failures ? 1 : 0;
 }
 
 } // namespace
