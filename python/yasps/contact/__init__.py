@@ -35,13 +35,13 @@ from ..frontend.errors import SceneError
 from ..frontend.scene import Primitive, PrimitiveUnion, Scene
 from ..runtime import current
 from ..solve import assemble
-from .friction import (ARITIES, FrictionPairs, add_friction_primitives,
-                       tangential_pairs)
-from .halfspace import HalfSpaces
+from .friction import ARITIES, FrictionPairs, tangential_pairs
+from .forces import FORCE_KINDS, ContactForces, member_sums
 from .masses import MASS, average_vertex_mass
+from .model import add_contact_energies
 from .detection import (DETECTIONS, MIN_SEPARATION, NARROW_PHASE_CCD,
                         IpctkDetection, RuntimeDetection)
-from .pairs import PAIR_TYPES, barrier_energy
+from .pairs import PAIR_TYPES
 from .stiffness import AdaptiveStiffness
 from .surface import edges_of, surface_of
 from .sweep import Sweep
@@ -151,34 +151,25 @@ class Contact:
         #: the positions of the last collision set and its smallest
         #: squared distance (the adaptive stiffness reads it)
         self._last_pairs: Optional[Tuple[np.ndarray, float]] = None
-        mesh = scene.addMesh(name)
-        # A stored value, not a number in the IR: changing the stiffness
-        # recompiles nothing.
-        self.stiffness = mesh.addConstant("kappa", rows=1)
-        self.stiffness.updateValue([1.0 if kappa is None else float(kappa)])
-        self.primitives: Dict[str, Primitive] = {}
-        for pair in PAIR_TYPES:
-            p = mesh.addPrimitive(pair.name, numInstances=0, isDynamic=True)
-            link = p.addConnectivity("v", vertices, np.zeros((0, pair.arity),
-                                                              np.int64),
-                                     pair.arity)
-            gathered = p.addAttribute("x", through=link, source=self.positions)
-            eps = p.addConstant("eps_x", rows=1)
-            weight = p.addConstant("weight", rows=1)
-            energy = barrier_energy(pair, gathered, eps, weight, self.dhat,
-                                    self.stiffness)
-            scene.addEnergy(p.addAttribute("barrier", computed_attribute=energy),
-                            dynamic_instances=True, projection=projection)
-            self.primitives[pair.name] = p
-        self.halfspaces = HalfSpaces(mesh, vertices, self.positions,
-                                     halfspaces, self.dhat, self.stiffness,
-                                     projection)
-        self.friction_primitives: Dict[int, Primitive] = {}
-        if self.friction > 0:
-            self.eps_u = mesh.addConstant("eps_u", rows=1)
-            self.eps_u.updateValue([self.eps_v])
-            self.friction_primitives = add_friction_primitives(
-                mesh, vertices, self.positions, self.eps_u, projection)
+        self.model = add_contact_energies(
+            scene.addMesh(name), vertices, self.positions, self.dhat,
+            halfspaces, self.friction > 0, self.eps_v, projection)
+        self._planes = list(halfspaces)
+        self.stiffness = self.model.stiffness
+        if kappa is not None:
+            self.stiffness.updateValue([float(kappa)])
+        self.primitives: Dict[str, Primitive] = self.model.primitives
+        self.halfspaces = self.model.halfspaces
+        self.friction_primitives: Dict[int, Primitive] = \
+            self.model.friction_primitives
+        self.eps_u = self.model.eps_u
+        #: the scene's energies per unit of physical energy: forces() divides
+        #: by it. 1 by default; ImplicitEuler sets dt^2, since beside its
+        #: inertia m/2 |x - x_hat|^2 every potential is scaled by dt^2.
+        self.energy_scale = 1.0
+        #: the world-space copy of the energies that forces() reads (built
+        #: at its first call)
+        self._forces: Optional[ContactForces] = None
 
     # ------------------------------------------------------------- geometry
 
@@ -397,6 +388,39 @@ class Contact:
             kappa = self.adaptive.update(self._min_distance2(V), diagonal)
         self._set_kappa(kappa)
         return kappa
+
+    def forces(self, kind: str = "all", per: str = "vertex") -> np.ndarray:
+        """The contact forces at the current positions (after a step: its
+        solution), in world space whatever parameterises the vertices:
+        minus the gradient of the contact's energies with respect to each
+        vertex's world position, from the collision set there and the
+        current stiffness, divided by ``energy_scale`` (under
+        :class:`yasps.sim.ImplicitEuler`, dt^2: the forces are then in
+        newtons for SI scenes). ``kind``: "normal" (the barrier's, pairs and
+        half-spaces), "friction" (the lagged friction of the last lag) or
+        "all" (their sum). ``per="vertex"`` gives one row per vertex of the
+        union (N, 3); ``per="body"`` sums them over each member of the union
+        (B, 3), in member order (one row for a single primitive).
+
+        The first call compiles the energies once more on a scene whose
+        target is the world positions (:mod:`.forces`); later calls
+        evaluate only."""
+        if per not in ("vertex", "body"):
+            raise ValueError(f"Contact.forces: per must be 'vertex' or "
+                             f"'body', got {per!r}")
+        if kind not in FORCE_KINDS:
+            raise ValueError(f"Contact.forces: kind must be one of "
+                             f"{', '.join(FORCE_KINDS)}, got {kind!r}")
+        V = self.world()
+        if self._last_pairs is None or \
+                not np.array_equal(self._last_pairs[0], V):
+            self._normal_pairs(V)
+        self.halfspaces.update(V)
+        if self._forces is None:
+            self._forces = ContactForces(self)
+        found = self._forces.forces(kind) / self.energy_scale
+        return found if per == "vertex" else \
+            member_sums(self.vertices, found)
 
     def hasIntersections(self) -> bool:
         """Whether some edge crosses some triangle (ipctk), or some vertex

@@ -484,6 +484,11 @@ class ImplicitEuler:
                       for t, m in zip(self.targets, masks)]
         self.velocity_tolerance = velocity_tolerance
         self.step_bound, self.contact = step_bound, contact
+        if contact is not None:
+            # Inertia m/2 |x - x_hat|^2 beside potentials scaled by dt^2:
+            # the contact's energies are dt^2 times its potential, which
+            # Contact.forces divides out to report newtons.
+            contact.energy_scale = self.dt * self.dt
         self.max_iterations, self.cg_tolerance = max_iterations, cg_tolerance
         self.cg_max_iterations = cg_max_iterations
         self.cg_stopping = cg_stopping
