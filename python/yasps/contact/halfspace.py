@@ -10,7 +10,7 @@ stored value, so adding pairs or planes compiles nothing.
 
 from __future__ import annotations
 
-from typing import Optional, Sequence, Tuple
+from typing import List, Optional, Sequence, Tuple
 
 import numpy as np
 
@@ -66,6 +66,12 @@ class HalfSpaces:
                              dynamic_instances=True, projection=projection)
         self.primitive = p
         self.update(np.zeros((0, 3)))  # no pairs until the first update
+
+    def planes(self) -> List[Tuple[np.ndarray, np.ndarray]]:
+        """The planes as (origin, unit normal) pairs, origins nearest the
+        world origin: what ``Contact(halfspaces=...)`` and pictures
+        take."""
+        return [(n * o, n) for n, o in zip(self.normals, self.offsets)]
 
     def signed_distances(self, V: np.ndarray) -> np.ndarray:
         """(N, planes): each vertex's signed distance to each plane."""

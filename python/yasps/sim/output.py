@@ -1,11 +1,12 @@
 """Output of simulations: surface meshes per frame for ParaView (VTU files
-and a .pvd series per body), off-screen pictures of shaded triangles, and
-videos of such pictures.
+and a .pvd series per body), off-screen pictures of shaded triangles (by
+VTK with a depth buffer, :mod:`.render_vtk`, or matplotlib), and videos of
+such pictures.
 
-matplotlib, meshio and imageio are imported inside the functions that use
-them, so that importing yasps.sim needs none of them, and matplotlib's
-global backend is never changed (the pictures draw on their own Agg
-canvas)."""
+PyVista, matplotlib, meshio and imageio are imported inside the functions
+that use them, so that importing yasps.sim needs none of them, and
+matplotlib's global backend is never changed (its pictures draw on their
+own Agg canvas)."""
 
 from __future__ import annotations
 
@@ -212,22 +213,91 @@ def _draw(meshes: Sequence[SurfaceMesh], view: Tuple[float, float],
     return figure
 
 
+#: The renderers of :func:`render_surfaces`: "vtk" (PyVista off-screen,
+#: with a depth buffer), "matplotlib" (painter's order: bodies can show
+#: through a cloth) or "auto" (VTK where PyVista renders, else matplotlib).
+RENDERERS = ("auto", "vtk", "matplotlib")
+#: The colour half-spaces are drawn in.
+GROUND_COLOR = (0.78, 0.78, 0.76)
+#: A half-space is drawn as a square this many times the scene's
+#: diagonal across, centred under the scene.
+GROUND_SIZE = 1.5
+
+
+def halfspace_squares(halfspaces: Sequence, lower: np.ndarray,
+                      upper: np.ndarray) -> List[SurfaceMesh]:
+    """Each half-space ``(origin, normal)`` as a square of its boundary
+    plane (two triangles) around the point nearest the centre of [lower,
+    upper], GROUND_SIZE times the box's diagonal across."""
+    from ..contact.halfspace import tangent_basis
+
+    centre = 0.5 * (lower + upper)
+    half = 0.5 * GROUND_SIZE * max(float(np.linalg.norm(upper - lower)), 1e-3)
+    squares: List[SurfaceMesh] = []
+    for origin, normal in halfspaces:
+        n = np.asarray(normal, dtype=float).reshape(3)
+        n = n / np.linalg.norm(n)
+        o = np.asarray(origin, dtype=float).reshape(3)
+        foot = centre - ((centre - o) @ n) * n
+        t0, t1 = tangent_basis(n).T
+        corners = np.array([foot + half * (a * t0 + b * t1)
+                            for a, b in ((-1, -1), (1, -1), (1, 1), (-1, 1))])
+        squares.append((corners, np.array([[0, 1, 2], [0, 2, 3]]),
+                        GROUND_COLOR))
+    return squares
+
+
+def _picture(meshes: Sequence[SurfaceMesh], view: Tuple[float, float],
+             title: Optional[str], size: Tuple[int, int],
+             bounds: Optional[Bounds], axes: bool, halfspaces: Sequence,
+             renderer: str) -> Optional[np.ndarray]:
+    """The picture by VTK as an array, or None where matplotlib draws it
+    (chosen, or VTK missing under "auto")."""
+    if renderer not in RENDERERS:
+        raise ValueError(f"render_surfaces: renderer must be one of "
+                         f"{', '.join(RENDERERS)}, got {renderer!r}")
+    if not meshes:
+        raise ValueError("render_surfaces: no meshes to draw")
+    from . import render_vtk
+
+    use_vtk = renderer == "vtk" or (renderer == "auto" and not axes
+                                    and render_vtk.available())
+    if not use_vtk:
+        return None
+    lower, upper = _scene_bounds(meshes, bounds)
+    drawn = list(meshes) + halfspace_squares(halfspaces, lower, upper)
+    return render_vtk.picture(drawn, view, title, size, lower, upper)
+
+
 def render_surfaces(path: PathArg, meshes: Sequence[SurfaceMesh],
                     view: Tuple[float, float] = (25.0, -60.0),
                     title: Optional[str] = None,
                     size: Tuple[int, int] = (800, 600),
                     bounds: Optional[Bounds] = None,
-                    axes: bool = False) -> Path:
+                    axes: bool = False, halfspaces: Sequence = (),
+                    renderer: str = "auto") -> Path:
     """Draws triangle meshes ``[(V (N, 3), F (M, 3), colour), ...]`` with
-    flat Lambert shading off-screen and saves the picture (the format from
-    the suffix: .png, .pdf, .svg, ...). ``view``: (elevation, azimuth) in
-    degrees; ``size``: (width, height) in pixels; ``bounds``: ((xmin, ymin,
-    zmin), (xmax, ymax, zmax)) to show, fixed across the frames of a video
-    (default: the meshes' own). Axes are equally scaled. Returns the
-    path."""
-    dpi = 100
-    figure = _draw(meshes, view, title, size, bounds, axes, dpi)
+    flat shading off-screen and saves the picture. ``view``: (elevation,
+    azimuth) in degrees; ``size``: (width, height) in pixels; ``bounds``:
+    ((xmin, ymin, zmin), (xmax, ymax, zmax)) the camera is fitted to,
+    fixed across the frames of a video (default: the meshes' own);
+    ``halfspaces``: planes ``(origin, normal)`` (as Contact's) drawn as
+    ground squares under the scene. ``renderer`` (:data:`RENDERERS`):
+    VTK's depth buffer by default where PyVista is installed, matplotlib
+    otherwise or with ``axes`` (equally scaled axes drawn), or for vector
+    formats (.pdf, .svg). Returns the path."""
     path = Path(path)
+    raster = path.suffix.lower() in (".png", ".jpg", ".jpeg", ".bmp")
+    image = _picture(meshes, view, title, size, bounds, axes, halfspaces,
+                     renderer if raster else "matplotlib")
+    if image is not None:
+        import imageio.v3 as imageio
+
+        imageio.imwrite(path, image)
+        return path
+    dpi = 100
+    figure = _draw(_with_halfspaces(meshes, bounds, halfspaces), view, title,
+                   size, _fitted(meshes, bounds), axes, dpi)
     figure.savefig(path, dpi=dpi)
     return path
 
@@ -237,12 +307,34 @@ def render_surfaces_array(meshes: Sequence[SurfaceMesh],
                           title: Optional[str] = None,
                           size: Tuple[int, int] = (800, 600),
                           bounds: Optional[Bounds] = None,
-                          axes: bool = False) -> np.ndarray:
+                          axes: bool = False, halfspaces: Sequence = (),
+                          renderer: str = "auto") -> np.ndarray:
     """``render_surfaces``' picture as an (height, width, 3) uint8 RGB array,
     for ``write_video``."""
-    figure = _draw(meshes, view, title, size, bounds, axes, dpi=100)
+    image = _picture(meshes, view, title, size, bounds, axes, halfspaces,
+                     renderer)
+    if image is not None:
+        return image
+    figure = _draw(_with_halfspaces(meshes, bounds, halfspaces), view, title,
+                   size, _fitted(meshes, bounds), axes, dpi=100)
     figure.canvas.draw()
     return np.array(figure.canvas.buffer_rgba())[..., :3]
+
+
+def _fitted(meshes: Sequence[SurfaceMesh], bounds: Optional[Bounds]
+            ) -> Bounds:
+    """The bounds a picture is fitted to: ``bounds``, or the meshes'."""
+    return bounds if bounds is not None else _scene_bounds(meshes, None)
+
+
+def _with_halfspaces(meshes: Sequence[SurfaceMesh], bounds: Optional[Bounds],
+                     halfspaces: Sequence) -> List[SurfaceMesh]:
+    """The meshes and the half-spaces' squares, for matplotlib (whose axes
+    still fit the meshes alone: ``bounds`` or theirs)."""
+    if not halfspaces:
+        return list(meshes)
+    lower, upper = _scene_bounds(meshes, bounds)
+    return list(meshes) + halfspace_squares(halfspaces, lower, upper)
 
 
 # ----------------------------------------------------------------- videos

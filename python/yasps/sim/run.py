@@ -108,6 +108,7 @@ def simulate(stepper: ImplicitEuler, bodies: Mapping[str, Body], frames: int,
                                      if stepper.contact is not None else []),
         progress=progress).seconds
     first = now()
+    planes = contact.halfspaces.planes() if contact is not None else []
     if bounds is None:
         bounds = _bounds(list(first.values()), margin=0.15)
     chosen = sorted({max(1, round(frames * (k + 1) / stills))
@@ -127,7 +128,8 @@ def simulate(stepper: ImplicitEuler, bodies: Mapping[str, Body], frames: int,
             crossed = crossed or contact.hasIntersections()
         if video:
             images.append(render_surfaces_array(meshes(P), bounds=bounds,
-                                                view=view, size=size))
+                                                view=view, size=size,
+                                                halfspaces=planes))
         if frame in chosen:
             kept[frame] = P
         if on_frame is not None:
@@ -140,7 +142,8 @@ def simulate(stepper: ImplicitEuler, bodies: Mapping[str, Body], frames: int,
     for frame, P in kept.items():
         files[f"frame_{frame}"] = render_surfaces(
             output / f"frame_{frame:04d}.png", meshes(P), bounds=bounds,
-            view=view, title=f"t = {frame * stepper.dt:.2f} s")
+            view=view, title=f"t = {frame * stepper.dt:.2f} s",
+            halfspaces=planes)
     if video and images:
         files["video"] = write_video(output / "contact.mp4", images, fps=25)
     return RunSummary(frames, total, closest, crossed, seconds, files)

@@ -1,0 +1,89 @@
+"""Pictures of triangle meshes with a depth buffer: PyVista (VTK) off-screen.
+
+matplotlib's 3-D axes paint whole triangles back to front, so a body under
+a cloth shows through it in stripes; VTK draws with OpenGL's depth buffer,
+so what is behind stays behind. Without a display VTK renders through EGL
+(Mesa's on a machine without a GPU), chosen here before VTK loads unless
+``VTK_DEFAULT_OPENGL_WINDOW`` says otherwise. :mod:`.output` falls back to
+matplotlib where PyVista is missing or cannot render.
+"""
+
+from __future__ import annotations
+
+import os
+from typing import Optional, Sequence, Tuple
+
+import numpy as np
+
+#: The camera's vertical field of view, in degrees (VTK's default).
+VIEW_ANGLE = 30.0
+#: How much room the camera leaves around the scene's bounding sphere.
+MARGIN = 1.05
+
+
+def available() -> bool:
+    """Whether PyVista can be imported (it is not a hard dependency)."""
+    try:
+        _pyvista()
+    except ImportError:
+        return False
+    return True
+
+
+def _pyvista():
+    if not os.environ.get("DISPLAY"):
+        # Without X, VTK's default window first tries an X connection and
+        # warns; EGL renders off-screen directly.
+        os.environ.setdefault("VTK_DEFAULT_OPENGL_WINDOW",
+                              "vtkEGLRenderWindow")
+    import pyvista
+    return pyvista
+
+
+def camera(view: Tuple[float, float], lower: np.ndarray, upper: np.ndarray
+           ) -> Tuple[np.ndarray, np.ndarray, Tuple[float, float, float]]:
+    """(position, focal point, up) of a camera that looks at the box
+    [lower, upper] from ``view`` = (elevation, azimuth) in degrees, as
+    matplotlib's ``view_init`` means them (azimuth about +z from +x), far
+    enough for the box's bounding sphere to fit the picture."""
+    elevation, azimuth = np.radians(view)
+    direction = np.array([np.cos(elevation) * np.cos(azimuth),
+                          np.cos(elevation) * np.sin(azimuth),
+                          np.sin(elevation)])
+    centre = 0.5 * (lower + upper)
+    radius = max(0.5 * float(np.linalg.norm(upper - lower)), 1e-12)
+    distance = MARGIN * radius / np.sin(np.radians(VIEW_ANGLE) / 2)
+    # Looking straight down or up, +z cannot be "up"; +y is.
+    up = (0.0, 1.0, 0.0) if abs(direction[2]) > 0.999 else (0.0, 0.0, 1.0)
+    return centre + distance * direction, centre, up
+
+
+def picture(meshes: Sequence, view: Tuple[float, float],
+            title: Optional[str], size: Tuple[int, int],
+            lower: np.ndarray, upper: np.ndarray) -> np.ndarray:
+    """The meshes ``[(V, F, colour), ...]`` flat-shaded with a depth
+    buffer, as an (height, width, 3) uint8 array, the camera fitted to
+    [lower, upper]."""
+    pv = _pyvista()
+    plotter = pv.Plotter(off_screen=True, window_size=tuple(size))
+    try:
+        plotter.set_background("white")
+        for verts, faces, color in meshes:
+            verts = np.asarray(verts, dtype=float).reshape(-1, 3)
+            faces = np.asarray(faces, dtype=np.int64).reshape(-1, 3)
+            cells = np.hstack([np.full((len(faces), 1), 3), faces]).ravel()
+            plotter.add_mesh(pv.PolyData(verts, cells), color=color,
+                             smooth_shading=False)
+        position, focus, up = camera(view, lower, upper)
+        plotter.camera.position = tuple(position)
+        plotter.camera.focal_point = tuple(focus)
+        plotter.camera.up = up
+        plotter.camera.view_angle = VIEW_ANGLE
+        plotter.reset_camera_clipping_range()
+        if title:
+            plotter.add_text(title, position="upper_edge", font_size=10,
+                             color="black")
+        image = plotter.screenshot(return_img=True)
+    finally:
+        plotter.close()
+    return np.ascontiguousarray(image[..., :3], dtype=np.uint8)
