@@ -17,8 +17,9 @@ import numpy as np
 
 #: The camera's vertical field of view, in degrees (VTK's default).
 VIEW_ANGLE = 30.0
-#: How much room the camera leaves around the scene's bounding sphere.
-MARGIN = 1.05
+#: How much farther the camera stands than the nearest point from which
+#: the scene's bounding box fits the picture.
+MARGIN = 1.08
 
 
 def available() -> bool:
@@ -40,21 +41,34 @@ def _pyvista():
     return pyvista
 
 
-def camera(view: Tuple[float, float], lower: np.ndarray, upper: np.ndarray
+def camera(view: Tuple[float, float], lower: np.ndarray, upper: np.ndarray,
+           aspect: float = 4 / 3
            ) -> Tuple[np.ndarray, np.ndarray, Tuple[float, float, float]]:
-    """(position, focal point, up) of a camera that looks at the box
-    [lower, upper] from ``view`` = (elevation, azimuth) in degrees, as
-    matplotlib's ``view_init`` means them (azimuth about +z from +x), far
-    enough for the box's bounding sphere to fit the picture."""
+    """(position, focal point, up) of a camera that looks at the centre of
+    the box [lower, upper] from ``view`` = (elevation, azimuth) in degrees,
+    as matplotlib's ``view_init`` means them (azimuth about +z from +x),
+    as near as it can be with every corner of the box inside a picture of
+    this ``aspect`` (width / height), less MARGIN."""
     elevation, azimuth = np.radians(view)
     direction = np.array([np.cos(elevation) * np.cos(azimuth),
                           np.cos(elevation) * np.sin(azimuth),
                           np.sin(elevation)])
     centre = 0.5 * (lower + upper)
-    radius = max(0.5 * float(np.linalg.norm(upper - lower)), 1e-12)
-    distance = MARGIN * radius / np.sin(np.radians(VIEW_ANGLE) / 2)
     # Looking straight down or up, +z cannot be "up"; +y is.
     up = (0.0, 1.0, 0.0) if abs(direction[2]) > 0.999 else (0.0, 0.0, 1.0)
+    right = np.cross(-direction, up)
+    right /= np.linalg.norm(right)
+    screen_up = np.cross(right, -direction)
+    corners = np.array([[(lower, upper)[k >> i & 1][i] for i in range(3)]
+                        for k in range(8)]) - centre
+    tangent = np.tan(np.radians(VIEW_ANGLE) / 2)
+    # A corner at depth z towards the camera, seen from distance D, is in
+    # the picture when its offsets fit (D - z) tan(angle / 2).
+    needed = corners @ direction + np.maximum(
+        np.abs(corners @ screen_up) / tangent,
+        np.abs(corners @ right) / (tangent * aspect))
+    size = max(float(np.linalg.norm(upper - lower)), 1e-12)
+    distance = max(MARGIN * float(needed.max()), 0.5 * size)
     return centre + distance * direction, centre, up
 
 
@@ -74,7 +88,8 @@ def picture(meshes: Sequence, view: Tuple[float, float],
             cells = np.hstack([np.full((len(faces), 1), 3), faces]).ravel()
             plotter.add_mesh(pv.PolyData(verts, cells), color=color,
                              smooth_shading=False)
-        position, focus, up = camera(view, lower, upper)
+        position, focus, up = camera(view, lower, upper,
+                                     size[0] / size[1])
         plotter.camera.position = tuple(position)
         plotter.camera.focal_point = tuple(focus)
         plotter.camera.up = up
