@@ -6,7 +6,7 @@ set -euo pipefail
 LLVM_PREFIX=${LLVM_PREFIX:-/usr/lib/llvm-22}
 DEB_PACKAGES=(cmake ninja-build ccache g++ python3-dev libgtest-dev llvm-22-dev llvm-22-tools libmlir-22-dev mlir-22-tools
   clang-22 libclang-rt-22-dev libegl1 libegl-mesa0 libgl1-mesa-dri)
-PY_PACKAGES=(lit pytest pytest-xdist numpy scipy nanobind jax mpmath ipctk meshio matplotlib pyvista tqdm imageio imageio-ffmpeg ray)
+PY_PACKAGES=(lit pytest pytest-xdist numpy scipy nanobind jax mpmath ipctk meshio tetgen pytetwild matplotlib pyvista tqdm imageio imageio-ffmpeg ray)
 
 sudo_if_needed() {
   if [ "$(id -u)" -eq 0 ]; then "$@"; else sudo "$@"; fi

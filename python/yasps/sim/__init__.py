@@ -21,6 +21,7 @@ from .newton import (ImplicitEuler, NewtonNotConverged, NewtonReport,
 from .output import (RecordedFrame, SurfaceRecorder, render_surfaces,
                      render_surfaces_array, write_video)
 from .run import Body, RunSummary, simulate
+from .tetrahedralize import tetrahedralize
 
 __all__ = ["AffineBody", "Body", "Cage", "FreeVertices", "HEX_CORNERS",
            "Motion", "affine_motion", "affine_velocity", "vertex_motion",
@@ -35,4 +36,5 @@ __all__ = ["AffineBody", "Body", "Cage", "FreeVertices", "HEX_CORNERS",
            "box_tet_mesh", "cloth_corners", "cloth_grid", "hinges_of",
            "iteration_totals", "locality_order", "newton", "orient_tets",
            "read_surface_mesh", "read_tet_mesh", "reorder_mesh", "render_surfaces",
-           "render_surfaces_array", "signed_tet_volumes", "write_video"]
+           "render_surfaces_array", "signed_tet_volumes", "tetrahedralize",
+           "write_video"]

@@ -1,0 +1,93 @@
+"""Tet meshes of closed surfaces: TetGen keeps the surface, triangle for
+triangle, and fills exactly its volume with positive tets no larger than
+asked; fTetWild fills a surface with a hole to within its envelope; open
+surfaces and unknown methods are refused with the reason."""
+
+import numpy as np
+import pytest
+
+from yasps import SceneError
+from yasps.contact import surface_of
+from yasps.sim import signed_tet_volumes, tetrahedralize
+from yasps.sim.sphere import triangle_orientations
+from yasps.sim.tetrahedralize import open_edges
+
+
+def icosphere(subdivisions: int = 2, radius: float = 0.1):
+    """A closed triangulated sphere, faces turned outwards."""
+    t = (1 + 5 ** 0.5) / 2
+    V = [[-1, t, 0], [1, t, 0], [-1, -t, 0], [1, -t, 0], [0, -1, t],
+         [0, 1, t], [0, -1, -t], [0, 1, -t], [t, 0, -1], [t, 0, 1],
+         [-t, 0, -1], [-t, 0, 1]]
+    F = [[0, 11, 5], [0, 5, 1], [0, 1, 7], [0, 7, 10], [0, 10, 11],
+         [1, 5, 9], [5, 11, 4], [11, 10, 2], [10, 7, 6], [7, 1, 8],
+         [3, 9, 4], [3, 4, 2], [3, 2, 6], [3, 6, 8], [3, 8, 9],
+         [4, 9, 5], [2, 4, 11], [6, 2, 10], [8, 6, 7], [9, 8, 1]]
+    V = [np.array(v, float) / np.linalg.norm(v) for v in V]
+    for _ in range(subdivisions):
+        middle, out = {}, []
+
+        def mid(a, b):
+            key = (min(a, b), max(a, b))
+            if key not in middle:
+                m = V[a] + V[b]
+                V.append(m / np.linalg.norm(m))
+                middle[key] = len(V) - 1
+            return middle[key]
+        for a, b, c in F:
+            ab, bc, ca = mid(a, b), mid(b, c), mid(c, a)
+            out += [[a, ab, ca], [b, bc, ab], [c, ca, bc], [ab, bc, ca]]
+        F = out
+    return radius * np.array(V), np.array(F)
+
+
+def enclosed_volume(V, F) -> float:
+    return float(triangle_orientations(V, F).sum() / 6)
+
+
+def sorted_triangles(V, F):
+    """Each triangle as its sorted corner positions, for comparing meshes
+    numbered differently."""
+    corners = np.round(V[F], 12)
+    keys = sorted(tuple(sorted(map(tuple, c))) for c in corners)
+    return keys
+
+
+def test_tetgen_fills_the_sphere_and_keeps_its_surface():
+    V, F = icosphere()
+    tv, tt = tetrahedralize(V, F, max_volume=2e-6, method="tetgen")
+    volumes = signed_tet_volumes(tv, tt)
+    # TetGen's volume bound is a target: most tets meet it, the largest
+    # (at the surface, which it may not split) within twice it.
+    assert volumes.min() > 0 and np.median(volumes) <= 2e-6
+    assert volumes.max() <= 4e-6
+    assert volumes.sum() == pytest.approx(enclosed_volume(V, F), rel=1e-12)
+    assert sorted_triangles(tv, surface_of(tt)) == sorted_triangles(V, F)
+    # Inner points were added to meet the volume bound; every vertex is used.
+    assert len(tv) > len(V)
+    assert np.array_equal(np.unique(tt), np.arange(len(tv)))
+
+
+def test_ftetwild_fills_a_surface_with_a_hole():
+    V, F = icosphere()
+    F = F[1:]                       # one triangle missing
+    assert open_edges(F) == 3
+    with pytest.raises(SceneError, match="not closed.*ftetwild"):
+        tetrahedralize(V, F, method="tetgen")
+    tv, tt = tetrahedralize(V, F, edge_length=0.02)   # auto: fTetWild
+    volumes = signed_tet_volumes(tv, tt)
+    assert volumes.min() > 0
+    full = enclosed_volume(*icosphere())
+    assert volumes.sum() == pytest.approx(full, rel=0.05)
+    # Every output vertex lies near the sphere or inside it.
+    assert np.linalg.norm(tv, axis=1).max() < 0.1 * 1.02
+
+
+def test_tetrahedralize_refuses_bad_input():
+    V, F = icosphere(1)
+    with pytest.raises(SceneError, match="method must be one of"):
+        tetrahedralize(V, F, method="gmsh")
+    with pytest.raises(SceneError, match="outside"):
+        tetrahedralize(V, F + 1)
+    with pytest.raises(SceneError, match="no triangles"):
+        tetrahedralize(V, F[:0])
