@@ -137,7 +137,7 @@ def contact_scene(module, build_args, bounds, **run_options):
 def pendulum_scene(args):
     """The pendulum has no contact: its own loop, the same summary."""
     scene, parts = pendulum.build()
-    stepper = pendulum.Stepper(scene, parts)
+    stepper = pendulum.stepper(scene, parts)
     total = NewtonReport()
     start = time.perf_counter()
     stills = []

@@ -7,8 +7,9 @@ foot. The only targets are angles: each spring's zigzag angle (its length
 is K l cos(phi)) and the lever's tilt. The masses' world positions are
 computed attributes nested through all of them, so their inertia is a
 deeply nested non-linear parameterisation; the springs' energy is k (phi -
-phi_rest)^2. Implicit Euler on the masses' world positions: the predictions
-are made in world space and Newton runs over the angles.
+phi_rest)^2. Implicit Euler on the masses' world positions
+(``add_world_inertia``): ImplicitEuler predicts them in world space and
+Newton runs over the angles; nothing is differentiated or stepped by hand.
 
     python3 examples/paper/pendulum.py [--frames 100] [--output DIR]
 """
@@ -16,7 +17,7 @@ are made in world space and Newton runs over the angles.
 from __future__ import annotations
 
 import sys
-from typing import Dict, List
+from typing import List
 
 import numpy as np
 
@@ -24,7 +25,8 @@ from common import DT, REPO, arguments  # noqa: E402
 
 import yasps  # noqa: E402
 from imageio import v3 as iio  # noqa: E402
-from yasps.sim import (NewtonReport, SurfaceRecorder, newton,  # noqa: E402
+from yasps.sim import (ImplicitEuler, NewtonReport,  # noqa: E402
+                       SurfaceRecorder, add_world_inertia,
                        polyline_segments, write_video, zigzag_spring)
 
 ANCHOR = np.array([0.0, 0.0, 0.0])
@@ -41,10 +43,11 @@ def spring_length(phi):
     return SEGMENTS * SEGMENT * phi.cos()
 
 
-def build(tilt: float = 0.4):
-    """The scene: (scene, {name: attribute}) with targets phi (3 springs:
-    ceiling, left, right) and psi (the lever)."""
-    s = yasps.scene("pendulum")
+def build(name: str = "pendulum", tilt: float = 0.4):
+    """The scene: (scene, parts) with targets phi (3 springs: ceiling,
+    left, right) and psi (the lever), the masses' world ``position`` and
+    their world-space ``inertia``."""
+    s = yasps.scene(name)
     m = s.addMesh("pendulum")
     springs = m.addPrimitive("springs", numInstances=3)
     phi = springs.addAttribute("phi", rows=1)
@@ -54,7 +57,6 @@ def build(tilt: float = 0.4):
     psi.updateValue([[tilt]])
     masses = m.addPrimitive("masses", numInstances=2)
     masses.addConstant("side", rows=1).updateValue([[-1.0], [1.0]])
-    masses.addConstant("mass", rows=1).updateValue(np.array(MASSES)[:, None])
     top = masses.addAttribute("phi_top", through=masses.addConnectivity(
         "to_ceiling", springs, [[0], [0]], 1), source=phi)
     own = masses.addAttribute("phi_own", through=masses.addConnectivity(
@@ -67,13 +69,11 @@ def build(tilt: float = 0.4):
     z = -spring_length(top) + side * LEVER * tipping.sin() - spring_length(own)
     position = masses.addAttribute("position", computed_attribute=yasps.vstack(
         [x + ANCHOR[0], 0.0 * x + ANCHOR[1], z + ANCHOR[2]]))
-    predicted = masses.addConstant("x_hat", rows=3)
-    s.addEnergy(masses.addAttribute("inertia", computed_attribute=0.5 * masses["mass"]
-        * (position - predicted).squaredNorm()))
+    inertia = add_world_inertia(position, MASSES)
     s.addEnergy(springs.addAttribute("elastic", computed_attribute=(
         DT * DT * STIFFNESS) * (phi - REST) * (phi - REST)))
     s.addMinimizeTarget([phi, psi])
-    return s, dict(phi=phi, psi=psi, position=position, predicted=predicted)
+    return s, dict(phi=phi, psi=psi, position=position, inertia=inertia)
 
 
 def reference_positions(phi: np.ndarray, psi: float) -> np.ndarray:
@@ -86,23 +86,12 @@ def reference_positions(phi: np.ndarray, psi: float) -> np.ndarray:
     return np.array(out)
 
 
-class Stepper:
-    """Implicit Euler on the masses: world-space predictions, Newton over
-    the angles."""
-
-    def __init__(self, scene, parts: Dict[str, object]):
-        self.scene, self.parts = scene, parts
-        self.velocity = np.zeros((2, 3))
-
-    def step(self) -> NewtonReport:
-        x = self.parts["position"].compute().value[:, :, 0].copy()
-        self.parts["predicted"].updateValue(
-            x + DT * self.velocity + DT * DT * GRAVITY)
-        report = newton(self.scene, [self.parts["phi"], self.parts["psi"]],
-                        tolerance=1e-6, max_iterations=50, cg_tolerance=1e-10)
-        self.velocity = (self.parts["position"].compute().value[:, :, 0]
-                         - x) / DT
-        return report
+def stepper(scene, parts) -> ImplicitEuler:
+    """Implicit Euler on the masses: world-space predictions and
+    velocities, Newton over the angles."""
+    return ImplicitEuler(scene, targets=[parts["phi"], parts["psi"]], dt=DT,
+                         world=[parts["inertia"]], world_gravity=GRAVITY,
+                         velocity_tolerance=1e-4)
 
 
 def pendulum_lines(phi: np.ndarray, psi: float) -> np.ndarray:
@@ -158,14 +147,14 @@ def main() -> None:
     output = args.output or REPO / "out" / "paper" / "pendulum"
     output.mkdir(parents=True, exist_ok=True)
     scene, parts = build()
-    stepper = Stepper(scene, parts)
+    stepping = stepper(scene, parts)
     total = NewtonReport()
     recorder = SurfaceRecorder(output, {
         "pendulum": pendulum_lines(np.full(3, REST), 0.0)[1]})
     images: List[np.ndarray] = []
     stills = {max(1, round(args.frames * k / 4)) for k in range(1, 5)}
     for frame in range(1, args.frames + 1):
-        total.add(stepper.step())
+        total.add(stepping.step())
         phi = parts["phi"].value[:, 0, 0]
         psi = float(parts["psi"].value[0, 0, 0])
         image = draw(phi, psi, f"t = {frame * DT:.2f} s")

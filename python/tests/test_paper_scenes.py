@@ -176,7 +176,7 @@ def test_pendulum_swings():
     Newton step lowers the energy."""
     import pendulum
     scene, parts = pendulum.build()
-    stepper = pendulum.Stepper(scene, parts)
+    stepper = pendulum.stepper(scene, parts)
     start = parts["position"].compute().value[:, :, 0].copy()
     tilts = []
     for _ in range(30):

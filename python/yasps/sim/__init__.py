@@ -20,10 +20,15 @@ from .newton import (ImplicitEuler, NewtonNotConverged, NewtonReport,
                      iteration_totals, newton)
 from .output import (RecordedFrame, SurfaceRecorder, render_surfaces,
                      render_surfaces_array, write_video)
+from .rotation import (RotationBody, add_rotation_vector_body,
+                       rotation_matrices, wrap_rotation_vectors)
 from .run import Body, RunSummary, simulate
+from .world import WorldInertia, add_world_inertia
 from .tetrahedralize import tetrahedralize
 
 __all__ = ["AffineBody", "Body", "Cage", "FreeVertices", "HEX_CORNERS",
+           "RotationBody", "WorldInertia", "add_rotation_vector_body",
+           "add_world_inertia", "rotation_matrices", "wrap_rotation_vectors",
            "Motion", "affine_motion", "affine_velocity", "vertex_motion",
            "combined_bound", "inversion_bound", "inversion_free_fraction",
            "add_caged_surface", "add_free_vertices", "add_hex8_neo_hookean",

@@ -124,6 +124,8 @@ def save(stepper, path: Union[str, PathLike]) -> None:
     arrays["time"] = np.array(stepper.time)
     for k, v in enumerate(stepper.velocities):
         arrays[f"velocity|{k}"] = v
+    for k, inertia in enumerate(stepper.world):
+        arrays[f"world_velocity|{k}"] = inertia.velocity
     adaptive = getattr(stepper.contact, "adaptive", None)
     if adaptive is not None:
         arrays["adaptive"] = np.array([
@@ -155,6 +157,13 @@ def restore(stepper, path: Union[str, PathLike]) -> None:
             for v, t in zip(velocities, stepper.targets)):
         raise SceneError(f"restore: {path} holds velocities of other targets "
                          f"than the stepper's")
+    world = [arrays[f"world_velocity|{k}"] for k in range(len(stepper.world))
+             if f"world_velocity|{k}" in arrays]
+    if len(world) != len(stepper.world) or \
+            any(f"world_velocity|{len(world)}" == k for k in arrays) or any(
+            v.shape != w.velocity.shape for v, w in zip(world, stepper.world)):
+        raise SceneError(f"restore: {path} holds world velocities of other "
+                         f"world inertias than the stepper's")
     adaptive = getattr(stepper.contact, "adaptive", None)
     if (adaptive is None) != ("adaptive" not in arrays):
         raise SceneError(f"restore: {path} and the stepper differ in whether "
@@ -163,6 +172,8 @@ def restore(stepper, path: Union[str, PathLike]) -> None:
         k[len("scene|"):]: v for k, v in arrays.items()
         if k.startswith("scene|")})
     stepper.velocities = [v.copy() for v in velocities]
+    for inertia, v in zip(stepper.world, world):
+        inertia.velocity = v.copy()
     stepper.time = float(arrays["time"])
     if adaptive is not None:
         kappa, max_kappa, previous = (float(x) for x in arrays["adaptive"])

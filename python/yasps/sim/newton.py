@@ -24,6 +24,7 @@ from ..solve.minimize import checked_fixed_mask
 from ..solve.prepare import compile_scene
 from . import checkpoint
 from .forcing import Forcing
+from .world import WorldInertia
 from .prescribed import (Prescription, entry_mask, fixed_with_prescribed,
                          move_prescribed, prescription)
 
@@ -357,6 +358,12 @@ def newton(scene, x: Targets, tolerance: float,
     return report
 
 
+#: ImplicitEuler's default gravity: (0, 0, -9.81) for a single target;
+#: with several targets whose inertia is all in world space, none of their
+#: own (``world_gravity`` pulls the world positions).
+DEFAULT_GRAVITY = (0.0, 0.0, -9.81)
+
+
 def initial_velocities(targets: Sequence[Attribute], given,
                        single: bool) -> List[np.ndarray]:
     """ImplicitEuler's starting velocities: ``given`` (one array or None
@@ -433,11 +440,23 @@ class ImplicitEuler:
     instead of from ``x``: in smooth motion its first direction then only
     corrects the change of velocity (22% fewer Newton iterations on the
     twisting cloth, 6% on the bunny on a cloth, docs/benchmarks.md). The
-    solution is the same minimiser; False starts from ``x``, as IPC does."""
+    solution is the same minimiser; False starts from ``x``, as IPC does.
+
+    ``world``: world-space inertias (:func:`yasps.sim.add_world_inertia`)
+    of bodies whose parameters are not world positions or linear maps of
+    them (angles, rotation vectors): each step predicts their world
+    positions from world velocities and ``world_gravity``, and keeps the
+    velocities (``world_velocities``: their starting values, one (N, 3)
+    array or None per inertia; ``inertia.velocity`` after each step).
+    Targets whose inertia is all in world space take ``predicted=None``
+    (or no ``predicted`` at all) and no gravity of their own.
+    ``normalize``: per target, None or a function applied to its value
+    after each step, for a parameter with several values of the same
+    world positions (:func:`yasps.sim.wrap_rotation_vectors`)."""
 
     def __init__(self, scene, x: Optional[Targets] = None,
                  x_hat: Optional[Targets] = None, dt: Optional[float] = None,
-                 gravity=(0.0, 0.0, -9.81), velocity_tolerance: float = 1e-2,
+                 gravity=DEFAULT_GRAVITY, velocity_tolerance: float = 1e-2,
                  step_bound: Optional[Callable[[np.ndarray, np.ndarray],
                                                float]] = None,
                  fixed=None, max_iterations: int = MAX_ITERATIONS,
@@ -448,7 +467,9 @@ class ImplicitEuler:
                  *, targets: Optional[Sequence[Attribute]] = None,
                  predicted: Optional[Sequence[Attribute]] = None,
                  projection: str = "progressive", cg_forcing: bool = True,
-                 warm_start: bool = True, velocities=None):
+                 warm_start: bool = True, velocities=None, world=None,
+                 world_velocities=None,
+                 world_gravity=(0.0, 0.0, -9.81), normalize=None):
         # targets= and predicted= are the multi-target spelling of x, x_hat.
         if targets is not None or predicted is not None:
             if x is not None or x_hat is not None:
@@ -456,10 +477,13 @@ class ImplicitEuler:
                                  "targets= and predicted=, not both")
             x, x_hat = (None if targets is None else list(targets),
                         None if predicted is None else list(predicted))
+        if x is not None and x_hat is None and world is not None:
+            x_hat = [None] * len(_as_list(x))   # all inertia in world space
         if x is None or x_hat is None or dt is None:
             raise SceneError("ImplicitEuler: give the targets (x or "
                              "targets=), their predictions (x_hat or "
-                             "predicted=) and dt")
+                             "predicted=, None for a target whose inertia "
+                             "is in world space) and dt")
         single = isinstance(x, Attribute)
         self.scene, self.dt = scene, float(dt)
         self.targets, self.predicted = _as_list(x), _as_list(x_hat)
@@ -467,6 +491,9 @@ class ImplicitEuler:
             raise SceneError(f"ImplicitEuler: {len(self.targets)} targets but "
                              f"{len(self.predicted)} predictions")
         _check_targets(scene, self.targets)
+        if not single and all(p is None for p in self.predicted) and \
+                gravity is DEFAULT_GRAVITY:
+            gravity = [None] * len(self.targets)  # gravity acts in the world
         gravities = [gravity] if single else list(gravity)
         if len(gravities) != len(self.targets):
             raise SceneError("ImplicitEuler: give one gravity (or None) per "
@@ -474,6 +501,29 @@ class ImplicitEuler:
         self.gravity = [None if g is None else
                         np.asarray(g, dtype=float).reshape(1, -1, 1)
                         for g in gravities]
+        for t, hat, g in zip(self.targets, self.predicted, self.gravity):
+            if hat is None and g is not None:
+                raise SceneError(f"ImplicitEuler: {t.describe()} has no "
+                                 f"prediction, so no gravity of its own "
+                                 f"(give None; world_gravity pulls world "
+                                 f"inertia)")
+        #: the world-space inertias (:mod:`yasps.sim.world`)
+        self.world: List[WorldInertia] = [] if world is None else \
+            ([world] if isinstance(world, WorldInertia) else list(world))
+        self.world_gravity = None if world_gravity is None else \
+            np.asarray(world_gravity, dtype=float).reshape(3)
+        given = [None] * len(self.world) if world_velocities is None \
+            else list(world_velocities)
+        if len(given) != len(self.world):
+            raise SceneError(f"ImplicitEuler: {len(given)} world velocities "
+                             f"for {len(self.world)} world inertias")
+        for inertia, v in zip(self.world, given):
+            inertia.set_velocity(v)
+        self.normalize = [None] * len(self.targets) if normalize is None \
+            else list(normalize)
+        if len(self.normalize) != len(self.targets):
+            raise SceneError("ImplicitEuler: give one normalize function "
+                             "(or None) per target")
         masks = [fixed] if single else (list(fixed) if fixed is not None
                                         else [None] * len(self.targets))
         if len(masks) != len(self.targets):
@@ -618,9 +668,13 @@ class ImplicitEuler:
         if self.contact is not None:
             self.contact.forgetCandidates()
         previous = [t.value for t in self.targets]
+        for inertia in self.world:
+            inertia.predict(self.dt, self.world_gravity)
         for value, v, g, mask, hat in zip(previous, self.velocities,
                                           self.gravity, self.fixed,
                                           self.predicted):
+            if hat is None:
+                continue
             pull = np.zeros_like(value) if g is None else \
                 np.broadcast_to(g, value.shape).copy()
             if mask is not None:
@@ -680,6 +734,11 @@ class ImplicitEuler:
                 break
         self.velocities = [(t.value - p) / self.dt
                            for t, p in zip(self.targets, previous)]
+        for inertia in self.world:
+            inertia.finish(self.dt)
+        for t, fn in zip(self.targets, self.normalize):
+            if fn is not None:
+                t.updateValue(fn(t.value))
         self.time += self.dt
         report.prescribedLag = lagging
         report.seconds["compile"] += compile_seconds
