@@ -12,6 +12,7 @@ import numpy as np
 import pytest
 
 import yasps
+from yasps import SceneError
 from yasps import energies as E
 from yasps import sim
 from yasps.contact import Contact, surface_of
@@ -181,12 +182,13 @@ def test_halfspace_friction_equals_a_static_triangle():
 
 
 def block_on_slope(angle_degrees: float, mu: float, steps: int,
-                   on_report=None, **stepping):
+                   on_report=None, ground_mu=None, **stepping):
     """A stiff soft block resting on a slope of ``angle_degrees`` with
     friction ``mu``, stepped by implicit Euler (``stepping``: more of its
     options; ``on_report``: called with each step's report): the distance
     its centre slid down the slope, and the smallest height of a vertex
-    above the plane in any frame (by ipctk's point-plane distance)."""
+    above the plane in any frame (by ipctk's point-plane distance).
+    ``ground_mu``: the block-slope pair's own coefficient, if given."""
     theta = np.radians(angle_degrees)
     normal = np.array([-np.sin(theta), 0.0, np.cos(theta)])
     down = np.array([-np.cos(theta), 0.0, -np.sin(theta)])
@@ -208,7 +210,8 @@ def block_on_slope(angle_degrees: float, mu: float, steps: int,
     s.addMinimizeTarget(x)
     contact = Contact(s, v, faces=surface_of(tets), dhat=dhat,
                       average_mass=mass, halfspaces=[((0, 0, 0), normal)],
-                      friction=mu, eps_v=1e-3)
+                      friction=mu, eps_v=1e-3, friction_pairs=None
+                      if ground_mu is None else {(v, 0): ground_mu})
     stepper = ImplicitEuler(s, x, x_hat, dt=dt, contact=contact, **stepping)
     lowest = np.inf
     # The plane as a triangle for ipctk: (0, t0, t1) with t0 x t1 = normal.
@@ -243,6 +246,58 @@ def test_block_sticks_below_the_friction_angle_and_slides_above():
     free = 0.5 * 9.81 * (np.sin(theta) - mu * np.cos(theta)) * t * t
     assert 0.6 * free < slid < 1.2 * free
     assert min(low_stuck, low_slid) > 0.0
+
+
+def test_a_pair_of_bodies_takes_its_own_coefficient():
+    """The block-slope pair's coefficient overrides the contact's: 0.1
+    against a default of 0.5 lets the block slide on a 15-degree slope
+    as far as g (sin - 0.1 cos) t^2 / 2 allows; 0.5 against a default of 0
+    holds it."""
+    steps = 20
+    t = steps * 0.01
+    slid, low_slid = block_on_slope(15.0, 0.5, steps, ground_mu=0.1,
+                                    velocity_tolerance=1e-3)
+    stuck, low_stuck = block_on_slope(15.0, 0.0, steps, ground_mu=0.5,
+                                      velocity_tolerance=1e-3)
+    theta = np.radians(15.0)
+    free = 0.5 * 9.81 * (np.sin(theta) - 0.1 * np.cos(theta)) * t * t
+    assert 0.6 * free < slid < 1.2 * free
+    assert abs(stuck) < 2e-3 * t
+    assert min(low_stuck, low_slid) > 0.0
+
+
+def test_friction_pairs_scale_each_pair_and_refuse_strangers():
+    """Between two soft boxes, a pair coefficient of 0.6 against the
+    default 0.3 doubles every friction force (forces are linear in mu);
+    0 leaves no friction pair; a side that is no member is refused."""
+    verts, tets = box_tet_mesh(2, 0.5)
+    faces = surface_of(tets)
+    upper = verts + [0.1, 0.05, 0.52]
+    forces = []
+    for name, pairs in (("mu_default", None), ("mu_pair", 0.6),
+                        ("mu_none", 0.0)):
+        s, prims, (xa, xb), union = two_soft_boxes(name, verts, upper)
+        contact = Contact(s, union, faces=np.concatenate(
+            [faces, faces + len(verts)]), dhat=0.05, kappa=3.0,
+            friction=0.3, eps_v=0.1, friction_pairs=None if pairs is None
+            else {(prims[0], prims[1]): pairs})
+        s.addMinimizeTarget([xa, xb])
+        counts = contact.update(lag=True, dt=0.01)
+        xb.updateValue(upper + [2e-3, -1e-3, 0.0])
+        forces.append((contact.forces("friction"),
+                       sum(counts[f"friction{k}"] for k in (1, 2, 3, 4))))
+    (base, n_base), (doubled, n_doubled), (none, n_none) = forces
+    assert n_base == n_doubled > 0 and n_none == 0
+    assert np.abs(base).max() > 0
+    np.testing.assert_allclose(doubled, 2 * base, rtol=1e-12, atol=0)
+    np.testing.assert_array_equal(none, 0.0)
+    s, prims, _, union = two_soft_boxes("mu_stranger", verts, upper)
+    with pytest.raises(SceneError, match="not a member"):
+        Contact(s, union, faces=faces, friction=0.3, kappa=1.0,
+                friction_pairs={(prims[0], union): 0.5})
+    with pytest.raises(SceneError, match="half-space 0; there are 0"):
+        Contact(s, union, faces=faces, friction=0.3, kappa=1.0,
+                friction_pairs={(prims[0], 0): 0.5})
 
 
 def test_lagged_friction_iterations_follow_the_sliding_law():

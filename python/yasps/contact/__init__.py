@@ -36,6 +36,7 @@ from ..frontend.scene import Primitive, PrimitiveUnion, Scene
 from ..runtime import current
 from ..solve import assemble
 from .friction import ARITIES, FrictionPairs, tangential_pairs
+from .coefficients import FrictionCoefficients
 from .forces import FORCE_KINDS, ContactForces, member_sums
 from .masses import MASS, average_vertex_mass
 from .model import add_contact_energies
@@ -66,7 +67,12 @@ class Contact:
     (origin, normal) the vertices stay above. ``friction`` > 0 adds IPC's
     lagged friction with coefficient mu = friction and smoothing velocity
     ``eps_v`` (m/s; the displacement threshold is eps_v dt), lagged by
-    ``update(lag=True, dt=...)`` once per time step. ``detection``
+    ``update(lag=True, dt=...)`` once per time step.
+    ``friction_pairs`` gives pairs of bodies their own coefficients:
+    ``{(member_a, member_b): mu, (member, k): mu}``, members of the
+    ``vertices`` UNION and ``k`` the index of a half-space (a member with
+    itself for its self-contact); other pairs take ``friction``
+    (:mod:`.coefficients`). ``detection``
     ("runtime" or "ipctk", :mod:`.detection`) finds the pairs and bounds
     steps: the runtime's by default, ipctk's for a cross-check.
 
@@ -90,7 +96,8 @@ class Contact:
                  projection: str = "clamp", halfspaces=(),
                  friction: float = 0.0, eps_v: float = 1e-3,
                  detection: str = "runtime",
-                 points: Union[bool, np.ndarray] = True):
+                 points: Union[bool, np.ndarray] = True,
+                 friction_pairs=None):
         if position not in vertices:
             raise SceneError(f"Contact: {vertices.describe()} has no "
                              f"attribute {position!r} (its world positions)")
@@ -106,7 +113,13 @@ class Contact:
         if not friction >= 0 or not eps_v > 0:
             raise ValueError(f"Contact: friction must be >= 0 and eps_v > 0, "
                              f"got friction={friction}, eps_v={eps_v}")
-        self.friction, self.eps_v = float(friction), float(eps_v)
+        self.eps_v = float(eps_v)
+        halfspaces = list(halfspaces)
+        #: the friction coefficient of each pair of bodies
+        self.coefficients = FrictionCoefficients(
+            vertices, friction, friction_pairs, len(list(halfspaces)))
+        #: the largest coefficient in play: > 0 when there is friction
+        self.friction = self.coefficients.largest
         self.scene, self.vertices, self.dhat = scene, vertices, float(dhat)
         if kappa is None and average_mass is None:
             average_mass = average_vertex_mass(vertices)
@@ -239,8 +252,9 @@ class Contact:
         for found in pairs.values():
             found.vertices = [self._full(np.asarray(ids)).tolist()
                               for ids in found.vertices]
-        self.halfspaces.friction_pairs(V, start, barrier, self.friction,
-                                       pairs[1])
+        planes = self.halfspaces.friction_pairs(V, start, barrier,
+                                                self.friction, pairs[1])
+        self.coefficients.apply(pairs, planes)
         for arity, found in pairs.items():
             found.sort()
             found.store(self.friction_primitives[arity])

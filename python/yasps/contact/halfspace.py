@@ -123,15 +123,17 @@ class HalfSpaces:
             (self.signed_distances(V) < 0).any())
 
     def friction_pairs(self, V: np.ndarray, start: np.ndarray, barrier,
-                       mu: float, pairs) -> None:
+                       mu: float, pairs) -> np.ndarray:
         """Adds the lagged friction data of the vertices close to a plane
         now to ``pairs`` (a :class:`.friction.FrictionPairs` of arity 1):
         the plane's tangent basis and ipctk's normal-force magnitude of
         ``barrier`` (a BarrierPotential) at the vertex's distance, with
-        tangential motion measured from ``start``."""
+        tangential motion measured from ``start``. Returns the plane of
+        each pair added, in order."""
         vertex, plane = self.close_pairs(V)
         gaps = self.signed_distances(V)[vertex, plane]
         for v, k, gap in zip(vertex, plane, gaps):
             force = barrier.force_magnitude(float(gap * gap), 0.0)
             pairs.add([v], [1.0], tangent_basis(self.normals[k]), start[[v]],
                       mu * force)
+        return plane
