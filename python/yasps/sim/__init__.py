@@ -15,6 +15,7 @@ from .meshes import (HEX_CORNERS, Cage, box_tet_mesh, cage_grid,
                      zigzag_spring)
 from .inversion import (combined_bound, inversion_bound,
                         inversion_free_fraction)
+from .loads import Loads, add_loads
 from .motion import Motion, affine_motion, affine_velocity, vertex_motion
 from .newton import (ImplicitEuler, NewtonNotConverged, NewtonReport,
                      iteration_totals, newton)
@@ -27,7 +28,7 @@ from .world import WorldInertia, add_world_inertia
 from .tetrahedralize import tetrahedralize
 
 __all__ = ["AffineBody", "Body", "Cage", "FreeVertices", "HEX_CORNERS",
-           "RotationBody", "WorldInertia", "add_rotation_vector_body",
+           "Loads", "RotationBody", "WorldInertia", "add_loads", "add_rotation_vector_body",
            "add_world_inertia", "rotation_matrices", "wrap_rotation_vectors",
            "Motion", "affine_motion", "affine_velocity", "vertex_motion",
            "combined_bound", "inversion_bound", "inversion_free_fraction",

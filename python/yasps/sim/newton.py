@@ -491,9 +491,11 @@ class ImplicitEuler:
             raise SceneError(f"ImplicitEuler: {len(self.targets)} targets but "
                              f"{len(self.predicted)} predictions")
         _check_targets(scene, self.targets)
-        if not single and all(p is None for p in self.predicted) and \
-                gravity is DEFAULT_GRAVITY:
-            gravity = [None] * len(self.targets)  # gravity acts in the world
+        if not single and (gravity is None or (
+                all(p is None for p in self.predicted)
+                and gravity is DEFAULT_GRAVITY)):
+            # None for all; world inertia alone: gravity acts in the world.
+            gravity = [None] * len(self.targets)
         gravities = [gravity] if single else list(gravity)
         if len(gravities) != len(self.targets):
             raise SceneError("ImplicitEuler: give one gravity (or None) per "
