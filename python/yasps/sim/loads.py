@@ -13,7 +13,6 @@ centre of mass and turns nothing.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Optional
 
 import numpy as np
 
