@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 
 import yasps
+from yasps import SceneError
 from yasps.contact import Contact, surface_of
 from yasps.sim import (ImplicitEuler, add_affine_body, add_free_vertices,
                        box_tet_mesh, lumped_masses)
@@ -123,3 +124,28 @@ def test_forces_reject_unknown_kinds():
         contact.forces("tangential")
     with pytest.raises(ValueError, match="per must be"):
         contact.forces(per="member")
+
+
+def test_relative_lengths_are_fractions_of_the_scene_size():
+    """dhat, eps_v and the velocity tolerance as Relative fractions of the
+    bounding box's diagonal, as IPC's scene files state them."""
+    from yasps.sim import Relative
+    s, contact, _ = box_over_box("relative_lengths", False)
+    size = contact.size
+    verts, _ = box_tet_mesh(2, 0.5)
+    assert size > np.linalg.norm(verts.max(0) - verts.min(0))
+    relative = Contact(s, contact.vertices, dhat=Relative(1e-3),
+                       eps_v=Relative(2e-3), kappa=1.0, name="relative")
+    assert relative.dhat == pytest.approx(1e-3 * size, rel=1e-15)
+    assert relative.eps_v == pytest.approx(2e-3 * size, rel=1e-15)
+    stepper = ImplicitEuler(s, targets=s.minimizeTargets, dt=0.01,
+                            predicted=[None, None], world=[],
+                            velocity_tolerance=Relative(1e-2),
+                            contact=relative)
+    assert stepper.velocity_tolerance == pytest.approx(1e-2 * size)
+    with pytest.raises(SceneError, match="Relative velocity_tolerance"):
+        ImplicitEuler(s, targets=s.minimizeTargets, dt=0.01,
+                      predicted=[None, None],
+                      velocity_tolerance=Relative(1e-2))
+    with pytest.raises(ValueError, match="fraction must be > 0"):
+        Relative(0.0)

@@ -37,6 +37,7 @@ from ..runtime import current
 from ..solve import assemble
 from .friction import ARITIES, FrictionPairs, tangential_pairs
 from .coefficients import FrictionCoefficients
+from .relative import Length, Relative, diagonal, resolve
 from .forces import FORCE_KINDS, ContactForces, member_sums
 from .masses import MASS, average_vertex_mass
 from .model import add_contact_energies
@@ -47,7 +48,7 @@ from .stiffness import AdaptiveStiffness
 from .surface import edges_of, surface_of
 from .sweep import Sweep
 
-__all__ = ["Contact", "MIN_SEPARATION", "PAIR_TYPES", "edges_of",
+__all__ = ["Contact", "MIN_SEPARATION", "PAIR_TYPES", "Relative", "edges_of",
            "surface_of"]
 
 #: Straight pieces that follow a curved (non-linear) motion in stepBound.
@@ -74,7 +75,10 @@ class Contact:
     itself for its self-contact); other pairs take ``friction``
     (:mod:`.coefficients`). ``detection``
     ("runtime" or "ipctk", :mod:`.detection`) finds the pairs and bounds
-    steps: the runtime's by default, ipctk's for a cross-check.
+    steps: the runtime's by default, ipctk's for a cross-check. ``dhat``
+    and ``eps_v`` may be ``Relative(fraction)``: that fraction of the
+    diagonal of the vertices' bounding box now (``contact.size``), as IPC's
+    scene files give them (:mod:`.relative`).
 
     ``points`` says which vertices on no face or edge take part, as IPC's
     codimensional points: all of them (True, the default: particles, and a
@@ -89,12 +93,12 @@ class Contact:
     def __init__(self, scene: Scene,
                  vertices: Union[Primitive, PrimitiveUnion],
                  faces: Optional[np.ndarray] = None,
-                 edges: Optional[np.ndarray] = None, dhat: float = 1e-3,
+                 edges: Optional[np.ndarray] = None, dhat: Length = 1e-3,
                  kappa: Optional[float] = None,
                  average_mass: Optional[float] = None,
                  position: str = "position", name: str = "contact",
                  projection: str = "clamp", halfspaces=(),
-                 friction: float = 0.0, eps_v: float = 1e-3,
+                 friction: float = 0.0, eps_v: Length = 1e-3,
                  detection: str = "runtime",
                  points: Union[bool, np.ndarray] = True,
                  friction_pairs=None):
@@ -105,6 +109,10 @@ class Contact:
         if self.positions.shape != (3, 1):
             raise SceneError(f"Contact: world positions must be 3x1, got "
                              f"{self.positions.describe()}")
+        #: the diagonal of the vertices' bounding box at construction, the
+        #: size that Relative lengths are fractions of
+        self.size = diagonal(self.positions.compute().value)
+        dhat, eps_v = resolve(dhat, self.size), resolve(eps_v, self.size)
         if not dhat > 0:
             raise ValueError(f"Contact: dhat must be > 0, got {dhat}")
         if detection not in DETECTIONS:

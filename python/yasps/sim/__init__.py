@@ -2,6 +2,7 @@
 search and step bounds), bodies (soft tets, cloth, affine bodies), meshes,
 and output (ParaView series, pictures, videos)."""
 
+from ..contact.relative import Relative
 from .bodies import (AffineBody, FreeVertices, add_affine_body,
                      add_affine_inertia, add_caged_surface, add_cloth,
                      add_elastic_tets, add_free_vertices,
@@ -28,7 +29,7 @@ from .world import WorldInertia, add_world_inertia
 from .tetrahedralize import tetrahedralize
 
 __all__ = ["AffineBody", "Body", "Cage", "FreeVertices", "HEX_CORNERS",
-           "Loads", "RotationBody", "WorldInertia", "add_loads", "add_rotation_vector_body",
+           "Loads", "Relative", "RotationBody", "WorldInertia", "add_loads", "add_rotation_vector_body",
            "add_world_inertia", "rotation_matrices", "wrap_rotation_vectors",
            "Motion", "affine_motion", "affine_velocity", "vertex_motion",
            "combined_bound", "inversion_bound", "inversion_free_fraction",

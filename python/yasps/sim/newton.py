@@ -16,6 +16,7 @@ from typing import Callable, Dict, List, Optional, Sequence, Tuple, Union
 import numpy as np
 from tqdm import tqdm
 
+from ..contact.relative import Relative, resolve
 from ..frontend.attribute import Attribute
 from ..frontend.errors import SceneError
 from ..runtime import current as current_backend
@@ -404,7 +405,8 @@ class ImplicitEuler:
     (``gravity``: one vector for a single target, or one per target, None
     for none) and minimises the energy by :func:`newton`, with ``contact``
     if given, until the largest displacement of a Newton step over ``dt`` is
-    below ``velocity_tolerance`` (paper section 9.1); then
+    below ``velocity_tolerance`` (paper section 9.1; ``Relative(f)``: f
+    times the contact's size per second, as IPC states it); then
     ``v = (x_new - x_old) / dt``. ``fixed`` (as for :func:`newton`) keeps
     DoFs where they are; ``cg_stopping`` is PCG's stopping rule (see
     :func:`newton`). Several targets may also be given as
@@ -534,6 +536,12 @@ class ImplicitEuler:
         self.fixed = [None if m is None else
                       checked_fixed_mask(t, m, "ImplicitEuler")
                       for t, m in zip(self.targets, masks)]
+        if isinstance(velocity_tolerance, Relative):
+            if contact is None:
+                raise SceneError("ImplicitEuler: a Relative velocity_tolerance "
+                                 "is a fraction of the contact's size; give "
+                                 "a contact, or a number")
+            velocity_tolerance = resolve(velocity_tolerance, contact.size)
         self.velocity_tolerance = velocity_tolerance
         self.step_bound, self.contact = step_bound, contact
         if contact is not None:
