@@ -8,37 +8,14 @@ import pytest
 
 from yasps import SceneError
 from yasps.contact import surface_of
-from yasps.sim import signed_tet_volumes, tetrahedralize
+from yasps.sim import signed_tet_volumes, sphere_surface, tetrahedralize
 from yasps.sim.sphere import triangle_orientations
 from yasps.sim.tetrahedralize import open_edges
 
 
 def icosphere(subdivisions: int = 2, radius: float = 0.1):
     """A closed triangulated sphere, faces turned outwards."""
-    t = (1 + 5 ** 0.5) / 2
-    V = [[-1, t, 0], [1, t, 0], [-1, -t, 0], [1, -t, 0], [0, -1, t],
-         [0, 1, t], [0, -1, -t], [0, 1, -t], [t, 0, -1], [t, 0, 1],
-         [-t, 0, -1], [-t, 0, 1]]
-    F = [[0, 11, 5], [0, 5, 1], [0, 1, 7], [0, 7, 10], [0, 10, 11],
-         [1, 5, 9], [5, 11, 4], [11, 10, 2], [10, 7, 6], [7, 1, 8],
-         [3, 9, 4], [3, 4, 2], [3, 2, 6], [3, 6, 8], [3, 8, 9],
-         [4, 9, 5], [2, 4, 11], [6, 2, 10], [8, 6, 7], [9, 8, 1]]
-    V = [np.array(v, float) / np.linalg.norm(v) for v in V]
-    for _ in range(subdivisions):
-        middle, out = {}, []
-
-        def mid(a, b):
-            key = (min(a, b), max(a, b))
-            if key not in middle:
-                m = V[a] + V[b]
-                V.append(m / np.linalg.norm(m))
-                middle[key] = len(V) - 1
-            return middle[key]
-        for a, b, c in F:
-            ab, bc, ca = mid(a, b), mid(b, c), mid(c, a)
-            out += [[a, ab, ca], [b, bc, ab], [c, ca, bc], [ab, bc, ca]]
-        F = out
-    return radius * np.array(V), np.array(F)
+    return sphere_surface(radius, subdivisions)
 
 
 def enclosed_volume(V, F) -> float:

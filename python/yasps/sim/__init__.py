@@ -17,6 +17,8 @@ from .meshes import (HEX_CORNERS, Cage, box_tet_mesh, cage_grid,
 from .inversion import (combined_bound, inversion_bound,
                         inversion_free_fraction)
 from .loads import Loads, add_loads
+from .parts import CagedBody, add_caged_body, add_obstacle, contact_union
+from .shapes import bowl_surface, ring_surface, sphere_surface
 from .motion import Motion, affine_motion, affine_velocity, vertex_motion
 from .newton import (ImplicitEuler, NewtonNotConverged, NewtonReport,
                      iteration_totals, newton)
@@ -29,6 +31,8 @@ from .world import WorldInertia, add_world_inertia
 from .tetrahedralize import tetrahedralize
 
 __all__ = ["AffineBody", "Body", "Cage", "FreeVertices", "HEX_CORNERS",
+           "CagedBody", "add_caged_body", "add_obstacle", "contact_union",
+           "bowl_surface", "ring_surface", "sphere_surface",
            "Loads", "Relative", "RotationBody", "WorldInertia", "add_loads", "add_rotation_vector_body",
            "add_world_inertia", "rotation_matrices", "wrap_rotation_vectors",
            "Motion", "affine_motion", "affine_velocity", "vertex_motion",
