@@ -26,8 +26,9 @@ from ..solve.prepare import compile_scene
 from . import checkpoint
 from .forcing import Forcing
 from .world import WorldInertia
-from .prescribed import (Prescription, entry_mask, fixed_with_prescribed,
-                         move_prescribed, prescription)
+from .prescribed import (Prescription, add_pull, entry_mask,
+                         fixed_with_prescribed, move_prescribed, prescription,
+                         pull_prescribed)
 
 Targets = Union[Attribute, Sequence[Attribute]]
 
@@ -626,12 +627,17 @@ class ImplicitEuler:
         masked entries' values in order, any shape of that size):
         kinematic pins that move, a motor turning an affine body's A, a
         scripted obstacle. Each step moves them to ``fn(time + dt)`` before
-        Newton, as far as CCD allows (the rest left for later steps,
-        reported as ``report.prescribedLag``), and Newton keeps them fixed
-        (:mod:`yasps.sim.prescribed`). ``stepper.time`` counts from 0 at
-        construction."""
-        self.prescriptions.append(prescription(self.targets, target, fn,
-                                               mask))
+        Newton, as far as CCD allows; where something is in the way, a
+        penalty pulls them there with everything free (so a motor pushes
+        what it meets, as IPC's kinematic conditions do), and they move
+        the rest of the way; what CCD still forbids is left for later
+        steps, reported as ``report.prescribedLag``. Newton then keeps them
+        fixed (:mod:`yasps.sim.prescribed`). ``stepper.time`` counts from 0
+        at construction. Registers the penalty as an energy of the
+        target's primitive (off until needed)."""
+        found = prescription(self.targets, target, fn, mask)
+        found.pull = add_pull(target, len(self.prescriptions))
+        self.prescriptions.append(found)
 
     def _bound(self, steps: List[np.ndarray]) -> float:
         """The safe fraction of the motion ``steps`` (one per target) from
@@ -662,6 +668,21 @@ class ImplicitEuler:
         for t, step in zip(self.targets, steps):
             t.updateValue(t.value + alpha * step)
         return time.perf_counter() - clock
+
+    def _solve(self, fixed) -> "NewtonReport":
+        """Newton on the step's energy with the entries ``fixed`` (one mask
+        or None per target) held."""
+        if fixed is not None and all(m is None for m in fixed):
+            fixed = None
+        return newton(self.scene, self.targets,
+                      tolerance=self.velocity_tolerance * self.dt,
+                      step_bound=self.step_bound,
+                      max_iterations=self.max_iterations,
+                      cg_tolerance=self.cg_tolerance, fixed=fixed,
+                      contact=self.contact,
+                      cg_max_iterations=self.cg_max_iterations,
+                      cg_stopping=self.cg_stopping, compile_first=False,
+                      projection=self.projection, cg_forcing=self.cg_forcing)
 
     @property
     def velocity(self) -> np.ndarray:
@@ -707,24 +728,26 @@ class ImplicitEuler:
                                     step_start=start_world if lag else None)
                 lag_seconds = time.perf_counter() - clock
             guess_seconds = 0.0
+            pulls: List[NewtonReport] = []
             if lag == 0:
                 clock = time.perf_counter()
                 lagging = move_prescribed(self.prescriptions, self.targets,
                                           self.time + self.dt, self._bound)
                 prescribed_seconds = time.perf_counter() - clock
-                if self.warm_start:
+                if lagging > 0.0:
+                    # Stopped short by what they must push: pulled there
+                    # with everything free, then the rest of the way.
+                    pulls = pull_prescribed(
+                        self.prescriptions, self.targets, self.time + self.dt,
+                        lambda: self._solve(self.fixed), self.scene)
+                    lagging = move_prescribed(
+                        self.prescriptions, self.targets, self.time + self.dt,
+                        self._bound)
+                elif self.warm_start:
                     guess_seconds = self._start_from_velocities(fixed)
-            solve = newton(self.scene, self.targets,
-                           tolerance=self.velocity_tolerance * self.dt,
-                           step_bound=self.step_bound,
-                           max_iterations=self.max_iterations,
-                           cg_tolerance=self.cg_tolerance, fixed=fixed,
-                           contact=self.contact,
-                           cg_max_iterations=self.cg_max_iterations,
-                           cg_stopping=self.cg_stopping,
-                           compile_first=False,
-                           projection=self.projection,
-                           cg_forcing=self.cg_forcing)
+            solve = self._solve(fixed)
+            for pulled in pulls:
+                solve.add(pulled)
             solve.seconds["collisions"] += lag_seconds
             solve.seconds["ccd"] += guess_seconds + (prescribed_seconds
                                                      if lag == 0 else 0.0)

@@ -27,13 +27,59 @@ from ..solve.minimize import checked_fixed_mask
 CUT_FRACTION = 0.9
 
 
+#: How many penalty solves a step may take to bring its prescribed
+#: entries to their values, each with a hundredfold stiffer penalty.
+PULL_ROUNDS = 4
+#: The largest distance from their values at which pulled entries are then
+#: moved the rest of the way, relative to the distance they were short.
+PULL_TOLERANCE = 1e-3
+
+
+@dataclass
+class Pull:
+    """The penalty ``sum w (q - q*)^2 / 2`` on a target's entries, off
+    (``w`` = 0) except while a step pulls its prescribed entries: stored
+    values ``q*`` (``target``) and ``w`` (``weight``) beside the target,
+    so switching it compiles nothing."""
+    target: Attribute
+    weight: Attribute
+
+    def set(self, wanted: np.ndarray, mask: np.ndarray, k: float) -> None:
+        self.target.updateValue(wanted)
+        self.weight.updateValue(np.where(mask, k, 0.0))
+
+    def off(self) -> None:
+        self.weight.updateValue(np.zeros(self.weight.value.shape))
+
+
+def add_pull(target: Attribute, index: int) -> Pull:
+    """Registers the :class:`Pull` penalty of prescription ``index`` on
+    ``target``'s primitive (off until a step needs it)."""
+    owner = target.owner
+    rows, cols = target.shape
+    wanted = owner.addConstant(f"prescribed{index}_value", rows=rows,
+                               cols=cols)
+    wanted.updateValue(target.value)
+    weight = owner.addConstant(f"prescribed{index}_weight", rows=rows,
+                               cols=cols)
+    weight.updateValue(np.zeros(target.value.shape))
+    gap = target - wanted
+    owner.scene.addEnergy(owner.addAttribute(
+        f"prescribed{index}_pull",
+        computed_attribute=0.5 * weight.cwiseProduct(gap.cwiseProduct(gap))
+        .sum()))
+    return Pull(wanted, weight)
+
+
 @dataclass
 class Prescription:
     """Entries of target ``index`` (``mask`` over its value's entries) that
-    take ``fn(time)`` (their values, in the order of the masked entries)."""
+    take ``fn(time)`` (their values, in the order of the masked entries),
+    with the penalty that pulls them there where CCD stops them."""
     index: int
     fn: Callable[[float], np.ndarray]
     mask: np.ndarray
+    pull: Optional[Pull] = None
 
 
 def prescription(targets: Sequence[Attribute], target: Attribute,
@@ -105,6 +151,61 @@ def move_prescribed(prescriptions: List[Prescription],
         if step.any():
             t.updateValue(value + fraction * step)
     return float(max(np.abs(s).max() for s in steps) * (1.0 - fraction))
+
+
+def curvature(scene, targets: Sequence[Attribute],
+              steps: List[np.ndarray]) -> float:
+    """The scene energy's second derivative along the motion ``steps`` (one
+    per target), per squared unit of its largest entry, by a second
+    difference at a thousandth of the motion (the scale of a pull)."""
+    values = [t.value for t in targets]
+    h = 1e-3
+
+    def energy(fraction: float) -> float:
+        for t, value, step in zip(targets, values, steps):
+            t.updateValue(value + fraction * step)
+        return scene.evaluateEnergy()
+
+    try:
+        e0, e1, e2 = energy(0.0), energy(h), energy(2 * h)
+    finally:
+        for t, value in zip(targets, values):
+            t.updateValue(value)
+    size = max(float(np.abs(s).max()) for s in steps)
+    return abs(e2 - 2 * e1 + e0) / (h * size) ** 2
+
+
+def pull_prescribed(prescriptions: List[Prescription], targets, time: float,
+                    solve: Callable[[], object], scene) -> List[object]:
+    """Brings prescribed entries that CCD stopped short towards their
+    values at ``time`` by the penalty solves ``solve()`` (Newton with them
+    free); returns the solves' reports."""
+    values = [t.value for t in targets]
+    steps = [np.zeros_like(v) for v in values]
+    wanted = {}
+    for p in prescriptions:
+        wanted[id(p)] = wanted_values(p, values[p.index], time)
+        steps[p.index][p.mask] = (wanted[id(p)] - values[p.index])[p.mask]
+    short = max(float(np.abs(s).max()) for s in steps)
+    if short == 0.0:
+        return []
+    k = 100.0 * max(curvature(scene, targets, steps), 1e-300)
+    reports = []
+    try:
+        for _ in range(PULL_ROUNDS):
+            for p in prescriptions:
+                p.pull.set(wanted[id(p)], p.mask, k)
+            reports.append(solve())
+            left = max(float(np.abs((targets[p.index].value
+                                     - wanted[id(p)])[p.mask]).max())
+                       for p in prescriptions)
+            if left <= PULL_TOLERANCE * short:
+                break
+            k *= 100.0
+    finally:
+        for p in prescriptions:
+            p.pull.off()
+    return reports
 
 
 def fixed_with_prescribed(fixed: Sequence[Optional[np.ndarray]],
