@@ -45,7 +45,8 @@ def test_tetgen_fills_the_sphere_and_keeps_its_surface():
     assert np.array_equal(np.unique(tt), np.arange(len(tv)))
 
 
-def test_ftetwild_fills_a_surface_with_a_hole():
+def test_ftetwild_fills_a_surface_with_a_hole(tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
     V, F = icosphere()
     F = F[1:]                       # one triangle missing
     assert open_edges(F) == 3
@@ -58,6 +59,8 @@ def test_ftetwild_fills_a_surface_with_a_hole():
     assert volumes.sum() == pytest.approx(full, rel=0.05)
     # Every output vertex lies near the sphere or inside it.
     assert np.linalg.norm(tv, axis=1).max() < 0.1 * 1.02
+    # fTetWild's scratch file stays out of the working folder.
+    assert not list(tmp_path.iterdir())
 
 
 def test_tetrahedralize_refuses_bad_input():

@@ -13,6 +13,8 @@ AGPL-licensed, fTetWild MPL: the user's choice of package decides.
 
 from __future__ import annotations
 
+import os
+import tempfile
 from typing import Optional, Tuple
 
 import numpy as np
@@ -119,8 +121,16 @@ def _ftetwild(V: np.ndarray, F: np.ndarray, edge_length: Optional[float]
         raise ImportError("tetrahedralize: method 'ftetwild' needs the "
                           "'pytetwild' package (pip install pytetwild)"
                           ) from error
-    nodes, tets = pytetwild.tetrahedralize(
-        V, F, edge_length_abs=edge_length, quiet=True)
+    # fTetWild writes its tracked surface (__tracked_surface.stl) into the
+    # working folder: run it in a folder of its own, not the user's.
+    here = os.getcwd()
+    with tempfile.TemporaryDirectory() as scratch:
+        os.chdir(scratch)
+        try:
+            nodes, tets = pytetwild.tetrahedralize(
+                V, F, edge_length_abs=edge_length, quiet=True)
+        finally:
+            os.chdir(here)
     return np.asarray(nodes, dtype=float), np.asarray(tets, dtype=np.int64)
 
 
