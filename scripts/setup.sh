@@ -6,7 +6,8 @@ set -euo pipefail
 LLVM_PREFIX=${LLVM_PREFIX:-/usr/lib/llvm-22}
 DEB_PACKAGES=(cmake ninja-build ccache g++ python3-dev libgtest-dev llvm-22-dev llvm-22-tools libmlir-22-dev mlir-22-tools
   clang-22 libclang-rt-22-dev libegl1 libegl-mesa0 libgl1-mesa-dri)
-PY_PACKAGES=(lit pytest pytest-xdist numpy scipy nanobind jax mpmath ipctk meshio tetgen pytetwild matplotlib pyvista tqdm imageio imageio-ffmpeg ray)
+# Python packages: the pins of requirements.txt.
+REQUIREMENTS="$(cd "$(dirname "$0")/.." && pwd)/requirements.txt"
 
 sudo_if_needed() {
   if [ "$(id -u)" -eq 0 ]; then "$@"; else sudo "$@"; fi
@@ -26,9 +27,12 @@ fi
 
 PYTHON=${PYTHON:-python3}
 py_missing=()
-for pkg in "${PY_PACKAGES[@]}"; do
-  "$PYTHON" -m pip show -q "$pkg" >/dev/null 2>&1 || py_missing+=("$pkg")
-done
+# One listing of what is installed, names normalised (lower case, '-').
+normalise() { tr 'A-Z_' 'a-z-'; }
+installed=$("$PYTHON" -m pip list --format=freeze 2>/dev/null | normalise)
+while read -r pin; do
+  grep -qxF "$(echo "$pin" | normalise)" <<<"$installed" || py_missing+=("$pin")
+done < <(grep -E '^[A-Za-z0-9_.-]+==' "$REQUIREMENTS")
 if [ ${#py_missing[@]} -gt 0 ]; then
   echo "setup: installing Python packages: ${py_missing[*]}"
   "$PYTHON" -m pip install -q "${py_missing[@]}"
