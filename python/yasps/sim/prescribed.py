@@ -189,10 +189,17 @@ def pull_prescribed(prescriptions: List[Prescription], targets, time: float,
     short = max(float(np.abs(s).max()) for s in steps)
     if short == 0.0:
         return []
-    k = 100.0 * max(curvature(scene, targets, steps), 1e-300)
+    bend = curvature(scene, targets, steps)
+    if not np.isfinite(bend):
+        # The energy is undefined a little along the missing motion (a
+        # material's barrier: a tet would invert): no pull can get there.
+        return []
+    k = 100.0 * max(bend, 1e-300)
     reports = []
     try:
         for _ in range(PULL_ROUNDS):
+            if not np.isfinite(k):
+                break
             for p in prescriptions:
                 p.pull.set(wanted[id(p)], p.mask, k)
             reports.append(solve())
