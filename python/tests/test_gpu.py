@@ -141,3 +141,24 @@ def test_the_gpu_solver_kernels_are_built_for_sm80_and_sm90():
     ptx = images[("sm_90", "ptx")].rstrip(b"\0").decode()
     for name in names:
         assert f".entry {name}(" in ptx
+
+
+def test_every_generated_kernel_can_launch_with_its_block_size():
+    """The launch-resource gate: ptxas' registers, stack and shared memory
+    of every kernel of the running example and of the demo scene fit its
+    block size on a multiprocessor, and its PTX entry takes the parameters
+    its launch record passes. A kernel given too large a block, or a launch
+    record one buffer short, is reported."""
+    from yasps.compiler.gpu_resources import launch_problems, resource_usage
+    for scene in (running_example(), drop.build(1)[0]):
+        kernels = yasps.compiler.gpu.compile_scene(scene, chips=["sm_90"])
+        usage = resource_usage(kernels.binaries[("sm_90", "ptx")], "sm_90")
+        assert launch_problems(kernels, usage) == []
+        assert all(u.registers > 0 for u in usage.values())
+    heaviest = max(kernels.kernels, key=lambda k: usage[k.name].registers)
+    heaviest.threads_per_block = 1024
+    heaviest.launch_params = heaviest.launch_params[:-1]
+    problems = launch_problems(kernels, usage)
+    assert len(problems) == 2
+    assert "registers x 1024 threads" in problems[0]
+    assert "launch record passes" in problems[1]
