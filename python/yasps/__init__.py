@@ -22,7 +22,9 @@ from . import compiler, config, ir, runtime, solve
 from .frontend import energies
 from .frontend.attribute import (Attribute, concat, constant, hstack,
                                  identity, select, vstack, zeros)
-from .frontend.errors import (IRError, LineageError, SceneError, ShapeError,
+from .frontend.errors import (ArgumentError, ArgumentTypeError,
+                              IndexRangeError, IRError, LineageError,
+                              NameLookupError, SceneError, ShapeError,
                               ValueUpdateError, YaspsError)
 from .frontend.scene import (Connectivity, Entity, Mesh, Primitive,
                              PrimitiveUnion, Scene, scene)
@@ -50,7 +52,8 @@ install(Services(
 ))
 
 __all__ = [
-    "Attribute", "BackendError", "backend", "CompileSummary", "compile",
+    "ArgumentError", "ArgumentTypeError", "IndexRangeError",
+    "NameLookupError", "Attribute", "BackendError", "backend", "CompileSummary", "compile",
     "Connectivity", "config",
     "Entity", "IRError", "IllConditionedSolve", "LineageError", "Mesh",
     "PrecisionWarning", "Primitive", "PrimitiveUnion", "Scene", "SceneError", "ShapeError", "SolverError",

@@ -117,9 +117,10 @@ hessian_storage: str = "f64"
 
 def resolve_hessian_storage() -> str:
     """``hessian_storage``, checked: "f64" or "f32", else ValueError."""
+    from .frontend.errors import ArgumentError  # frontend imports config
     if hessian_storage not in PRECISIONS:
-        raise ValueError(f"hessian_storage must be one of {PRECISIONS}, got "
-                         f"{hessian_storage!r}")
+        raise ArgumentError(f"hessian_storage must be one of {PRECISIONS}, got "
+                            f"{hessian_storage!r}")
     return hessian_storage
 
 
@@ -131,16 +132,18 @@ PRECONDITIONERS = ("block-jacobi", "multilevel")
 
 def resolve_preconditioner() -> str:
     """``preconditioner``, checked: one of PRECONDITIONERS, else ValueError."""
+    from .frontend.errors import ArgumentError
     if preconditioner not in PRECONDITIONERS:
-        raise ValueError(f"preconditioner must be one of {PRECONDITIONERS}, "
-                         f"got {preconditioner!r}")
+        raise ArgumentError(f"preconditioner must be one of {PRECONDITIONERS}, "
+                            f"got {preconditioner!r}")
     return preconditioner
 
 
 def resolve_precision(scene_precision: Optional[str]) -> str:
     """The precision a scene computes in: its own, else ``precision``.
     Raises ValueError for anything but "f64" or "f32"."""
+    from .frontend.errors import ArgumentError
     value = scene_precision if scene_precision is not None else precision
     if value not in PRECISIONS:
-        raise ValueError(f"precision must be one of {PRECISIONS}, got {value!r}")
+        raise ArgumentError(f"precision must be one of {PRECISIONS}, got {value!r}")
     return value

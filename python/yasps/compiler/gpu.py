@@ -23,6 +23,7 @@ from .errors import native, translated
 from .params import KernelArgument, Param, attribute_params, kernel_arguments
 from .pipelines import differentiation_pipeline
 from .specs import scene_kernel_paths
+from ..frontend.errors import NameLookupError
 
 #: Compute capabilities compiled by default: Ampere (A100) and Hopper (H100).
 DEFAULT_CHIPS: Tuple[str, ...] = ("sm_80", "sm_90")
@@ -68,7 +69,7 @@ class GpuKernels:
         for k in self.kernels:
             if k.attribute == attribute:
                 return k
-        raise KeyError(f"no GPU kernel for {attribute}")
+        raise NameLookupError(f"no GPU kernel for {attribute}")
 
     def params(self, attribute: str) -> List[Param]:
         """The local parameter groups of a derivative kernel (asked of the

@@ -14,6 +14,7 @@ from typing import List, Optional, Sequence, Tuple, Union
 from .. import config
 from ..ir import text_and_locations
 from .errors import native, translated
+from ..frontend.errors import ArgumentError
 
 #: Kinds of kernel arguments: a stored attribute's values, a connectivity's
 #: indices, a union's member offsets, the targets' first DoFs, the output.
@@ -32,7 +33,7 @@ def kernel_arguments(record: Sequence[Tuple[str, str]]) -> List[KernelArgument]:
     out = []
     for kind, path in record:
         if kind not in ARGUMENT_KINDS:
-            raise ValueError(f"unknown kernel argument kind {kind!r}")
+            raise ArgumentError(f"unknown kernel argument kind {kind!r}")
         out.append(KernelArgument(kind, path))
     return out
 
@@ -72,7 +73,7 @@ def decode_param(fields: Sequence[str]) -> Param:
         return JoinParam(fields[1], int(fields[2]), fields[3], int(fields[4]))
     if kind == "union":
         return UnionParam(fields[1], fields[2], int(fields[3]))
-    raise ValueError(f"unknown parameter group kind {kind!r}")
+    raise ArgumentError(f"unknown parameter group kind {kind!r}")
 
 
 def decode_params(records: Sequence[Sequence[str]]) -> List[Param]:

@@ -47,6 +47,7 @@ from .pairs import PAIR_TYPES
 from .stiffness import AdaptiveStiffness
 from .surface import edges_of, surface_of
 from .sweep import Sweep
+from ..frontend.errors import ArgumentError
 
 __all__ = ["Contact", "MIN_SEPARATION", "PAIR_TYPES", "Relative", "edges_of",
            "surface_of"]
@@ -114,13 +115,13 @@ class Contact:
         self.size = diagonal(self.positions.compute().value)
         dhat, eps_v = resolve(dhat, self.size), resolve(eps_v, self.size)
         if not dhat > 0:
-            raise ValueError(f"Contact: dhat must be > 0, got {dhat}")
+            raise ArgumentError(f"Contact: dhat must be > 0, got {dhat}")
         if detection not in DETECTIONS:
             raise SceneError(f"Contact: detection must be one of "
                              f"{', '.join(DETECTIONS)}, got {detection!r}")
         if not friction >= 0 or not eps_v > 0:
-            raise ValueError(f"Contact: friction must be >= 0 and eps_v > 0, "
-                             f"got friction={friction}, eps_v={eps_v}")
+            raise ArgumentError(f"Contact: friction must be >= 0 and eps_v > 0, "
+                                f"got friction={friction}, eps_v={eps_v}")
         self.eps_v = float(eps_v)
         halfspaces = list(halfspaces)
         #: the friction coefficient of each pair of bodies
@@ -228,15 +229,15 @@ class Contact:
         if step_start is not None:
             step_start = np.asarray(step_start, dtype=float)
             if step_start.shape != V.shape:
-                raise ValueError(f"Contact.update: step_start has shape "
-                                 f"{step_start.shape}; the world positions "
-                                 f"are {V.shape}")
+                raise ArgumentError(f"Contact.update: step_start has shape "
+                                    f"{step_start.shape}; the world positions "
+                                    f"are {V.shape}")
         counts = self._normal_pairs(V)
         counts["plane"] = self.halfspaces.update(V)
         if lag and self.friction > 0:
             if dt is None or not dt > 0:
-                raise ValueError("Contact.update(lag=True): give the time "
-                                 "step dt (friction's threshold is eps_v dt)")
+                raise ArgumentError("Contact.update(lag=True): give the time "
+                                    "step dt (friction's threshold is eps_v dt)")
             if self.adaptive is not None and self.adaptive.kappa is None:
                 self.adaptStiffness()
             counts.update(self._lag_friction(
@@ -326,8 +327,8 @@ class Contact:
         deviation is largest at its midpoint, as on arcs."""
         targets = self.scene.minimizeTargets
         if len(steps) != len(targets):
-            raise ValueError(f"stepBound: {len(steps)} steps for "
-                             f"{len(targets)} targets")
+            raise ArgumentError(f"stepBound: {len(steps)} steps for "
+                                f"{len(targets)} targets")
         before = [t.value for t in targets]
         steps = [np.asarray(p).reshape(x.shape) for x, p in zip(before, steps)]
 
@@ -428,11 +429,11 @@ class Contact:
         target is the world positions (:mod:`.forces`); later calls
         evaluate only."""
         if per not in ("vertex", "body"):
-            raise ValueError(f"Contact.forces: per must be 'vertex' or "
-                             f"'body', got {per!r}")
+            raise ArgumentError(f"Contact.forces: per must be 'vertex' or "
+                                f"'body', got {per!r}")
         if kind not in FORCE_KINDS:
-            raise ValueError(f"Contact.forces: kind must be one of "
-                             f"{', '.join(FORCE_KINDS)}, got {kind!r}")
+            raise ArgumentError(f"Contact.forces: kind must be one of "
+                                f"{', '.join(FORCE_KINDS)}, got {kind!r}")
         V = self.world()
         if self._last_pairs is None or \
                 not np.array_equal(self._last_pairs[0], V):

@@ -18,6 +18,7 @@ import numpy as np
 from ..frontend.errors import SceneError
 from ..frontend.scene import Primitive, PrimitiveUnion
 from .friction import FrictionPairs
+from ..frontend.errors import ArgumentError
 
 #: A side of a pair: a member primitive of the contact's UNION, or the
 #: index of a half-space (an int, in the order given to Contact).
@@ -42,8 +43,8 @@ class FrictionCoefficients:
         self.by_pair: Dict[FrozenSet[int], float] = {}
         for (a, b), mu in (pairs or {}).items():
             if not float(mu) >= 0:
-                raise ValueError(f"Contact: friction coefficients must be "
-                                 f">= 0, got {mu} for a pair")
+                raise ArgumentError(f"Contact: friction coefficients must be "
+                                    f">= 0, got {mu} for a pair")
             key = frozenset((_side(a, members, planes),
                              _side(b, members, planes)))
             self.by_pair[key] = float(mu)

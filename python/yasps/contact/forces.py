@@ -23,6 +23,7 @@ import numpy as np
 from ..frontend.attribute import STORED_KINDS, Attribute
 from ..frontend.scene import Primitive, PrimitiveUnion, Scene
 from .model import ContactModel, add_contact_energies
+from ..frontend.errors import ArgumentError
 
 if TYPE_CHECKING:  # pragma: no cover
     from . import Contact
@@ -69,8 +70,8 @@ class ContactForces:
         """The (N, 3) forces on the contact's vertices at their current
         positions (see :meth:`Contact.forces`)."""
         if kind not in FORCE_KINDS:
-            raise ValueError(f"Contact.forces: kind must be one of "
-                             f"{', '.join(FORCE_KINDS)}, got {kind!r}")
+            raise ArgumentError(f"Contact.forces: kind must be one of "
+                                f"{', '.join(FORCE_KINDS)}, got {kind!r}")
         V = self.contact.world()
         self._copy_state(V)
         energies = []

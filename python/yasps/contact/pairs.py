@@ -20,6 +20,7 @@ import numpy as np
 
 from ..frontend import energies as E
 from ..frontend.attribute import Attribute, select
+from ..frontend.errors import ArgumentTypeError
 
 
 def _points(gathered: Attribute, arity: int) -> List[Attribute]:
@@ -153,8 +154,8 @@ def collision_pairs(collisions: ipctk.NormalCollisions, edges: np.ndarray,
                                         ee[rows, 2], ee[rows, 3]))
     if len(dtypes) and not np.isin(dtypes, [int(d) for d in
                                             _EDGE_EDGE_ORDERS]).all():
-        raise TypeError("ipctk gave an edge-edge collision of unknown "
-                        "distance type")
+        raise ArgumentTypeError("ipctk gave an edge-edge collision of unknown "
+                                "distance type")
     return {kind: _joined(parts, BY_NAME[kind].arity)
             for kind, parts in out.items()}
 

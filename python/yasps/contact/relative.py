@@ -14,6 +14,7 @@ from dataclasses import dataclass
 from typing import Union
 
 import numpy as np
+from ..frontend.errors import ArgumentError
 
 
 @dataclass(frozen=True)
@@ -23,8 +24,8 @@ class Relative:
 
     def __post_init__(self):
         if not float(self.fraction) > 0:
-            raise ValueError(f"Relative: the fraction must be > 0, got "
-                             f"{self.fraction}")
+            raise ArgumentError(f"Relative: the fraction must be > 0, got "
+                                f"{self.fraction}")
 
 
 #: A length in the scene's units, or relative to its size.

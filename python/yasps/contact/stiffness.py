@@ -17,6 +17,7 @@ from typing import Callable, Optional
 
 import ipctk
 import numpy as np
+from ..frontend.errors import ArgumentError
 
 
 #: kappa doubles (up to IPC's bound, 100 times its minimum) while the
@@ -34,8 +35,8 @@ class AdaptiveStiffness:
 
     def __init__(self, dhat: float, average_mass: float):
         if not average_mass > 0:
-            raise ValueError(f"adaptive barrier stiffness needs the bodies' "
-                             f"average vertex mass > 0, got {average_mass}")
+            raise ArgumentError(f"adaptive barrier stiffness needs the bodies' "
+                                f"average vertex mass > 0, got {average_mass}")
         self.dhat, self.average_mass = float(dhat), float(average_mass)
         self.kappa: Optional[float] = None
         self.max_kappa = 0.0

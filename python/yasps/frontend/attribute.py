@@ -18,7 +18,8 @@ from typing import TYPE_CHECKING, Any, Iterable, Optional, Sequence, Tuple, Unio
 
 import numpy as np
 
-from .errors import LineageError, ShapeError, ValueUpdateError
+from .errors import (ArgumentError, ArgumentTypeError, IndexRangeError,
+                     LineageError, ShapeError, ValueUpdateError)
 from . import values as _values
 from .services import services
 
@@ -134,7 +135,7 @@ class Attribute:
         return f"<yasps.Attribute {self.describe()}>"
 
     def __bool__(self) -> bool:
-        raise TypeError(
+        raise ArgumentTypeError(
             f"{self.describe()} is symbolic and has no truth value; use "
             "comparisons with select() to choose per instance")
 
@@ -383,8 +384,8 @@ class Attribute:
         eigenvalues to zero, ``abs`` flips them, ``none`` keeps them."""
         self._square("project")
         if method not in PROJECTION_METHODS:
-            raise ValueError(f"project: method must be one of "
-                             f"{', '.join(PROJECTION_METHODS)}, got {method!r}")
+            raise ArgumentError(f"project: method must be one of "
+                                f"{', '.join(PROJECTION_METHODS)}, got {method!r}")
         return self._new("project", (self,), self._rows, self._cols,
                          method=method)
 
@@ -433,10 +434,10 @@ class Attribute:
 
     def _index(self, what: str, index: int, bound: int) -> int:
         if not isinstance(index, numbers.Integral) or isinstance(index, bool):
-            raise TypeError(f"{what} index must be an integer, got {index!r}")
+            raise ArgumentTypeError(f"{what} index must be an integer, got {index!r}")
         i = int(index) + (bound if index < 0 else 0)
         if not 0 <= i < bound:
-            raise IndexError(
+            raise IndexRangeError(
                 f"{what} {index} is out of range for {self.describe()}")
         return i
 
@@ -453,7 +454,7 @@ class Attribute:
     def _range(self, what: str, key: slice, bound: int) -> Tuple[int, int]:
         start, stop, step = key.indices(bound)
         if step != 1 or stop <= start:
-            raise IndexError(
+            raise IndexRangeError(
                 f"{what} slice {key} of {self.describe()} must select a "
                 "non-empty contiguous range")
         return start, stop - start
@@ -469,7 +470,7 @@ class Attribute:
             else:
                 key = (key, slice(None))
         if len(key) != 2:
-            raise IndexError(f"{self.describe()} takes one or two indices")
+            raise IndexRangeError(f"{self.describe()} takes one or two indices")
         rkey, ckey = key
         if not isinstance(rkey, slice) and not isinstance(ckey, slice):
             r = self._index("row", rkey, self._rows)
@@ -615,7 +616,7 @@ def select(condition: Operand, if_true: Operand, if_false: Operand) -> Attribute
 def concat(parts: Sequence[Operand], axis: int = 0) -> Attribute:
     """Stacks attributes vertically (``axis=0``) or side by side (``axis=1``)."""
     if axis not in (0, 1):
-        raise ValueError(f"concat: axis must be 0 or 1, got {axis}")
+        raise ArgumentError(f"concat: axis must be 0 or 1, got {axis}")
     if not parts:
         raise ShapeError("concat: needs at least one operand")
     items = [lift(p, op="concat") for p in parts]

@@ -28,3 +28,24 @@ class ValueUpdateError(YaspsError, ValueError):
 
 class IRError(YaspsError, ValueError):
     """IR that the C++ compiler rejects; the message holds its diagnostics."""
+
+
+class ArgumentError(YaspsError, ValueError):
+    """An argument out of its range, or not one of the choices a function
+    takes (a projection method, a precision, a renderer, ...)."""
+
+
+class ArgumentTypeError(YaspsError, TypeError):
+    """An argument of a type the function does not take."""
+
+
+class NameLookupError(YaspsError, KeyError):
+    """A name that is not there (``entity["nope"]``); a KeyError too."""
+
+    def __str__(self) -> str:
+        # KeyError shows its message quoted, as a key; this is a sentence.
+        return str(self.args[0]) if self.args else ""
+
+
+class IndexRangeError(YaspsError, IndexError):
+    """An index outside its range (a row, a column, an instance)."""

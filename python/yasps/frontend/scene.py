@@ -25,7 +25,8 @@ from .. import config
 from . import values as _values
 from .values import MAX_MATRIX_ENTRIES, as_count
 from .attribute import PROJECTION_METHODS, Attribute
-from .errors import LineageError, SceneError, ShapeError
+from .errors import (ArgumentError, LineageError, NameLookupError,
+                     SceneError, ShapeError)
 from .services import services
 
 _NAME = re.compile(r"^[A-Za-z_][A-Za-z0-9_]*$")
@@ -109,8 +110,8 @@ class Entity:
             return self._attributes[name]
         except KeyError:
             known = ", ".join(self._attributes) or "none"
-            raise KeyError(f"{self.describe()} has no attribute {name!r} "
-                           f"(it has: {known})") from None
+            raise NameLookupError(f"{self.describe()} has no attribute {name!r} "
+                                  f"(it has: {known})") from None
 
     def __contains__(self, name: str) -> bool:
         return name in self._attributes
@@ -227,8 +228,8 @@ class Scene(Entity):
     def __init__(self, name: str, precision: Optional[str] = None):
         super().__init__(_check_name(name, "scene"), None)
         if precision is not None and precision not in config.PRECISIONS:
-            raise ValueError(f"scene '{name}': precision must be one of "
-                             f"{config.PRECISIONS}, got {precision!r}")
+            raise ArgumentError(f"scene '{name}': precision must be one of "
+                                f"{config.PRECISIONS}, got {precision!r}")
         #: The float type this scene's kernels compute in; None follows
         #: ``yasps.config.precision``.
         self.precision: Optional[str] = precision

@@ -17,6 +17,7 @@ from ..frontend.attribute import Attribute
 from ..frontend.scene import (Connectivity, Entity, Mesh, Primitive,
                               PrimitiveUnion, Scene)
 from .symbols import entity_path, symbol_path
+from ..frontend.errors import ArgumentError
 
 _INDENT = "  "
 
@@ -46,7 +47,7 @@ def dense_literal(array: np.ndarray, element: str = "f64") -> str:
     if element == "f32":
         finite = array[np.isfinite(array)]
         if finite.size and np.abs(finite).max() > _F32_MAX:
-            raise ValueError(
+            raise ArgumentError(
                 f"the constant {np.abs(finite).max():g} is beyond the f32 "
                 f"range (|x| <= {_F32_MAX:g}): compute this scene in f64")
     if np.all(array == array.flat[0]):

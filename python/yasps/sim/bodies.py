@@ -19,6 +19,7 @@ from ..frontend.attribute import Attribute
 from ..frontend.errors import SceneError
 from ..frontend.scene import Mesh, Primitive
 from .meshes import HEX_CORNERS, hinges_of
+from ..frontend.errors import ArgumentError
 
 
 def material_constant(mesh: Mesh, name: str, value: Number) -> Attribute:
@@ -40,8 +41,8 @@ MATERIALS = {"stable_neo_hookean": E.stable_neo_hookean,
 def lame(young: Number, poisson: Number) -> Tuple[float, float]:
     """Lame's (mu, lambda) from Young's modulus and Poisson's ratio (3-D)."""
     if not young > 0 or not -1.0 < poisson < 0.5:
-        raise ValueError(f"lame: need Young's modulus > 0 and -1 < Poisson's "
-                         f"ratio < 0.5, got {young} and {poisson}")
+        raise ArgumentError(f"lame: need Young's modulus > 0 and -1 < Poisson's "
+                            f"ratio < 0.5, got {young} and {poisson}")
     mu = young / (2.0 * (1.0 + poisson))
     return mu, young * poisson / ((1.0 + poisson) * (1.0 - 2.0 * poisson))
 
@@ -95,8 +96,8 @@ def add_affine_inertia(body, A: Attribute, t: Attribute, A_hat: Attribute,
     rest = np.asarray(rest, dtype=float).reshape(-1, 3)
     masses = np.asarray(masses, dtype=float).reshape(-1)
     if masses.shape != (len(rest),):
-        raise ValueError(f"add_affine_inertia: {len(masses)} masses for "
-                         f"{len(rest)} vertices")
+        raise ArgumentError(f"add_affine_inertia: {len(masses)} masses for "
+                            f"{len(rest)} vertices")
     second = body.addConstant(name + "_second_moment", rows=3, cols=3)
     second.updateValue(np.einsum("i,ij,ik->jk", masses, rest, rest))
     first = body.addConstant(name + "_first_moment", rows=3)
@@ -122,8 +123,8 @@ def _triangle_rest_frames(rest: np.ndarray, faces: np.ndarray):
     normal = np.cross(e1, e2)
     areas = 0.5 * np.linalg.norm(normal, axis=1)
     if (areas <= 0).any():
-        raise ValueError(f"add_cloth: {int((areas <= 0).sum())} triangles "
-                         f"have no area at rest")
+        raise ArgumentError(f"add_cloth: {int((areas <= 0).sum())} triangles "
+                            f"have no area at rest")
     u = e1 / np.linalg.norm(e1, axis=1, keepdims=True)
     v = np.cross(normal / (2 * areas[:, None]), u)
     uv = np.stack([np.stack([(e * u).sum(1), (e * v).sum(1)], axis=1)
@@ -245,8 +246,8 @@ def lumped_masses(verts: np.ndarray, cells: np.ndarray,
         sizes = 0.5 * np.linalg.norm(np.cross(c[:, 1] - c[:, 0],
                                               c[:, 2] - c[:, 0]), axis=1)
     else:
-        raise ValueError(f"lumped_masses: cells of {cells.shape[1]} vertices; "
-                         f"give tets (4) or triangles (3)")
+        raise ArgumentError(f"lumped_masses: cells of {cells.shape[1]} vertices; "
+                            f"give tets (4) or triangles (3)")
     k = cells.shape[1]
     masses = np.zeros(len(verts))
     np.add.at(masses, cells.reshape(-1), np.repeat(sizes / k, k))
@@ -307,7 +308,7 @@ def hex8_gauss_points(rest: np.ndarray, hexes: np.ndarray):
     G = np.stack(gradients, axis=1).reshape(-1, 8, 3)
     w = np.stack(volumes, axis=1).reshape(-1)
     if (w <= 0).any():
-        raise ValueError("hex8_gauss_points: inverted cells at rest")
+        raise ArgumentError("hex8_gauss_points: inverted cells at rest")
     return G, w
 
 

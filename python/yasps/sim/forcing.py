@@ -19,6 +19,7 @@ would stop it at the caller's own tolerance (see its ``cg_forcing``).
 from __future__ import annotations
 
 import math
+from ..frontend.errors import ArgumentError
 
 #: The loosest relative residual a direction is solved to (SymX's cap).
 LOOSEST = 1e-2
@@ -30,7 +31,7 @@ class Forcing:
 
     def __init__(self, tightest: float, loosest: float = LOOSEST):
         if not (0 <= tightest):
-            raise ValueError(f"Forcing: tightest must be >= 0, got {tightest}")
+            raise ArgumentError(f"Forcing: tightest must be >= 0, got {tightest}")
         self.tightest = float(tightest)
         self.loosest = max(float(loosest), self.tightest)
         self._first = None

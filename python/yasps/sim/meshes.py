@@ -10,6 +10,7 @@ from os import PathLike
 from typing import Optional, Tuple, Union
 
 import numpy as np
+from ..frontend.errors import ArgumentError
 
 
 def box_tet_mesh(n: int, size: float = 1.0) -> Tuple[np.ndarray, np.ndarray]:
@@ -40,7 +41,7 @@ def cloth_grid(n: int, size: float = 1.0,
     i + (n+1) j at column i, row j, and triangles (2 n^2, 3) int32, two per
     cell, counter-clockwise seen from +z (normals +z)."""
     if n < 1:
-        raise ValueError(f"cloth_grid: n must be at least 1, not {n}")
+        raise ArgumentError(f"cloth_grid: n must be at least 1, not {n}")
     ticks = np.linspace(-size / 2, size / 2, n + 1)
     x, y = np.meshgrid(ticks, ticks, indexing="xy")
     verts = np.stack([x.ravel(), y.ravel(),
@@ -89,8 +90,8 @@ def hinges_of(faces: np.ndarray) -> np.ndarray:
     order = np.argsort(key, kind="stable")
     sorted_key = key[order]
     if np.any(sorted_key[1:] == sorted_key[:-1]):
-        raise ValueError("hinges_of: a directed edge occurs in two triangles: "
-                         "the mesh is inconsistently oriented or non-manifold")
+        raise ArgumentError("hinges_of: a directed edge occurs in two triangles: "
+                            "the mesh is inconsistently oriented or non-manifold")
     # Each interior edge once: from its half-edge with start < end, looking
     # up the reversed half-edge of the neighbouring triangle.
     lower = np.flatnonzero(start < end)
@@ -143,8 +144,8 @@ def reorder_mesh(verts: np.ndarray, cells: np.ndarray,
         order = locality_order(cells, len(verts))
     order = np.asarray(order, dtype=np.int64)
     if not np.array_equal(np.sort(order), np.arange(len(verts))):
-        raise ValueError(f"reorder_mesh: order must be a permutation of the "
-                         f"{len(verts)} vertices")
+        raise ArgumentError(f"reorder_mesh: order must be a permutation of the "
+                            f"{len(verts)} vertices")
     new_index = np.empty(len(order), dtype=np.int64)
     new_index[order] = np.arange(len(order))
     renumbered = new_index[cells]
@@ -174,11 +175,11 @@ def read_tet_mesh(path: Union[str, PathLike],
     blocks = [block.data for block in mesh.cells if block.type == "tetra"]
     if not blocks:
         found = sorted({block.type for block in mesh.cells}) or ["none"]
-        raise ValueError(f"read_tet_mesh: {path} has no tetra cells (cell "
-                         f"types found: {', '.join(found)})")
+        raise ArgumentError(f"read_tet_mesh: {path} has no tetra cells (cell "
+                            f"types found: {', '.join(found)})")
     if mesh.points.shape[1] != 3:
-        raise ValueError(f"read_tet_mesh: {path} has {mesh.points.shape[1]}-D "
-                         "points; tets need 3-D ones")
+        raise ArgumentError(f"read_tet_mesh: {path} has {mesh.points.shape[1]}-D "
+                            "points; tets need 3-D ones")
     tets = np.concatenate(blocks).astype(np.int64)
     used, tets = np.unique(tets, return_inverse=True)
     verts = np.asarray(mesh.points, dtype=float)[used]
@@ -208,8 +209,8 @@ def read_surface_mesh(path: Union[str, PathLike],
                for block in mesh.cells if block.type == "quad"]
     if not blocks:
         found = sorted({block.type for block in mesh.cells}) or ["none"]
-        raise ValueError(f"read_surface_mesh: {path} has no triangles or "
-                         f"quads (cell types found: {', '.join(found)})")
+        raise ArgumentError(f"read_surface_mesh: {path} has no triangles or "
+                            f"quads (cell types found: {', '.join(found)})")
     points = np.asarray(mesh.points, dtype=float)
     if points.shape[1] == 2:
         points = np.hstack([points, np.zeros((len(points), 1))])
@@ -355,8 +356,8 @@ def tube_mesh(points: np.ndarray, radius: float, sides: int = 6,
     P = np.asarray(points, dtype=float).reshape(-1, 3)
     m = len(P)
     if m < 2 or sides < 3:
-        raise ValueError(f"tube_mesh: needs 2 points and 3 sides, got {m} "
-                         f"points and {sides} sides")
+        raise ArgumentError(f"tube_mesh: needs 2 points and 3 sides, got {m} "
+                            f"points and {sides} sides")
     after = np.roll(P, -1, axis=0) if closed else np.r_[P[1:], P[-1:]]
     before = np.roll(P, 1, axis=0) if closed else np.r_[P[:1], P[:-1]]
     tangent = after - before

@@ -17,6 +17,7 @@ from typing import Optional, Sequence, Tuple
 import numpy as np
 
 from .bodies import AffineBody
+from ..frontend.errors import ArgumentError
 
 
 @dataclass
@@ -78,8 +79,8 @@ def vertex_motion(masses: np.ndarray, positions: np.ndarray,
     x = np.asarray(positions, dtype=float).reshape(-1, 3)
     v = np.asarray(velocities, dtype=float).reshape(-1, 3)
     if not len(m) == len(x) == len(v):
-        raise ValueError(f"vertex_motion: {len(m)} masses, {len(x)} "
-                         f"positions and {len(v)} velocities")
+        raise ArgumentError(f"vertex_motion: {len(m)} masses, {len(x)} "
+                            f"positions and {len(v)} velocities")
     total = float(m.sum())
     center = m @ x / total
     linear = m @ v / total

@@ -17,6 +17,7 @@ from pathlib import Path
 from typing import Dict, List, Mapping, Optional, Sequence, Tuple, Union
 
 import numpy as np
+from ..frontend.errors import ArgumentError
 
 PathArg = Union[str, os.PathLike]
 Color = Union[str, Tuple[float, float, float]]
@@ -56,13 +57,13 @@ class SurfaceRecorder:
     def __init__(self, directory: PathArg,
                  faces_by_body: Mapping[str, np.ndarray], every: int = 1):
         if every < 1:
-            raise ValueError(f"SurfaceRecorder: every must be at least 1, "
-                             f"not {every}")
+            raise ArgumentError(f"SurfaceRecorder: every must be at least 1, "
+                                f"not {every}")
         for name in faces_by_body:
             # The name becomes part of file names.
             if not name or os.sep in name or "/" in name:
-                raise ValueError(f"SurfaceRecorder: body name {name!r} "
-                                 "cannot name a file")
+                raise ArgumentError(f"SurfaceRecorder: body name {name!r} "
+                                    "cannot name a file")
         self.directory = Path(directory)
         self.directory.mkdir(parents=True, exist_ok=True)
         # Triangles (M, 3), or polylines as segments (M, 2).
@@ -92,8 +93,8 @@ class SurfaceRecorder:
         missing = set(self.faces_by_body) - set(positions_by_body)
         unknown = set(positions_by_body) - set(self.faces_by_body)
         if missing or unknown:
-            raise ValueError(f"SurfaceRecorder.record: positions missing for "
-                             f"{sorted(missing)}, unknown bodies {sorted(unknown)}")
+            raise ArgumentError(f"SurfaceRecorder.record: positions missing for "
+                                f"{sorted(missing)}, unknown bodies {sorted(unknown)}")
         call = self._calls
         self._calls += 1
         if call % self.every:
@@ -113,9 +114,9 @@ class SurfaceRecorder:
 
         points = np.asarray(positions, dtype=float).reshape(-1, 3)
         if len(faces) and faces.max() >= len(points):
-            raise ValueError(f"SurfaceRecorder.record: {name!r} has "
-                             f"{len(points)} vertices, its faces use vertex "
-                             f"{faces.max()}")
+            raise ArgumentError(f"SurfaceRecorder.record: {name!r} has "
+                                f"{len(points)} vertices, its faces use vertex "
+                                f"{faces.max()}")
         path = self.directory / f"{name}_{index:04d}.vtu"
         cell = "line" if faces.shape[1] == 2 else "triangle"
         meshio.write(path, meshio.Mesh(points, [(cell, faces)]))
@@ -173,7 +174,7 @@ def _draw(meshes: Sequence[SurfaceMesh], view: Tuple[float, float],
     from mpl_toolkits.mplot3d.art3d import Poly3DCollection
 
     if not meshes:
-        raise ValueError("render_surfaces: no meshes to draw")
+        raise ArgumentError("render_surfaces: no meshes to draw")
     figure = Figure(figsize=(size[0] / dpi, size[1] / dpi), dpi=dpi)
     FigureCanvasAgg(figure)
     # The 3-D axes fill the picture: matplotlib's default margins would
@@ -254,10 +255,10 @@ def _picture(meshes: Sequence[SurfaceMesh], view: Tuple[float, float],
     """The picture by VTK as an array, or None where matplotlib draws it
     (chosen, or VTK missing under "auto")."""
     if renderer not in RENDERERS:
-        raise ValueError(f"render_surfaces: renderer must be one of "
-                         f"{', '.join(RENDERERS)}, got {renderer!r}")
+        raise ArgumentError(f"render_surfaces: renderer must be one of "
+                            f"{', '.join(RENDERERS)}, got {renderer!r}")
     if not meshes:
-        raise ValueError("render_surfaces: no meshes to draw")
+        raise ArgumentError("render_surfaces: no meshes to draw")
     from . import render_vtk
 
     use_vtk = renderer == "vtk" or (renderer == "auto" and not axes
@@ -357,8 +358,8 @@ def _as_rgb8(image: np.ndarray) -> np.ndarray:
     if image.ndim == 2:
         image = np.repeat(image[..., None], 3, axis=2)
     if image.ndim != 3 or image.shape[2] not in (3, 4):
-        raise ValueError(f"write_video: a frame of shape {image.shape} is not "
-                         "an (H, W), (H, W, 3) or (H, W, 4) image")
+        raise ArgumentError(f"write_video: a frame of shape {image.shape} is not "
+                            "an (H, W), (H, W, 3) or (H, W, 4) image")
     image = image[..., :3]
     if image.dtype != np.uint8:
         image = np.round(np.clip(image, 0.0, 1.0) * 255).astype(np.uint8)
@@ -385,10 +386,10 @@ def write_video(path: PathArg, images: Sequence[np.ndarray],
 
     frames = [_as_rgb8(image) for image in images]
     if not frames:
-        raise ValueError("write_video: no frames")
+        raise ArgumentError("write_video: no frames")
     shapes = {frame.shape for frame in frames}
     if len(shapes) > 1:
-        raise ValueError(f"write_video: frames of different sizes {sorted(shapes)}")
+        raise ArgumentError(f"write_video: frames of different sizes {sorted(shapes)}")
     path = Path(path)
     if path.suffix.lower() == ".mp4" and ffmpeg_available():
         # macro_block_size=2: the frames are padded to even sides already,

@@ -15,6 +15,7 @@ from typing import Optional, Tuple
 import numpy as np
 
 from ..contact.surface import edges_of
+from ..frontend.errors import ArgumentError
 
 
 def triangle_orientations(points: np.ndarray, faces: np.ndarray) -> np.ndarray:
@@ -60,10 +61,10 @@ def smooth_to_sphere(verts: np.ndarray, faces: np.ndarray,
             untangled = iteration
         if untangled is not None and iteration >= 2 * untangled + 1:
             return X
-    raise ValueError(f"smooth_to_sphere: {max_iterations} iterations left "
-                     f"{int((triangle_orientations(X, faces) <= 0).sum())} "
-                     f"triangles facing inwards (is the surface genus 0 and "
-                     f"oriented outwards?)")
+    raise ArgumentError(f"smooth_to_sphere: {max_iterations} iterations left "
+                        f"{int((triangle_orientations(X, faces) <= 0).sum())} "
+                        f"triangles facing inwards (is the surface genus 0 and "
+                        f"oriented outwards?)")
 
 
 class SphereMap:
@@ -77,8 +78,8 @@ class SphereMap:
         self.faces = np.asarray(faces, np.int64)
         self.surface = np.asarray(surface, float)
         if (triangle_orientations(self.sphere, self.faces) <= 0).any():
-            raise ValueError("SphereMap: some triangles of the sphere face "
-                             "inwards: not a one-to-one map")
+            raise ArgumentError("SphereMap: some triangles of the sphere face "
+                                "inwards: not a one-to-one map")
 
     def locate(self, points: np.ndarray) -> Tuple[np.ndarray, np.ndarray]:
         """For points (M, 3) (their directions from the origin): the

@@ -22,6 +22,7 @@ from .diagnosis import (ERROR_BOUND_WARNING, IllConditionedSolve,
                         describe_non_finite, first_warning_for,
                         non_finite_sources,
                         residual_error_bound, unread_targets)
+from ..frontend.errors import ArgumentError
 
 
 class SolverError(YaspsError, RuntimeError):
@@ -109,10 +110,10 @@ def minimize_energy(scene, backend: Backend,
     (Newton loops, which judge their directions themselves) leaves out the
     IllConditionedSolve warning; ``lastSolve['errorBound']`` still has it."""
     if not callable(tolerance) and not (tolerance >= 0):
-        raise ValueError(f"minimizeEnergy: tolerance must be >= 0, got {tolerance}")
+        raise ArgumentError(f"minimizeEnergy: tolerance must be >= 0, got {tolerance}")
     if stopping not in STOPPING_RULES:
-        raise ValueError(f"minimizeEnergy: stopping must be one of "
-                         f"{', '.join(STOPPING_RULES)}, got {stopping!r}")
+        raise ArgumentError(f"minimizeEnergy: stopping must be one of "
+                            f"{', '.join(STOPPING_RULES)}, got {stopping!r}")
     if projection_threshold is not None and not (projection_threshold >= 0):
         raise SceneError(f"minimizeEnergy: projectionThreshold must be >= 0 "
                          f"(or None: project every instance), got "
@@ -159,8 +160,8 @@ def minimize_energy(scene, backend: Backend,
     if callable(tolerance):
         tolerance = tolerance(gradient_max)
         if not (tolerance >= 0):
-            raise ValueError(f"minimizeEnergy: the tolerance function gave "
-                             f"{tolerance}, not a number >= 0")
+            raise ArgumentError(f"minimizeEnergy: the tolerance function gave "
+                                f"{tolerance}, not a number >= 0")
     x = np.zeros(system.size)
     start = time.perf_counter()
     pcg = backend.solve(system, x, float(tolerance), int(maxIterations),

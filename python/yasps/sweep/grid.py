@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import itertools
 from typing import Any, Dict, List
+from ..frontend.errors import ArgumentError
 
 
 def parameter_sets(grid: Any) -> List[Dict[str, Any]]:
@@ -15,5 +16,5 @@ def parameter_sets(grid: Any) -> List[Dict[str, Any]]:
         names = list(grid)
         values = [v if isinstance(v, list) else [v] for v in grid.values()]
         return [dict(zip(names, combo)) for combo in itertools.product(*values)]
-    raise ValueError("the grid must be a list of objects or an object of "
-                     "lists")
+    raise ArgumentError("the grid must be a list of objects or an object of "
+                        "lists")

@@ -19,6 +19,7 @@ from .. import config
 from .._native import BUILD_DIR
 from .manifest import Manifest, plain, run_id
 from .worker import STARTED, execute
+from ..frontend.errors import ArgumentError, ArgumentTypeError
 
 #: Seconds a worker may take, beyond an attempt's time limit, to start it
 #: (Ray starts a fresh process where the last one was killed).
@@ -109,10 +110,10 @@ def run(simulate: Callable[..., Dict[str, Any]],
     params = [dict(p) for p in params]
     keys = [run_id(p) for p in params]
     if len(set(keys)) != len(keys):
-        raise ValueError("sweep.run: the same parameter set is given twice")
+        raise ArgumentError("sweep.run: the same parameter set is given twice")
     if len(inspect.signature(simulate).parameters) not in (1, 2):
-        raise TypeError("sweep.run: simulate must take (params) or "
-                        "(params, folder)")
+        raise ArgumentTypeError("sweep.run: simulate must take (params) or "
+                                "(params, folder)")
     folder = Path(output if output is not None else "out/sweep").resolve()
     manifest = Manifest.open(folder)
     pending = deque(k for k in keys if not manifest.finished(k))
