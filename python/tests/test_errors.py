@@ -39,3 +39,17 @@ def test_the_reviewed_mistakes_raise_yasps_errors():
         p["nope"]
     assert isinstance(name.value, KeyError)
     assert str(name.value).startswith("primitive")  # a sentence, unquoted
+
+
+def test_names_that_members_would_shadow_are_refused():
+    """scene.<mesh> and mesh.<primitive> reach meshes and primitives by
+    name; a name the entity's own members take would be unreachable."""
+    s = yasps.scene("shadowed")
+    for name in ("name", "path", "scene", "meshes"):
+        with pytest.raises(yasps.SceneError, match="member of Scene"):
+            s.addMesh(name)
+    m = s.addMesh("m")
+    for name in ("parent", "primitives", "kind"):
+        with pytest.raises(yasps.SceneError, match="member of Mesh"):
+            m.addPrimitive(name)
+    assert m.addPrimitive("pose").name == "pose"

@@ -118,6 +118,14 @@ class Entity:
 
     def _check_new_symbol(self, name: str, what: str) -> str:
         _check_name(name, what)
+        if what in ("mesh", "primitive", "primitive union") and \
+                hasattr(type(self), name):
+            # Meshes and primitives are also reached as scene.<mesh> and
+            # mesh.<primitive>, which the entity's own members would hide.
+            raise SceneError(f"{what} name {name!r} is a member of "
+                             f"{type(self).__name__} (scene.<mesh> and "
+                             f"mesh.<primitive> would not reach it); choose "
+                             f"another name")
         if name in self._symbols:
             raise SceneError(f"{self.describe()} already has "
                              f"{self._symbols[name]!r} named {name!r}")
