@@ -53,3 +53,17 @@ def test_names_that_members_would_shadow_are_refused():
         with pytest.raises(yasps.SceneError, match="member of Mesh"):
             m.addPrimitive(name)
     assert m.addPrimitive("pose").name == "pose"
+
+
+@pytest.mark.parametrize("name, value", [
+    ("separate_reduced_hessians", "yes"), ("precision", "f16"),
+    ("gpu_derivatives", 1), ("opt_level", 4), ("num_threads", -1),
+    ("backend", "tpu"), ("cache_dir", 3)])
+def test_config_settings_are_checked_when_set(name, value):
+    """A wrong setting fails where it is set (it used to fail later: a
+    KeyError deep in the compiler for separate_reduced_hessians = "yes"),
+    and the setting keeps its value."""
+    before = getattr(yasps.config, name)
+    with pytest.raises(yasps.ArgumentError, match=f"config.{name} must be"):
+        setattr(yasps.config, name, value)
+    assert getattr(yasps.config, name) == before

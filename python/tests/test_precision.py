@@ -88,9 +88,8 @@ def test_precision_sets_the_ir_element_type(f64_default):
 def test_bad_precisions_are_errors(f64_default):
     with pytest.raises(ValueError, match="precision must be one of"):
         yasps.scene("s", precision="f16")
-    yasps.config.precision = "double"
-    with pytest.raises(ValueError, match="precision must be one of"):
-        emit_scene(tet_scene(None, count=1))
+    with pytest.raises(yasps.ArgumentError, match="precision must be one of"):
+        yasps.config.precision = "double"
 
 
 def test_an_f32_constant_out_of_range_is_an_error():
@@ -243,9 +242,8 @@ def test_f32_hessian_storage_solves_near_the_f64_system(f64_default):
     yasps.config.hessian_storage = "f32"
     p32 = tet_scene("f64").minimizeEnergy(tolerance=1e-10)[0]
     assert 0 < relative(p32, p64) <= 1e-5
-    yasps.config.hessian_storage = "f16"
     with pytest.raises(ValueError, match="hessian_storage must be one of"):
-        tet_scene("f64").minimizeEnergy()
+        yasps.config.hessian_storage = "f16"
 
 
 def test_too_many_dofs_for_f32_indices_is_an_error(monkeypatch):

@@ -84,6 +84,8 @@
 from __future__ import annotations
 
 import os
+import sys
+import types
 from pathlib import Path
 from typing import Optional
 
@@ -147,3 +149,51 @@ def resolve_precision(scene_precision: Optional[str]) -> str:
     if value not in PRECISIONS:
         raise ArgumentError(f"precision must be one of {PRECISIONS}, got {value!r}")
     return value
+
+
+# ------------------------------------------------------------- validation
+
+#: What each setting may be: checked when it is set, so that a wrong value
+#: fails at the line that sets it, not later inside a compile or a solve.
+_CHOICES = {"precision": PRECISIONS, "hessian_storage": PRECISIONS,
+            "preconditioner": PRECONDITIONERS,
+            "backend": ("auto", "cpu", "gpu")}
+_FLAGS = ("linear_map_projection", "slot_jacobians",
+          "compress_local_hessians", "gpu_derivatives")
+_COUNTS = {"num_threads": 0, "simd_lanes": 0, "opt_level": 0}
+
+
+def _check(name: str, value) -> None:
+    """Raises ArgumentError where ``value`` is not what setting ``name``
+    takes."""
+    from .frontend.errors import ArgumentError
+    wrong = None
+    if name in _CHOICES and value not in _CHOICES[name]:
+        wrong = f"one of {', '.join(map(repr, _CHOICES[name]))}"
+    elif name in _FLAGS and not isinstance(value, bool):
+        wrong = "True or False"
+    elif name == "separate_reduced_hessians" and \
+            not (value is None or isinstance(value, bool)):
+        wrong = "None, True or False"
+    elif name in _COUNTS and (isinstance(value, bool) or
+                              not isinstance(value, int) or value < 0 or
+                              (name == "opt_level" and value > 3)):
+        wrong = ("a whole number from 0 to 3" if name == "opt_level"
+                 else "a whole number >= 0")
+    elif name == "cache_dir" and not (value is None or
+                                      isinstance(value, (str, os.PathLike))):
+        wrong = "a folder (str or path) or None"
+    if wrong is not None:
+        raise ArgumentError(f"yasps.config.{name} must be {wrong}, got "
+                            f"{value!r}")
+
+
+class _Config(types.ModuleType):
+    """This module, its settings checked as they are set."""
+
+    def __setattr__(self, name: str, value) -> None:
+        _check(name, value)
+        super().__setattr__(name, value)
+
+
+sys.modules[__name__].__class__ = _Config
