@@ -37,6 +37,13 @@ from gpu_kit import peer_inputs  # noqa: E402
 from timing import per_call  # noqa: E402
 
 
+#: The paper's RTX 4090 figures for the same work, ms, as the GPU issue
+#: (7) quotes them (docs/benchmarks.md): ratios carry across GPUs, times
+#: do not.
+PAPER_RTX_4090 = {"grad": {"yasps": 0.197},
+                  "hess": {"yasps": 0.59, "PyTorch": 216.9, "JAX": 10.7}}
+
+
 def yasps_times(log: Path) -> dict:
     """{label: seconds} from yasps-kernel-bench's output."""
     times = {}
@@ -102,6 +109,14 @@ def main() -> None:
             t = results[(peer, name)]
             ratio = f" ({t / ours[name]:.0f}x)" if name in ours else ""
             row.append(f"{peer} {t * 1e3:9.3f}{ratio}")
+        print("   ".join(row))
+    print("the paper's RTX 4090 (ms; the ratios are what compare):")
+    for name, paper in PAPER_RTX_4090.items():
+        row = [f"  {name:6s}", f"yasps {paper['yasps']:8.3f}"]
+        for peer in ("PyTorch", "JAX"):
+            if peer in paper:
+                row.append(f"{peer} {paper[peer]:9.3f} "
+                           f"({paper[peer] / paper['yasps']:.0f}x)")
         print("   ".join(row))
 
 
