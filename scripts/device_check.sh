@@ -9,7 +9,14 @@
 # memcheck: the races, barrier misuse and out-of-range accesses that the
 # stand-in driver of CI cannot show).
 #
-#   bash scripts/device_check.sh KIT [OUT]
+#   bash scripts/device_check.sh [--dry-run] KIT [OUT]
+#
+# --dry-run runs the whole script here, without a GPU, on the stand-in
+# driver of the runtime's tests (the kit's libYaspsFakeCuda.so): the same
+# steps, limits, summary and archive. What the stand-in cannot run is
+# marked in the summary: the generated kernels (it launches them but
+# computes nothing, so their checks are off), the peers (PyTorch and JAX
+# on a GPU) and compute-sanitizer.
 #
 # KIT is what scripts/device_kit.sh gathered; logs go to OUT (default: the
 # current folder): summary.txt (each step's status and time, then the
@@ -21,6 +28,11 @@
 # real-driver test that skips are failures (exit status 1).
 set -uo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
+dry=0
+if [ "${1:-}" = --dry-run ]; then
+  dry=1
+  shift
+fi
 kit=$(cd "$1" && pwd)
 out=$(mkdir -p "${2:-.}" && cd "${2:-.}" && pwd)
 limit=${STEP_LIMIT:-150}
@@ -48,13 +60,28 @@ step() {
     >>"$summary"
 }
 
-if ! nvidia-smi --query-gpu=name,driver_version,memory.total --format=csv \
-  >"$out/gpu.log" 2>&1; then
-  echo "no usable NVIDIA driver (nvidia-smi failed)" | tee -a "$out/gpu.log"
-  status=1
+# skipped NAME WHY: a step a dry run leaves out, in the summary.
+skipped() {
+  echo "== $1: skipped ($2)"
+  printf '%-44s %s\n' "$1" "skipped in a dry run: $2" >>"$summary"
+}
+
+if [ $dry = 1 ]; then
+  # The stand-in plays the real driver too: every "ThisMachine" test runs.
+  export YASPS_CUDA_LIBRARY="$kit/libYaspsFakeCuda.so"
+  echo "dry run: the stand-in driver, no GPU" | tee "$out/gpu.log"
+  cat "$out/gpu.log" >>"$summary"
 fi
-cat "$out/gpu.log"
-cat "$out/gpu.log" >>"$summary"
+
+if [ $dry = 0 ]; then
+  if ! nvidia-smi --query-gpu=name,driver_version,memory.total --format=csv \
+    >"$out/gpu.log" 2>&1; then
+    echo "no usable NVIDIA driver (nvidia-smi failed)" | tee -a "$out/gpu.log"
+    status=1
+  fi
+  cat "$out/gpu.log"
+  cat "$out/gpu.log" >>"$summary"
+fi
 
 step "runtime unit tests (stand-in and real driver)" gtest.log \
   env YASPS_FAKE_CUDA="$kit/libYaspsFakeCuda.so" "$kit/YaspsRuntimeTests"
@@ -71,22 +98,35 @@ step "SpMV, assembly and PCG on the bunny" spmv.log \
   --export /tmp/yasps-bunny-hessian
 ms=$(awk '/GPU SpMV/ {print $3}' "$out/spmv.log")
 
-step "cuSPARSE on the same matrix" cusparse.log \
-  python3 "$root/bench/gpu_cusparse.py" /tmp/yasps-bunny-hessian \
-  ${ms:+--yasps-ms "$ms"}
+no_check=()
+if [ $dry = 1 ]; then
+  skipped "cuSPARSE on the same matrix" "cuSPARSE needs a GPU"
+  no_check=(--no-check)   # the stand-in computes nothing in them
+else
+  step "cuSPARSE on the same matrix" cusparse.log \
+    python3 "$root/bench/gpu_cusparse.py" /tmp/yasps-bunny-hessian \
+    ${ms:+--yasps-ms "$ms"}
+fi
 
 step "stable Neo-Hookean kernels (yasps)" kernels.log \
-  "$kit/yasps-kernel-bench" "$kit/snh" --repeat 100
+  "$kit/yasps-kernel-bench" "$kit/snh" --repeat 100 "${no_check[@]}"
 
-step "stable Neo-Hookean with PyTorch and JAX" peers.log \
-  python3 "$root/bench/gpu_peers.py" "$kit/snh" --yasps-log "$out/kernels.log"
+if [ $dry = 1 ]; then
+  skipped "stable Neo-Hookean with PyTorch and JAX" "the peers need a GPU"
+else
+  step "stable Neo-Hookean with PyTorch and JAX" peers.log \
+    python3 "$root/bench/gpu_peers.py" "$kit/snh" \
+    --yasps-log "$out/kernels.log"
+fi
 
 step "one Newton iteration of the bunny, in stages" newton.log \
-  "$kit/yasps-newton-bench" "$kit/newton"
+  "$kit/yasps-newton-bench" "$kit/newton" "${no_check[@]}"
 
 sanitizer=$(command -v compute-sanitizer ||
   ls /usr/local/cuda/bin/compute-sanitizer 2>/dev/null)
-if [ -n "$sanitizer" ]; then
+if [ $dry = 1 ]; then
+  skipped "real-driver tests under compute-sanitizer" "it needs a GPU"
+elif [ -n "$sanitizer" ]; then
   # racecheck is the slow one: about 250 s on an H200 (138 s of it in
   # SolvesLikeTheCpu), against 6 s for synccheck and 74 s for memcheck.
   for tool in synccheck memcheck racecheck; do

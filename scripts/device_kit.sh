@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Gathers what the GPU checks of scripts/device_check.sh need into
-# .device-kit/ (ignored by git), for a GPU machine that has neither MLIR
+# .device-kit/ (ignored by git; $KIT_DIR to put it elsewhere), for a GPU machine that has neither MLIR
 # nor this build: the runtime's test binary and stand-in driver, the SpMV,
 # kernel and Newton benchmarks, the bunny mesh, and the kits of
 # bench/gpu_kit.py (stable Neo-Hookean's derivative kernels, and the bunny
@@ -9,7 +9,7 @@
 set -euo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
 build=${BUILD_DIR:-$root/build}
-kit=$root/.device-kit
+kit=${KIT_DIR:-$root/.device-kit}
 data=${YASPS_DATA_DIR:-$root/../shared/data}
 
 cmake --build "$build" --target YaspsRuntimeTests YaspsFakeCuda \
