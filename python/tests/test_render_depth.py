@@ -91,3 +91,21 @@ def test_matplotlib_stays_the_fallback():
     assert image.shape == (180, 240, 3) and red(image).sum() > 100
     with pytest.raises(ValueError, match="renderer must be one of"):
         render_surfaces_array([BOX], renderer="povray")
+
+
+def test_frames_of_the_same_meshes_are_drawn_afresh():
+    """A video's frames reuse one plotter: a frame drawn after another of
+    the same meshes, moved, equals the same frame drawn first, title and
+    all; a moved box is drawn where it is."""
+    bounds = ((-1.0, -1.0, -0.5), (1.0, 1.0, 1.0))
+    moved = (BOX[0] + [0.0, 0.0, -0.4], BOX[1], BOX[2])
+    first = render_surfaces_array([BOX], view=VIEW, size=SIZE,
+                                  bounds=bounds, title="first")
+    other = render_surfaces_array([moved], view=VIEW, size=SIZE,
+                                  bounds=bounds, title="other")
+    again = render_surfaces_array([BOX], view=VIEW, size=SIZE,
+                                  bounds=bounds, title="first")
+    np.testing.assert_array_equal(again, first)
+    assert not np.array_equal(other, first)
+    rows = [np.nonzero(red(image))[0].mean() for image in (first, other)]
+    assert rows[1] > rows[0] + 5      # lower in the picture

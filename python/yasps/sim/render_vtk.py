@@ -15,6 +15,8 @@ from typing import Optional, Sequence, Tuple
 
 import numpy as np
 
+#: vtkCornerAnnotation's slot for text centred at the top.
+UPPER_EDGE = 7
 #: The camera's vertical field of view, in degrees (VTK's default).
 VIEW_ANGLE = 30.0
 #: How much farther the camera stands than the nearest point from which
@@ -72,33 +74,73 @@ def camera(view: Tuple[float, float], lower: np.ndarray, upper: np.ndarray,
     return centre + distance * direction, centre, up
 
 
+class _Stage:
+    """A plotter kept between pictures of the same meshes (a video's
+    frames): creating a plotter and its meshes costs several times what
+    drawing them does, so later frames only move the points."""
+
+    def __init__(self, pv, meshes: Sequence, size: Tuple[int, int]):
+        self.plotter = pv.Plotter(off_screen=True, window_size=tuple(size))
+        self.plotter.set_background("white")
+        self.surfaces = []
+        for verts, faces, color in meshes:
+            verts = np.asarray(verts, dtype=float).reshape(-1, 3)
+            faces = np.asarray(faces, dtype=np.int64).reshape(-1, 3)
+            cells = np.hstack([np.full((len(faces), 1), 3), faces]).ravel()
+            surface = pv.PolyData(verts.copy(), cells)
+            self.plotter.add_mesh(surface, color=color, smooth_shading=False)
+            self.surfaces.append(surface)
+        # One title, whose text changes: adding and removing actors would
+        # render the scene again each time.
+        self.title = self.plotter.add_text(
+            " ", position="upper_edge", font_size=10, color="black")
+
+    @staticmethod
+    def key(meshes: Sequence, size: Tuple[int, int]):
+        """What a stage is reused for: the picture's size, and per mesh its
+        vertex count, triangles and colour."""
+        return (tuple(size),) + tuple(
+            (np.asarray(verts).size,
+             np.asarray(faces, dtype=np.int64).tobytes(), repr(color))
+            for verts, faces, color in meshes)
+
+    def draw(self, meshes: Sequence, view, title: Optional[str],
+             size: Tuple[int, int], lower: np.ndarray,
+             upper: np.ndarray) -> np.ndarray:
+        for surface, (verts, _, _) in zip(self.surfaces, meshes):
+            surface.points = np.asarray(verts, dtype=float).reshape(-1, 3)
+        position, focus, up = camera(view, lower, upper, size[0] / size[1])
+        camera_ = self.plotter.camera
+        camera_.position, camera_.focal_point = tuple(position), tuple(focus)
+        camera_.up, camera_.view_angle = up, VIEW_ANGLE
+        self.plotter.reset_camera_clipping_range()
+        self.title.SetText(UPPER_EDGE, title or " ")
+        self.plotter.render()
+        image = self.plotter.screenshot(return_img=True)
+        return np.ascontiguousarray(image[..., :3], dtype=np.uint8)
+
+    def close(self) -> None:
+        self.plotter.close()
+
+
+#: The stage of the last picture, reused while its meshes' topology and the
+#: picture's size stay (one at a time: a new scene closes the old one).
+_last: dict = {}
+
+
 def picture(meshes: Sequence, view: Tuple[float, float],
             title: Optional[str], size: Tuple[int, int],
             lower: np.ndarray, upper: np.ndarray) -> np.ndarray:
     """The meshes ``[(V, F, colour), ...]`` flat-shaded with a depth
     buffer, as an (height, width, 3) uint8 array, the camera fitted to
-    [lower, upper]."""
+    [lower, upper]. Consecutive pictures of the same triangles (a video's
+    frames) reuse one plotter."""
     pv = _pyvista()
-    plotter = pv.Plotter(off_screen=True, window_size=tuple(size))
-    try:
-        plotter.set_background("white")
-        for verts, faces, color in meshes:
-            verts = np.asarray(verts, dtype=float).reshape(-1, 3)
-            faces = np.asarray(faces, dtype=np.int64).reshape(-1, 3)
-            cells = np.hstack([np.full((len(faces), 1), 3), faces]).ravel()
-            plotter.add_mesh(pv.PolyData(verts, cells), color=color,
-                             smooth_shading=False)
-        position, focus, up = camera(view, lower, upper,
-                                     size[0] / size[1])
-        plotter.camera.position = tuple(position)
-        plotter.camera.focal_point = tuple(focus)
-        plotter.camera.up = up
-        plotter.camera.view_angle = VIEW_ANGLE
-        plotter.reset_camera_clipping_range()
-        if title:
-            plotter.add_text(title, position="upper_edge", font_size=10,
-                             color="black")
-        image = plotter.screenshot(return_img=True)
-    finally:
-        plotter.close()
-    return np.ascontiguousarray(image[..., :3], dtype=np.uint8)
+    key = _Stage.key(meshes, size)
+    stage = _last.get(key)
+    if stage is None:
+        for old in _last.values():
+            old.close()
+        _last.clear()
+        stage = _last[key] = _Stage(pv, meshes, size)
+    return stage.draw(meshes, view, title, size, lower, upper)
