@@ -89,6 +89,8 @@ import types
 from pathlib import Path
 from typing import Optional
 
+from .errors import ArgumentError
+
 
 def _default_cache_dir() -> Optional[str]:
     value = os.environ.get("YASPS_CACHE_DIR")
@@ -119,7 +121,6 @@ hessian_storage: str = "f64"
 
 def resolve_hessian_storage() -> str:
     """``hessian_storage``, checked: "f64" or "f32", else ValueError."""
-    from .frontend.errors import ArgumentError  # frontend imports config
     if hessian_storage not in PRECISIONS:
         raise ArgumentError(f"hessian_storage must be one of {PRECISIONS}, got "
                             f"{hessian_storage!r}")
@@ -134,7 +135,6 @@ PRECONDITIONERS = ("block-jacobi", "multilevel")
 
 def resolve_preconditioner() -> str:
     """``preconditioner``, checked: one of PRECONDITIONERS, else ValueError."""
-    from .frontend.errors import ArgumentError
     if preconditioner not in PRECONDITIONERS:
         raise ArgumentError(f"preconditioner must be one of {PRECONDITIONERS}, "
                             f"got {preconditioner!r}")
@@ -144,7 +144,6 @@ def resolve_preconditioner() -> str:
 def resolve_precision(scene_precision: Optional[str]) -> str:
     """The precision a scene computes in: its own, else ``precision``.
     Raises ValueError for anything but "f64" or "f32"."""
-    from .frontend.errors import ArgumentError
     value = scene_precision if scene_precision is not None else precision
     if value not in PRECISIONS:
         raise ArgumentError(f"precision must be one of {PRECISIONS}, got {value!r}")
@@ -166,7 +165,6 @@ _COUNTS = {"num_threads": 0, "simd_lanes": 0, "opt_level": 0}
 def _check(name: str, value) -> None:
     """Raises ArgumentError where ``value`` is not what setting ``name``
     takes."""
-    from .frontend.errors import ArgumentError
     wrong = None
     if name in _CHOICES and value not in _CHOICES[name]:
         wrong = f"one of {', '.join(map(repr, _CHOICES[name]))}"
