@@ -21,8 +21,9 @@ pytestmark = pytest.mark.skipif(
 def test_device_check_dry_run_prints_the_summary(tmp_path):
     build = os.environ.get("YASPS_BUILD_DIR", str(REPO / "build"))
     kit, out = tmp_path / "kit", tmp_path / "out"
+    # Step limits far beyond a step's seconds: CI shares its machine.
     env = dict(os.environ, KIT_DIR=str(kit), BUILD_DIR=build,
-               STEP_LIMIT="240")
+               STEP_LIMIT="3600")
     made = subprocess.run(["bash", str(REPO / "scripts" / "device_kit.sh")],
                           env=env, capture_output=True, text=True)
     assert made.returncode == 0, made.stderr[-2000:]

@@ -9,17 +9,16 @@ values (a parameter sweep) reuses the compiled kernels, and
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Tuple
+from typing import Sequence, Tuple
 
 import numpy as np
 
 from ..frontend import energies as E
 from ..frontend.energies import Number
 from ..frontend.attribute import Attribute
-from ..frontend.errors import SceneError
+from ..frontend.errors import ArgumentError, SceneError
 from ..frontend.scene import Mesh, Primitive
 from .meshes import HEX_CORNERS, hinges_of
-from ..frontend.errors import ArgumentError
 
 
 def material_constant(mesh: Mesh, name: str, value: Number) -> Attribute:
@@ -31,6 +30,24 @@ def material_constant(mesh: Mesh, name: str, value: Number) -> Attribute:
     constant = mesh.addConstant(name, rows=1)
     constant.updateValue([float(value)])
     return constant
+
+
+def position_owner(positions: Attribute, where: str, adds: Sequence[str]):
+    """The primitive of the 3x1 world positions ``positions``, to which
+    ``where`` (a helper's name, for the message) adds attributes named
+    ``adds``; raises SceneError if it is not one or has one of them."""
+    if positions.shape != (3, 1):
+        raise SceneError(f"{where}: world positions must be 3x1, got "
+                         f"{positions.describe()}")
+    owner = positions.owner
+    if owner is None or not hasattr(owner, "numInstances"):
+        raise SceneError(f"{where}: {positions.describe()} is not an "
+                         f"attribute of a primitive")
+    for name in adds:
+        if name in owner:
+            raise SceneError(f"{where}: {owner.describe()} already has an "
+                             f"attribute {name!r}")
+    return owner
 
 
 #: add_elastic_tets' materials: energy densities of (F, mu, lam, volume).

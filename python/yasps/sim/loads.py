@@ -18,7 +18,7 @@ import numpy as np
 
 from ..frontend.attribute import Attribute
 from ..frontend.errors import SceneError
-from .bodies import material_constant
+from .bodies import material_constant, position_owner
 
 
 @dataclass
@@ -89,16 +89,7 @@ def add_loads(positions: Attribute, scale: float = 1.0,
     a 3x1 constant ``name`` and the energy ``-scale * f . x`` (``scale``:
     dt^2 in an ImplicitEuler scene, as the materials take). Set them with
     :meth:`Loads.set` or :meth:`Loads.set_total`."""
-    if positions.shape != (3, 1):
-        raise SceneError(f"add_loads: positions must be 3x1, got "
-                         f"{positions.describe()}")
-    owner = positions.owner
-    if owner is None or not hasattr(owner, "numInstances"):
-        raise SceneError(f"add_loads: {positions.describe()} is not an "
-                         f"attribute of a primitive")
-    if name in owner:
-        raise SceneError(f"add_loads: {owner.describe()} already has an "
-                         f"attribute {name!r}")
+    owner = position_owner(positions, "add_loads", (name,))
     forces = owner.addConstant(name, rows=3)
     forces.updateValue(np.zeros((owner.numInstances, 3, 1)))
     weight = material_constant(owner.parent, f"{owner.name}_{name}_scale",

@@ -23,6 +23,7 @@ import numpy as np
 from ..frontend import energies as E
 from ..frontend.attribute import Attribute
 from ..frontend.errors import SceneError
+from .bodies import position_owner
 
 
 @dataclass
@@ -83,17 +84,7 @@ def add_world_inertia(positions: Attribute, masses,
     through a non-linear map the Hessian ``J^T M J + sum m (x - x_hat)
     d2x/dq2`` can be indefinite far from the prediction, where "clamp"
     helps Newton."""
-    if positions.shape != (3, 1):
-        raise SceneError(f"add_world_inertia: world positions must be 3x1, "
-                         f"got {positions.describe()}")
-    owner = positions.owner
-    if owner is None or not hasattr(owner, "numInstances"):
-        raise SceneError(f"add_world_inertia: {positions.describe()} is not "
-                         f"an attribute of a primitive")
-    for name in ("x_hat", "mass"):
-        if name in owner:
-            raise SceneError(f"add_world_inertia: {owner.describe()} already "
-                             f"has an attribute {name!r}")
+    owner = position_owner(positions, "add_world_inertia", ("x_hat", "mass"))
     count = owner.numInstances
     x_hat = owner.addConstant("x_hat", rows=3)
     x_hat.updateValue(np.array(positions.compute().value, dtype=float))
