@@ -76,6 +76,35 @@ yasps.scene @s {
 
 // -----
 
+// The sum of signed singular values is differentiated implicitly, in terms
+// of its own value: the tangent divides by s (s^2 - |A|^2) - 2 det A and
+// needs no SVD; the Hessian differentiates that rule again.
+
+// CHECK-LABEL: yasps.attr @svs__jac : !yasps.mat<1x9xf64>
+// CHECK: %[[A:.*]] = yasps.read @m::@p::@a
+// CHECK: %[[S:.*]] = yasps.singular_value_sum %[[A]]
+// CHECK-DAG: yasps.cofactor %[[A]]
+// CHECK-DAG: yasps.det %[[A]]
+// CHECK-DAG: yasps.squared_norm %[[A]]
+// CHECK: yasps.attr @svs__jac__jac : !yasps.mat<9x9xf64>
+// CHECK: yasps.singular_value_sum
+yasps.scene @s {
+  yasps.mesh @m {
+    yasps.primitive @p(1) {
+      yasps.data_attr @a : !yasps.mat<3x3xf64>
+      yasps.attr @svs : !yasps.mat<1x1xf64> {
+        %a = yasps.read @m::@p::@a : !yasps.mat<3x3xf64>
+        %s = yasps.singular_value_sum %a : !yasps.mat<3x3xf64>
+        yasps.yield %s : !yasps.mat<1x1xf64>
+      }
+    }
+  }
+  yasps.energy @m::@p::@svs
+  yasps.minimize [@m::@p::@a]
+}
+
+// -----
+
 // Energies that read no target get no derivative attributes; reads of
 // constants are not parameters.
 

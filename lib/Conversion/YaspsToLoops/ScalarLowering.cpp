@@ -171,6 +171,72 @@ public:
     return (r + c) % 2 ? neg(minor) : minor;
   }
 
+  Value sqrt(Value x) { return math::SqrtOp::create(b, loc, x); }
+  Value greater(Value x, Value y) {
+    return arith::CmpFOp::create(b, loc, arith::CmpFPredicate::OGT, x, y);
+  }
+  Value select(Value flag, Value x, Value y) {
+    return arith::SelectOp::create(b, loc, flag, x, y);
+  }
+
+  /// The sum of the signed singular values of a matrix of at most 3x3 (see
+  /// yasps.singular_value_sum).
+  Value singularValueSum(const ScalarMatrix &m) {
+    if (m.rows == 1)
+      return m.values[0];
+    SmallVector<Value> squares;
+    for (Value v : m.values)
+      squares.push_back(mul(v, v));
+    Value first = sum(squares);
+    if (m.rows == 2)
+      return sqrt(add(first, mul(constant(2.0), det(m, {0, 1}, {0, 1}))));
+    SmallVector<Value> cofactorSquares, detTerms;
+    for (int64_t r = 0; r < 3; ++r)
+      for (int64_t c = 0; c < 3; ++c) {
+        Value cof = cofactor(m, r, c);
+        cofactorSquares.push_back(mul(cof, cof));
+        if (r == 0)
+          detTerms.push_back(mul(m.at(0, c), cof));
+      }
+    Value second = sum(cofactorSquares), det3 = sum(detTerms);
+    return largestQuarticRoot(first, second, det3);
+  }
+
+  /// The largest root of P(s) = (s^2 - I)^2 - 8 J s - 4 II. Its roots are
+  /// real (the sign patterns of the singular values), so Laguerre's method
+  /// started right of them all falls monotonically to the largest. The
+  /// start: s^2 = I + 2 q with q = s1 s2 + s2 s3 + s1 s3 <= sqrt(3 II), and
+  /// q <= s1 s2 <= sqrt(II) where J < 0. Its convergence is cubic: from
+  /// this start three steps reach full precision for every J > 0 tried
+  /// (singular values over e^-5..e^5), eight for J < 0, where two roots
+  /// draw close as s2 + s3 -> 0 (measured on 40,000 random matrices
+  /// against NumPy's SVD: relative error at most 3e-12, and 7e-13 unless
+  /// s2 + s3 < 1e-2 s1).
+  Value largestQuarticRoot(Value first, Value second, Value det) {
+    constexpr int steps = 8;
+    Value bound = select(greater(det, constant(0.0)),
+                         mul(constant(3.0), second), second);
+    Value s = sqrt(add(first, mul(constant(2.0), sqrt(bound))));
+    for (int k = 0; k < steps; ++k) {
+      Value gap = sub(mul(s, s), first);
+      Value p = sub(sub(mul(gap, gap), mul(mul(constant(8.0), det), s)),
+                    mul(constant(4.0), second));
+      Value dp = sub(mul(mul(constant(4.0), s), gap), mul(constant(8.0), det));
+      Value ddp = sub(mul(mul(constant(12.0), s), s), mul(constant(4.0), first));
+      // Laguerre with n = 4: s -= 4 P / (P' + sqrt(9 P'^2 - 12 P P'')).
+      Value disc = sub(mul(mul(constant(9.0), dp), dp),
+                       mul(mul(constant(12.0), p), ddp));
+      disc = select(greater(disc, constant(0.0)), disc, constant(0.0));
+      Value denominator = add(dp, sqrt(disc));
+      // At a root of P' as well (s = 0 for A = 0) the step is 0.
+      Value step = select(greater(denominator, constant(0.0)),
+                          div(mul(constant(4.0), p), denominator),
+                          constant(0.0));
+      s = sub(s, step);
+    }
+    return s;
+  }
+
   OpBuilder &b;
   Location loc;
   FloatType type;
@@ -451,6 +517,9 @@ mlir::yasps::lowerToScalars(OpBuilder &b, Operation *op,
         if (isa<NormOp>(norm.getOperation()))
           total = math::SqrtOp::create(b, loc, total);
         return ScalarMatrix{1, 1, {total}};
+      })
+      .Case([&](SingularValueSumOp) -> FailureOr<ScalarMatrix> {
+        return ScalarMatrix{1, 1, {s.singularValueSum(lhs())}};
       })
       .Case([&](SumOp) -> FailureOr<ScalarMatrix> {
         return ScalarMatrix{1, 1, {s.sum(lhs().values)}};

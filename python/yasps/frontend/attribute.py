@@ -367,6 +367,21 @@ class Attribute:
         self._square("trace")
         return self._new("trace", (self,), 1, 1)
 
+    def singularValueSum(self) -> "Attribute":
+        """The sum of the signed singular values (1x1) of a matrix of at
+        most 3x3: ``tr(S)`` of its polar decomposition ``R S`` with R a
+        rotation, so the smallest singular value counts negative where the
+        determinant is negative. ``|F - R|^2 = |F|^2 - 2 tr(S) + n`` is
+        fixed corotated elasticity's distance from a rotation. Computed
+        without an SVD (see ``yasps.singular_value_sum`` in docs/dialect.md);
+        its derivatives are singular where two signed singular values sum
+        to zero."""
+        self._square("singularValueSum")
+        if self._rows > 3:
+            raise ShapeError(f"singularValueSum: needs a matrix of at most "
+                             f"3x3, got {self.describe()}")
+        return self._new("singular_value_sum", (self,), 1, 1)
+
     def norm(self) -> "Attribute":
         """Frobenius norm (1x1)."""
         return self._new("norm", (self,), 1, 1)

@@ -74,6 +74,19 @@ def neo_hookean(F: Attribute, mu: Number, lam: Number,
     return volume * psi
 
 
+def fixed_corotated(F: Attribute, mu: Number, lam: Number,
+                    volume: Number) -> Attribute:
+    """Fixed corotated energy density times rest volume (Stomakhin et al.
+    2012, as in IPC): ``V [mu |F - R|^2 + lam/2 (J - 1)^2]`` with ``R`` the
+    rotation of F's polar decomposition, ``|F - R|^2 = |F|^2 - 2 tr(S) + 3``
+    (:meth:`Attribute.singularValueSum`) and ``J = det F``. Defined for
+    inverted elements too; its derivatives are singular only where two
+    signed singular values sum to zero."""
+    distance = F.squaredNorm() - 2.0 * F.singularValueSum() + 3.0
+    J = F.determinant()
+    return volume * (mu * distance + 0.5 * lam * (J - 1.0) * (J - 1.0))
+
+
 def baraff_witkin(corners: Attribute, rest_uv_inverse: Attribute,
                   area: Number, stretch: Number, shear: Number) -> Attribute:
     """Baraff-Witkin cloth stretch and shear of a triangle: with ``W = Dx

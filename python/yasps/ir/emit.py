@@ -25,7 +25,8 @@ _INDENT = "  "
 _UNARY_SAME = {"neg", "sqrt", "log", "exp", "sin", "cos", "abs",
                "stop_gradient", "inverse", "cofactor"}
 _BINARY_SAME = {"add", "sub", "elementwise_mul", "atan2", "min", "max", "cross"}
-_TO_SCALAR = {"det", "trace", "norm", "squared_norm", "sum"}
+_TO_SCALAR = {"det", "trace", "norm", "squared_norm", "sum",
+              "singular_value_sum"}
 
 
 # The largest finite f32: a literal beyond it does not exist in an f32 scene.

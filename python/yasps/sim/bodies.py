@@ -52,7 +52,8 @@ def position_owner(positions: Attribute, where: str, adds: Sequence[str]):
 
 #: add_elastic_tets' materials: energy densities of (F, mu, lam, volume).
 MATERIALS = {"stable_neo_hookean": E.stable_neo_hookean,
-             "neo_hookean": E.neo_hookean}
+             "neo_hookean": E.neo_hookean,
+             "fixed_corotated": E.fixed_corotated}
 
 
 def lame(young: Number, poisson: Number) -> Tuple[float, float]:
@@ -73,8 +74,8 @@ def add_elastic_tets(mesh: Mesh, positions: Attribute, rest: np.ndarray,
     ``positions`` belongs to, with their rest shape (the inverse of the rest
     edge matrix and the volume, from ``rest`` (N, 3)) and registers
     ``scale`` times the ``material`` (one of MATERIALS: stable Neo-Hookean,
-    or IPC's Neo-Hookean, whose energy never lets a tet invert; ``mu``,
-    ``lam`` per unit volume, :func:`lame` from E and nu) on them as an
+    IPC's Neo-Hookean, whose energy never lets a tet invert, or fixed
+    corotated; ``mu``, ``lam`` per unit volume, :func:`lame` from E and nu) on them as an
     energy (``scale``: dt^2 for implicit Euler), PSD-projected
     by ``projection`` (as ``addEnergy``). ``mu``, ``lam`` and ``scale``
     are the mesh's constants ``name + "_mu"``, ``"_lam"``, ``"_scale"``

@@ -1395,6 +1395,30 @@ yasps.scene @s {
 
 // -----
 
+// Singular value sum: not square.
+yasps.scene @s {
+  yasps.attr @a : !yasps.mat<1x1xf64> {
+    %0 = yasps.constant dense<1.0> : tensor<3x2xf64>
+    // expected-error @+1 {{'yasps.singular_value_sum' op needs a square matrix, got '!yasps.mat<3x2xf64>' in computed attribute @a}}
+    %1 = yasps.singular_value_sum %0 : !yasps.mat<3x2xf64>
+    yasps.yield %1 : !yasps.mat<1x1xf64>
+  }
+}
+
+// -----
+
+// Singular value sum: larger than 3x3.
+yasps.scene @s {
+  yasps.attr @a : !yasps.mat<1x1xf64> {
+    %0 = yasps.constant dense<1.0> : tensor<4x4xf64>
+    // expected-error @+1 {{'yasps.singular_value_sum' op needs a matrix of at most 3x3, got '!yasps.mat<4x4xf64>' in computed attribute @a}}
+    %1 = yasps.singular_value_sum %0 : !yasps.mat<4x4xf64>
+    yasps.yield %1 : !yasps.mat<1x1xf64>
+  }
+}
+
+// -----
+
 // Norm: the result is not 1x1 (TypesMatchWith).
 yasps.scene @s {
   yasps.attr @a : !yasps.mat<3x1xf64> {

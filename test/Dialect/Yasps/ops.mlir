@@ -140,6 +140,8 @@ yasps.scene @expressions {
         %cof = yasps.cofactor %hc : !yasps.mat<3x3xf64>
         // CHECK: yasps.trace %{{.*}} : !yasps.mat<3x3xf64>
         %tr = yasps.trace %inv : !yasps.mat<3x3xf64>
+        // CHECK: yasps.singular_value_sum %{{.*}} : !yasps.mat<3x3xf64>
+        %svs = yasps.singular_value_sum %hc : !yasps.mat<3x3xf64>
         // CHECK: yasps.norm %{{.*}} : !yasps.mat<6x1xf64>
         %nrm = yasps.norm %vc : !yasps.mat<6x1xf64>
         // CHECK: yasps.squared_norm %{{.*}} : !yasps.mat<1x3xf64>

@@ -336,6 +336,41 @@ TANGENT(NormOp) {
   TangentBuilder t(builder, getLoc());
   return t.scale(t.dot(getOperand(), tangents[0]), t.reciprocal(getResult()));
 }
+// The sum s of signed singular values, by implicit differentiation of its
+// defining polynomial (see the op's description), in terms of s itself so
+// that second derivatives follow by the same rule:
+//   2x2: s = sqrt(I + 2 J), s' = <A + cof A, A'> / s;
+//   3x3: P(s) = (s^2 - I)^2 - 8 J s - 4 II = 0 gives
+//   s' = ((s^2 - I) <A, A'> + 2 <cof A, cof(A)'> + 2 s <cof A, A'>)
+//        / (s (s^2 - I) - 2 J),
+// whose denominator is (s1 + s2)(s2 + s3)(s1 + s3) in the signed singular
+// values: zero only where the polar rotation is not unique.
+TANGENT(SingularValueSumOp) {
+  if (!tangents[0])
+    return Value();
+  TangentBuilder t(builder, getLoc());
+  Location loc = getLoc();
+  Value a = getOperand(), da = tangents[0], s = getResult();
+  MatrixType type = TangentBuilder::typeOf(a);
+  if (type.getRows() == 1)
+    return da;
+  auto cofactor = CofactorOp::create(builder, loc, type, a);
+  Value cof = cofactor.getResult();
+  if (type.getRows() == 2)
+    return t.scale(t.add(t.dot(a, da), t.dot(cof, da)), t.reciprocal(s));
+  FailureOr<Value> dcof = cofactor.emitTangent(builder, {da});
+  if (failed(dcof))
+    return failure();
+  Value gap = t.sub(t.emul(s, s), SquaredNormOp::create(builder, loc,
+                                                        type.getScalarType(), a)
+                                      .getResult());
+  Value det = DetOp::create(builder, loc, type.getScalarType(), a);
+  Value numerator =
+      t.add(t.add(t.emul(gap, t.dot(a, da)), t.scaleBy(t.dot(cof, *dcof), 2.0)),
+            t.scaleBy(t.emul(s, t.dot(cof, da)), 2.0));
+  Value denominator = t.sub(t.emul(s, gap), t.scaleBy(det, 2.0));
+  return t.emul(numerator, t.reciprocal(denominator));
+}
 // (|A|^2)' = 2 <A, A'>
 TANGENT(SquaredNormOp) {
   TangentBuilder t(builder, getLoc());

@@ -277,6 +277,15 @@ LogicalResult DetOp::verify() {
 LogicalResult TraceOp::verify() {
   return verifySquare(*this, matrixOf(getOperand()));
 }
+LogicalResult SingularValueSumOp::verify() {
+  MatrixType type = matrixOf(getOperand());
+  if (failed(verifySquare(*this, type)))
+    return failure();
+  if (type.getRows() > 3)
+    return emitOpError() << "needs a matrix of at most 3x3, got " << type
+                         << where(*this);
+  return success();
+}
 LogicalResult InverseOp::verify() {
   return verifySquare(*this, getMatrixType());
 }

@@ -405,6 +405,21 @@ def Yasps_TraceOp : Yasps_ToScalarOp<"trace", "trace of a square matrix",
     "The sum of the diagonal; the result is 1x1."> {
   let hasVerifier = 1;
 }
+def Yasps_SingularValueSumOp : Yasps_ToScalarOp<"singular_value_sum",
+    "sum of the signed singular values of a matrix of at most 3x3",
+    [{`tr(S)` of the polar decomposition `A = R S` with R a rotation: the sum
+    of A's singular values with the smallest one negated where `det A < 0`
+    (fixed corotated elasticity's `|F - R|^2 = |F|^2 - 2 tr(S) + 3`). No
+    SVD is needed: with `I = |A|^2`, `II = |cof A|^2` and `J = det A`, a 3x3
+    result s is the largest root of `(s^2 - I)^2 - 8 J s - 4 II`, whose four
+    real roots are the sign patterns of the singular values with an even
+    number of flips; kernels find it by Newton's method from an upper
+    bound, and derivatives follow by implicit differentiation in terms of
+    s itself. A 2x2 result is `sqrt(I + 2 J)`, a 1x1 one the entry. The
+    derivative is singular where two signed singular values sum to zero
+    (the rotation is not unique there). The result is 1x1.}]> {
+  let hasVerifier = 1;
+}
 def Yasps_NormOp : Yasps_ToScalarOp<"norm", "Frobenius norm",
     "The square root of the sum of squared entries; the result is 1x1.">;
 def Yasps_SquaredNormOp : Yasps_ToScalarOp<"squared_norm",
