@@ -9,7 +9,7 @@ values (a parameter sweep) reuses the compiled kernels, and
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Sequence, Tuple
+from typing import Optional, Sequence, Tuple
 
 import numpy as np
 
@@ -18,6 +18,7 @@ from ..frontend.energies import Number
 from ..frontend.attribute import Attribute
 from ..frontend.errors import ArgumentError, SceneError
 from ..frontend.scene import Mesh, Primitive
+from . import inversion
 from .meshes import HEX_CORNERS, hinges_of
 
 
@@ -55,6 +56,10 @@ MATERIALS = {"stable_neo_hookean": E.stable_neo_hookean,
              "neo_hookean": E.neo_hookean,
              "fixed_corotated": E.fixed_corotated}
 
+#: The materials whose energy is undefined past J = 0: add_elastic_tets
+#: guards their tets against inverting (:mod:`yasps.sim.inversion`).
+INVERSION_BARRIERS = frozenset({"neo_hookean"})
+
 
 def lame(young: Number, poisson: Number) -> Tuple[float, float]:
     """Lame's (mu, lambda) from Young's modulus and Poisson's ratio (3-D)."""
@@ -69,7 +74,8 @@ def add_elastic_tets(mesh: Mesh, positions: Attribute, rest: np.ndarray,
                      tets: np.ndarray, mu: Number, lam: Number,
                      scale: Number = 1.0, name: str = "t",
                      projection: str = "clamp",
-                     material: str = "stable_neo_hookean") -> Attribute:
+                     material: str = "stable_neo_hookean",
+                     guard_inversion: Optional[bool] = None) -> Attribute:
     """Adds a primitive ``name`` of the tets (M, 4) of the vertices that
     ``positions`` belongs to, with their rest shape (the inverse of the rest
     edge matrix and the volume, from ``rest`` (N, 3)) and registers
@@ -79,7 +85,11 @@ def add_elastic_tets(mesh: Mesh, positions: Attribute, rest: np.ndarray,
     energy (``scale``: dt^2 for implicit Euler), PSD-projected
     by ``projection`` (as ``addEnergy``). ``mu``, ``lam`` and ``scale``
     are the mesh's constants ``name + "_mu"``, ``"_lam"``, ``"_scale"``
-    (:func:`material_constant`). Returns it."""
+    (:func:`material_constant`). ``guard_inversion`` (by default where
+    the material is undefined past J = 0, IPC's Neo-Hookean): steppers
+    whose targets include ``positions`` then bound each step so that no
+    tet falls below a tenth of its volume (:func:`inversion_bound`), as
+    IPC does. Returns the energy."""
     if material not in MATERIALS:
         raise SceneError(f"add_elastic_tets: material must be one of "
                          f"{', '.join(MATERIALS)}, got {material!r}")
@@ -99,6 +109,9 @@ def add_elastic_tets(mesh: Mesh, positions: Attribute, rest: np.ndarray,
                             MATERIALS[material](E.deformation_gradient(
                                 gathered, t["inv"]), mu, lam, t["vol"]))
     mesh.scene.addEnergy(energy, projection=projection)
+    if guard_inversion if guard_inversion is not None \
+            else material in INVERSION_BARRIERS:
+        inversion.guard_inversion(positions, tets)
     return energy
 
 

@@ -9,11 +9,17 @@ tet's volume falls below a fraction of what it was, as its CCD does for
 distances. Along a straight step x + a p, a tet's signed volume is the
 cubic det(D + a P) in a (D, P its edge matrices of x and of p); the bound
 is the first a where some tet's cubic falls to KEEP of its value at 0.
+
+Materials say whether they need it: ``add_elastic_tets`` registers the
+tets of such a material with :func:`guard_inversion`, and every stepper
+whose targets include their positions bounds its steps by them
+(:func:`guarded_step_bound`) without being told.
 """
 
 from __future__ import annotations
 
-from typing import Callable, Sequence, Union
+from typing import Callable, List, Optional, Sequence, Tuple, Union
+from weakref import WeakKeyDictionary
 
 import numpy as np
 
@@ -105,3 +111,34 @@ def combined_bound(*bounds: Callable) -> Callable:
         return min(b(x, p) for b in bounds)
     return bound
 
+
+
+#: Per scene, the (positions, tets) whose steps must not invert a tet.
+_GUARDS: "WeakKeyDictionary[object, List[Tuple[object, np.ndarray]]]" = \
+    WeakKeyDictionary()
+
+
+def guard_inversion(positions, tets: np.ndarray) -> None:
+    """Registers ``tets`` over the vertices whose world positions are
+    ``positions`` (an attribute of a primitive): steppers of the scene
+    whose targets include ``positions`` bound every step by
+    :func:`inversion_bound` of them."""
+    scene = positions.owner.scene
+    _GUARDS.setdefault(scene, []).append(
+        (positions, np.asarray(tets, dtype=np.int64).reshape(-1, 4)))
+
+
+def guarded_step_bound(scene, targets: Sequence,
+                       step_bound: Optional[Callable] = None
+                       ) -> Optional[Callable]:
+    """``step_bound`` (None for none) combined with the inversion bounds
+    that :func:`guard_inversion` registered on ``scene`` for any of
+    ``targets``; None when there is neither."""
+    bounds = [] if step_bound is None else [step_bound]
+    for positions, tets in _GUARDS.get(scene, ()):
+        for index, target in enumerate(targets):
+            if target is positions:
+                bounds.append(inversion_bound(tets, target=index))
+    if not bounds:
+        return None
+    return bounds[0] if len(bounds) == 1 else combined_bound(*bounds)

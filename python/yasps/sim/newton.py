@@ -25,6 +25,7 @@ from ..solve.minimize import checked_fixed_mask
 from ..solve.prepare import compile_scene
 from . import checkpoint
 from .forcing import Forcing
+from .inversion import guarded_step_bound
 from .world import WorldInertia
 from .prescribed import (Prescription, add_pull, entry_mask,
                          fixed_with_prescribed, move_prescribed, prescription,
@@ -212,6 +213,9 @@ def newton(scene, x: Targets, tolerance: float,
                          f"{', '.join(PROJECTIONS)}, got {projection!r}")
     targets = _as_list(x)
     _check_targets(scene, targets)
+    # Materials that must not invert (IPC's Neo-Hookean) bound the steps
+    # of their positions themselves (sim.inversion).
+    step_bound = guarded_step_bound(scene, targets, step_bound)
     if fixed is not None and isinstance(x, Attribute):
         fixed = [fixed]
     report = NewtonReport()
@@ -644,9 +648,10 @@ class ImplicitEuler:
         the targets' values now: ``step_bound``'s and the contact's CCD."""
         alpha = 1.0
         now = [t.value for t in self.targets]
-        if self.step_bound is not None:
-            alpha = self.step_bound(now[0], steps[0]) \
-                if len(steps) == 1 else self.step_bound(now, steps)
+        bound = guarded_step_bound(self.scene, self.targets, self.step_bound)
+        if bound is not None:
+            alpha = bound(now[0], steps[0]) if len(steps) == 1 \
+                else bound(now, steps)
         if self.contact is not None and alpha > 0.0:
             alpha = min(alpha, self.contact.stepBound(steps))
         return alpha
