@@ -162,3 +162,22 @@ def test_every_generated_kernel_can_launch_with_its_block_size():
     assert len(problems) == 2
     assert "registers x 1024 threads" in problems[0]
     assert "launch record passes" in problems[1]
+
+
+def test_fixed_corotated_compiles_for_gpus_and_can_launch():
+    """The sum of signed singular values (eight Laguerre steps, unrolled)
+    lowers to the GPU like any other arithmetic, within the launch gate."""
+    from yasps.compiler.gpu_resources import launch_problems, resource_usage
+    from yasps.sim import (add_elastic_tets, add_free_vertices, box_tet_mesh,
+                           lumped_masses)
+    verts, tets = box_tet_mesh(1, 0.1)
+    s = yasps.scene("fixed_corotated_gpu")
+    m = s.addMesh("m")
+    soft = add_free_vertices(m, verts, lumped_masses(verts, tets, 1000.0))
+    add_elastic_tets(m, soft.x, verts, tets, 1.0, 1.0,
+                     material="fixed_corotated")
+    s.addMinimizeTarget(soft.x)
+    kernels = yasps.compiler.gpu.compile_scene(s, chips=["sm_90"])
+    check_binaries(kernels, ["sm_90"])
+    usage = resource_usage(kernels.binaries[("sm_90", "ptx")], "sm_90")
+    assert launch_problems(kernels, usage) == []
