@@ -135,18 +135,22 @@ void ThreadPool::runChunks(Job &job) {
     std::int64_t k = job.nextChunk.fetch_add(1, std::memory_order_relaxed);
     if (k >= job.numChunks)
       return;
-    std::int64_t chunkBegin = job.begin + k * job.base + std::min(k, job.rem);
-    std::int64_t chunkEnd = chunkBegin + job.base + (k < job.rem ? 1 : 0);
-    try {
-      job.body(chunkBegin, chunkEnd);
-    } catch (...) {
-      std::lock_guard<std::mutex> lock(job.errorMutex);
-      if (!job.error)
-        job.error = std::current_exception();
-      job.failed.store(true, std::memory_order_relaxed);
-    }
+    runChunk(job, k);
     if (job.onePerThread)
       return;
+  }
+}
+
+void ThreadPool::runChunk(Job &job, std::int64_t k) {
+  std::int64_t chunkBegin = job.begin + k * job.base + std::min(k, job.rem);
+  std::int64_t chunkEnd = chunkBegin + job.base + (k < job.rem ? 1 : 0);
+  try {
+    job.body(chunkBegin, chunkEnd);
+  } catch (...) {
+    std::lock_guard<std::mutex> lock(job.errorMutex);
+    if (!job.error)
+      job.error = std::current_exception();
+    job.failed.store(true, std::memory_order_relaxed);
   }
 }
 
@@ -197,6 +201,9 @@ void ThreadPool::runTeam(const std::function<void(unsigned, unsigned)> &body) {
       };
   Job job{member, 0, 1, 0, static_cast<std::int64_t>(teamSize)};
   job.onePerThread = true;
+  // Member 0 is the caller's (runJob): a worker woken first must not take
+  // it.
+  job.nextChunk.store(1, std::memory_order_relaxed);
   runJob(job);
 }
 
@@ -212,7 +219,10 @@ void ThreadPool::runJob(Job &job) {
     generation_.fetch_add(1, std::memory_order_release);
   }
   wakeWorkers_.notify_all();
-  runChunks(job);
+  if (job.onePerThread)
+    runChunk(job, 0);
+  else
+    runChunks(job);
   auto finished = [&] {
     return pendingWorkers_.load(std::memory_order_acquire) == 0;
   };

@@ -69,6 +69,7 @@ private:
   void workerLoop();
   void stopWorkers();
   void runChunks(Job &job);
+  void runChunk(Job &job, std::int64_t k);
 
   std::vector<std::thread> workers_;
   // Held while a job runs: one job at a time.
