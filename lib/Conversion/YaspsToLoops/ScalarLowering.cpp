@@ -214,24 +214,25 @@ public:
   /// s2 + s3 < 1e-2 s1).
   Value largestQuarticRoot(Value first, Value second, Value det) {
     constexpr int steps = 8;
-    Value bound = select(greater(det, constant(0.0)),
-                         mul(constant(3.0), second), second);
+    Value bound =
+        select(greater(det, constant(0.0)), mul(constant(3.0), second), second);
     Value s = sqrt(add(first, mul(constant(2.0), sqrt(bound))));
     for (int k = 0; k < steps; ++k) {
       Value gap = sub(mul(s, s), first);
       Value p = sub(sub(mul(gap, gap), mul(mul(constant(8.0), det), s)),
                     mul(constant(4.0), second));
       Value dp = sub(mul(mul(constant(4.0), s), gap), mul(constant(8.0), det));
-      Value ddp = sub(mul(mul(constant(12.0), s), s), mul(constant(4.0), first));
+      Value ddp =
+          sub(mul(mul(constant(12.0), s), s), mul(constant(4.0), first));
       // Laguerre with n = 4: s -= 4 P / (P' + sqrt(9 P'^2 - 12 P P'')).
       Value disc = sub(mul(mul(constant(9.0), dp), dp),
                        mul(mul(constant(12.0), p), ddp));
       disc = select(greater(disc, constant(0.0)), disc, constant(0.0));
       Value denominator = add(dp, sqrt(disc));
       // At a root of P' as well (s = 0 for A = 0) the step is 0.
-      Value step = select(greater(denominator, constant(0.0)),
-                          div(mul(constant(4.0), p), denominator),
-                          constant(0.0));
+      Value step =
+          select(greater(denominator, constant(0.0)),
+                 div(mul(constant(4.0), p), denominator), constant(0.0));
       s = sub(s, step);
     }
     return s;

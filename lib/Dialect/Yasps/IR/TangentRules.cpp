@@ -361,9 +361,9 @@ TANGENT(SingularValueSumOp) {
   FailureOr<Value> dcof = cofactor.emitTangent(builder, {da});
   if (failed(dcof))
     return failure();
-  Value gap = t.sub(t.emul(s, s), SquaredNormOp::create(builder, loc,
-                                                        type.getScalarType(), a)
-                                      .getResult());
+  Value gap = t.sub(
+      t.emul(s, s),
+      SquaredNormOp::create(builder, loc, type.getScalarType(), a).getResult());
   Value det = DetOp::create(builder, loc, type.getScalarType(), a);
   Value numerator =
       t.add(t.add(t.emul(gap, t.dot(a, da)), t.scaleBy(t.dot(cof, *dcof), 2.0)),
