@@ -57,13 +57,15 @@ def bunny(scale: str, height: float) -> Tuple[np.ndarray, np.ndarray, np.ndarray
     return verts, tets, surface_of(tets)
 
 
-def pinned_cloth(scene, scale: str, material: dict, density: float
+def pinned_cloth(scene, scale: str, material: dict, density: float,
+                 size: float = 1.0
                  ) -> Tuple[FreeVertices, np.ndarray, np.ndarray]:
-    """The scenes' bottom cloth: a 1 m square at z = 0 of CLOTH_CELLS[scale]
-    cells (``material``: add_cloth's stretch, shear and bending; ``density``
-    per area), its four corners pinned: (vertices, triangles, pinned mask)."""
+    """The scenes' bottom cloth: a ``size`` m square at z = 0 of
+    CLOTH_CELLS[scale] cells (``material``: add_cloth's stretch, shear and
+    bending; ``density`` per area), its four corners pinned: (vertices,
+    triangles, pinned mask)."""
     n = CLOTH_CELLS[scale]
-    verts, faces = cloth_grid(n, size=1.0)
+    verts, faces = cloth_grid(n, size=size)
     mesh = scene.addMesh("cloth")
     cloth = add_free_vertices(mesh, verts, lumped_masses(verts, faces, density))
     add_cloth(mesh, cloth.x, verts, faces, scale=DT * DT, **material)

@@ -13,7 +13,8 @@ using ::yasps::runtime::PcgStopping;
 void yasps::python::bindPcg(nb::module_ &m) {
   nb::enum_<PcgStopping>(m, "PcgStopping", "When PCG stops on success.")
       .value("residual", PcgStopping::Residual)
-      .value("energy_norm", PcgStopping::EnergyNorm);
+      .value("energy_norm", PcgStopping::EnergyNorm)
+      .value("preconditioned", PcgStopping::Preconditioned);
   nb::enum_<PcgPreconditioner>(m, "PcgPreconditioner", "PCG's preconditioner.")
       .value("block_jacobi", PcgPreconditioner::BlockJacobi)
       .value("multilevel", PcgPreconditioner::Multilevel);
@@ -31,6 +32,8 @@ void yasps::python::bindPcg(nb::module_ &m) {
       .def_ro("stop", &PcgResult::stop)
       .def_ro("energy_error", &PcgResult::energyError,
               "estimated relative energy-norm error (NaN if not estimated)")
+      .def_ro("preconditioned_residual", &PcgResult::preconditionedResidual,
+              "sqrt(r^T M^-1 r / b^T M^-1 b) of the last iterate")
       .def_ro("condition_estimate", &PcgResult::conditionEstimate,
               "condition number of M^-1 H from CG's Ritz values (NaN with "
               "fewer than two iterations)")

@@ -56,26 +56,22 @@ def pinned_corners_stay(stepper, mask_index: int = 0):
 
 @needs_bunny
 def test_cloths_on_bunny():
-    """9.1: the bunny falls onto the pinned cloth, a cloth layer onto it.
-    At the paper's CG tolerance (1e-4) the cloth's Hessian (diagonal ratio
-    2.4e4) makes the residual bound the step's error by about 2:
-    minimizeEnergy says so, once, where a user calls it; Newton, which
-    judges its directions itself, does not pass that on."""
+    """9.1: the bunny falls onto the pinned cloth, a cloth layer after it.
+    With the cloth of the paper's own script (1 kg over 5 m, its stiffness
+    times a 1 mm thickness) the systems are well conditioned: the residual
+    bounds the step's error well below 1, and no solve warns. The bunny,
+    its bottom 0.6 m over the cloth, lands on it in frame 51 or so."""
     import warnings
     import cloths_on_bunny
     stepper, contact, bodies = cloths_on_bunny.build("small", 1)
+    assert stepper.cg_stopping == "preconditioned"
     z0 = bodies["bunny"].now()[:, 2].mean()
     with warnings.catch_warnings():
         warnings.simplefilter("error", yasps.IllConditionedSolve)
-        step_and_check(stepper, bodies, 4, pinned_corners_stay(stepper))
-    assert stepper.scene.lastSolve["errorBound"] > 1
-    with pytest.warns(yasps.IllConditionedSolve, match="energy_norm") \
-            as warned:
-        stepper.scene.minimizeEnergy(tolerance=1e-4,
-                                     fixed=stepper.fixed)
-    assert len([w for w in warned
-                if issubclass(w.category, yasps.IllConditionedSolve)]) == 1
-    assert bodies["bunny"].now()[:, 2].mean() < z0
+        step_and_check(stepper, bodies, 56, pinned_corners_stay(stepper))
+        stepper.scene.minimizeEnergy(tolerance=1e-4, fixed=stepper.fixed)
+        assert stepper.scene.lastSolve["errorBound"] < 1
+    assert bodies["bunny"].now()[:, 2].mean() < z0 - 1.0
     assert sum(contact.update().values()) > 0  # the bunny is on the cloth
 
 

@@ -1,8 +1,8 @@
 """What minimizeEnergy says about its solve: the residual recomputed from
-the step, a tolerance past round-off, the energy-norm stopping rule, a
-warning where a converged residual says little about the step, a target no
-energy reads, and the energy and instance behind a NaN. References: NumPy's
-dense solve of the assembled system."""
+the step, a tolerance past round-off, the energy-norm and preconditioned
+stopping rules, a warning where a converged residual says little about the
+step, a target no energy reads, and the energy and instance behind a NaN.
+References: NumPy's dense solve of the assembled system."""
 
 import warnings
 
@@ -123,6 +123,37 @@ def test_energy_norm_stopping_measures_the_step():
     assert s.lastSolve["stopping"] == "energy_norm"
     assert s.lastSolve["energyError"] <= 1e-4
     assert energy_error(by_energy) <= 1e-4 < energy_error(by_residual)
+
+
+def preconditioned_residual(dx, g, H, block=3):
+    """sqrt(r^T M^-1 r / g^T M^-1 g) with r = g - H dx and M the
+    block-diagonal of H (3x3 blocks: one per vertex of the soft box)."""
+    inverse = np.zeros_like(H)
+    for start in range(0, len(g), block):
+        cut = slice(start, start + block)
+        inverse[cut, cut] = np.linalg.inv(H[cut, cut])
+    r = g - H @ dx.reshape(-1)
+    return np.sqrt((r @ inverse @ r) / (g @ inverse @ g))
+
+
+def test_the_preconditioned_rule_stops_at_the_first_iterate_that_meets_it():
+    """GIPC's and the paper's rule, r^T M^-1 r <= tol^2 g^T M^-1 g, judged
+    here with NumPy on the assembled system: the solve stops at the first
+    iterate that meets it; one iteration earlier it is not met."""
+    s = soft_box()
+    g, H = system_arrays(assemble(s, cpu_backend())[0])
+    tolerance = 1e-2
+    (dx,) = s.minimizeEnergy(tolerance=tolerance, stopping="preconditioned")
+    info = s.lastSolve
+    assert info["stopping"] == "preconditioned" and info["converged"]
+    assert info["preconditionedResidual"] <= tolerance
+    assert preconditioned_residual(dx, g, H) == pytest.approx(
+        info["preconditionedResidual"], rel=1e-6)
+    with pytest.raises(yasps.SolverError) as err:
+        s.minimizeEnergy(tolerance=tolerance, stopping="preconditioned",
+                         maxIterations=info["iterations"] - 1)
+    (early,) = err.value.solution
+    assert preconditioned_residual(early, g, H) > tolerance
 
 
 def test_well_conditioned_solves_do_not_warn():

@@ -351,7 +351,8 @@ PcgResult GpuSystem::solve(cu::DevicePtr x, const PcgOptions &options,
     prepareLevels(options);
   if (options.stopping != PcgStopping::Residual)
     throw std::invalid_argument("the GPU solve stops on the residual only; "
-                                "the energy-norm rule is the CPU's");
+                                "the energy-norm and preconditioned rules "
+                                "are the CPU's");
   if (checkEvery < 1)
     throw std::invalid_argument("GpuSystem::solve: checkEvery must be >= 1");
   const unsigned char *mask = nullptr;

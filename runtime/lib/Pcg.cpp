@@ -220,10 +220,22 @@ private:
   bool stopTestHolds() {
     if (!std::isfinite(rNorm_))
       return true;
-    bool small = options_.stopping == PcgStopping::EnergyNorm
-                     ? energyConverged()
-                     : rNorm_ <= threshold_;
-    return small || result_.iterations == options_.maxIterations;
+    return toleranceMet() || result_.iterations == options_.maxIterations;
+  }
+  /// Whether the stopping rule's tolerance is met now (on the residual CG
+  /// updates).
+  bool toleranceMet() {
+    if (rz0_ > 0.0)
+      result_.preconditionedResidual = std::sqrt(std::max(rz_, 0.0) / rz0_);
+    switch (options_.stopping) {
+    case PcgStopping::EnergyNorm:
+      return energyConverged();
+    case PcgStopping::Preconditioned:
+      return result_.preconditionedResidual <= options_.relativeTolerance;
+    case PcgStopping::Residual:
+      break;
+    }
+    return rNorm_ <= threshold_;
   }
   /// The bookkeeping of a finished iteration with step alpha, and the
   /// coefficient beta of the next direction.
@@ -268,6 +280,8 @@ private:
   /// CG's vectors, r . z and ||r||.
   std::vector<double> r_, z_, p_, q_;
   double rz_ = 0.0, rNorm_ = 0.0, threshold_ = 0.0;
+  /// b^T M^-1 b: the Preconditioned rule's reference.
+  double rz0_ = 0.0;
   std::unique_ptr<BlockJacobi> jacobi_;
   Multilevel *multilevel_ = nullptr;
   /// alpha_j r_j.z_j per iteration: the energy-norm estimate's terms.
@@ -457,17 +471,20 @@ PcgResult PcgSolve::run() {
     p_ = z_;
   };
   restart();
+  rz0_ = rz_;
   rNorm_ = bNorm;
   threshold_ = options_.relativeTolerance * bNorm;
   double lastTrueNorm = std::numeric_limits<double>::infinity();
-  const bool energyRule = options_.stopping == PcgStopping::EnergyNorm;
+  // Rules other than the residual's judge what the residual's 2-norm says
+  // little about; the recomputed residual is reported, not required.
+  const bool residualRule = options_.stopping == PcgStopping::Residual;
   // The team pays a hand-off per solve and barriers per iteration: worth it
   // on block-Jacobi solves big enough to share.
   const bool team = jacobi_ && pool_.size() > 1 && n_ >= kMinTeamDofs;
   while (true) {
     if (!std::isfinite(rNorm_))
       return finish(PcgStop::NonFinite, nan);
-    bool small = energyRule ? energyConverged() : rNorm_ <= threshold_;
+    bool small = toleranceMet();
     if (small || result_.iterations == options_.maxIterations) {
       // The updated residual drifts from b - H x in round-off: judge the
       // iterate by the recomputed one.
@@ -476,7 +493,7 @@ PcgResult PcgSolve::run() {
         return finish(PcgStop::NonFinite, nan);
       if (!small)
         return finish(PcgStop::MaxIterations, trueNorm / bNorm);
-      if (energyRule || trueNorm <= threshold_)
+      if (!residualRule || trueNorm <= threshold_)
         return finish(PcgStop::Converged, trueNorm / bNorm);
       // Restarting from the recomputed residual recovers the drift once;
       // if it did not help, the tolerance is below round-off.

@@ -100,8 +100,8 @@ class Backend(Protocol):
               max_iterations: int, threads: Optional[int],
               fixed: Optional[np.ndarray], stopping: str = "residual") -> Any:
         """PCG on the assembled system into ``x``, preconditioned as
-        ``config.preconditioner`` says; ``stopping`` is "residual" or
-        "energy_norm" (see Scene.minimizeEnergy). Returns the native
+        ``config.preconditioner`` says; ``stopping`` is "residual",
+        "energy_norm" or "preconditioned" (see Scene.minimizeEnergy). Returns the native
         PcgReport (iterations, relative_residual recomputed from x,
         converged, stop, energy_error, condition_estimate, diagonal_ratio,
         residual_replacements, levels)."""

@@ -79,7 +79,7 @@ def fixed_dof_mask(layout: DofLayout, fixed) -> Optional[np.ndarray]:
 
 
 #: minimizeEnergy's stopping rules (PCG's PcgStopping).
-STOPPING_RULES = ("residual", "energy_norm")
+STOPPING_RULES = ("residual", "energy_norm", "preconditioned")
 
 #: Why a solve failed, for SolverError's message, by PcgStop name.
 _STOP_REASONS = {
@@ -174,6 +174,7 @@ def minimize_energy(scene, backend: Backend,
             "converged": bool(pcg.converged), "stop": stop,
             "stopping": stopping,
             "energyError": float(pcg.energy_error),
+            "preconditionedResidual": float(pcg.preconditioned_residual),
             "conditionEstimate": float(pcg.condition_estimate),
             "diagonalRatio": float(pcg.diagonal_ratio),
             "errorBound": bound,

@@ -34,6 +34,11 @@ enum class PcgStopping {
   /// `energyDelay` iterations (Strakos and Tichy 2002), which measures the
   /// step where a stiff part of H makes the residual's 2-norm say little.
   EnergyNorm,
+  /// The residual in the preconditioner's inverse norm: r^T M^-1 r <=
+  /// relativeTolerance^2 b^T M^-1 b, on the residual CG updates (GIPC's
+  /// and the YASPS paper's rule, who compare the squared ratio with their
+  /// tolerance: their 1e-4 is a relativeTolerance of 1e-2 here).
+  Preconditioned,
 };
 
 /// Why PCG stopped.
@@ -98,6 +103,9 @@ struct PcgResult {
   /// iterate `energyDelay` iterations before the last (an upper estimate for
   /// the last); NaN before that many iterations.
   double energyError = std::numeric_limits<double>::quiet_NaN();
+  /// sqrt(r^T M^-1 r / b^T M^-1 b) of the last iterate, on the residual CG
+  /// updates (what the Preconditioned rule compares with the tolerance).
+  double preconditionedResidual = std::numeric_limits<double>::quiet_NaN();
   /// The condition number of the preconditioned matrix M^-1 H that CG's own
   /// coefficients show (the extreme Ritz values of its Lanczos matrix); a
   /// lower estimate, NaN with fewer than two iterations.
