@@ -322,10 +322,12 @@ struct PyGpuSystem {
 
   PcgResult solve(DoubleArray out, double tolerance, std::int64_t maxIterations,
                   std::optional<MaskArray> fixed, int checkEvery,
-                  ::yasps::runtime::PcgPreconditioner preconditioner) {
+                  ::yasps::runtime::PcgPreconditioner preconditioner,
+                  ::yasps::runtime::PcgStopping stopping) {
     checkSize(out);
     PcgOptions options;
     options.preconditioner = preconditioner;
+    options.stopping = stopping;
     options.relativeTolerance = tolerance;
     options.maxIterations = maxIterations;
     std::vector<std::uint8_t> mask;
@@ -438,8 +440,10 @@ void yasps::python::bindGpuSystem(nb::module_ &m, HostSystemOf hostSystemOf) {
            nb::arg("check_every") = 8,
            nb::arg("preconditioner") =
                ::yasps::runtime::PcgPreconditioner::BlockJacobi,
+           nb::arg("stopping") = ::yasps::runtime::PcgStopping::Residual,
            "Solves H x = g into `out` on the device (block-Jacobi or "
-           "multilevel PCG); returns a PcgReport")
+           "multilevel PCG, stopping as the CPU's PCG does); returns a "
+           "PcgReport")
       .def("multiply", &PyGpuSystem::multiply, nb::arg("x"), nb::arg("y"),
            "y = H x on the device")
       .def("gradient", &PyGpuSystem::gradient, nb::arg("out"),

@@ -162,6 +162,9 @@ MINIMIZE_ON_BOTH = """
 
     box = soft_box()
     compare(box)
+    # The GPU's PCG stops by every rule the CPU's does.
+    compare(box, stopping="energy_norm")
+    compare(box, stopping="preconditioned")
     n = box.m.v.numInstances
     compare(box, fixed=[np.arange(n) %% 3 == 0])
     s, pp, p2v, *_ = mixed_scene([[0, 3], [1, 4]])
@@ -229,11 +232,12 @@ def test_minimize_energy_on_the_gpu_backend_matches_the_cpu():
     """minimizeEnergy with the GPU backend: assembly and PCG through the
     GPU solver's kernels, here run by the stand-in driver (which executes
     the same kernel bodies on the host), against the CPU backend: a soft
-    box with and without fixed DoFs, a scene with changing dynamic pairs,
-    factored Hessians, and a solve stopped by its iteration limit."""
+    box with and without fixed DoFs and by each stopping rule, a scene with
+    changing dynamic pairs, factored Hessians, and a solve stopped by its
+    iteration limit."""
     out = run_python(MINIMIZE_ON_BOTH % str(REPO / "python" / "tests"),
                      YASPS_CUDA_LIBRARY=str(FAKE_DRIVER))
-    assert out.split() == ["True"] * 14, out
+    assert out.split() == ["True"] * 18, out
 
 
 @pytest.mark.skipif(not FAKE_DRIVER.exists(),

@@ -20,25 +20,14 @@ namespace {
 #define YASPS_SPMV_NAME(R, C) "yasps_spmv_" #R "x" #C,
 const char *const kSpmvKernels[] = {YASPS_SPMV_SHAPES(YASPS_SPMV_NAME)};
 #undef YASPS_SPMV_NAME
-const char *const kOtherKernels[] = {"yasps_assemble",
-                                     "yasps_check_finite",
-                                     "yasps_jacobi_invert",
-                                     "yasps_jacobi_apply",
-                                     "yasps_dot",
-                                     "yasps_pcg_init",
-                                     "yasps_pcg_update",
-                                     "yasps_pcg_direction",
-                                     "yasps_pcg_scalar",
-                                     "yasps_spmv_any",
-                                     "yasps_ml_coarsen",
-                                     "yasps_ml_restrict",
-                                     "yasps_ml_prolong",
-                                     "yasps_ml_smooth",
-                                     "yasps_ml_residual",
-                                     "yasps_ml_dense_scatter",
-                                     "yasps_ml_row_bound",
-                                     "yasps_ml_dense_invert",
-                                     "yasps_ml_dense_apply"};
+const char *const kOtherKernels[] = {
+    "yasps_assemble",         "yasps_check_finite",  "yasps_jacobi_invert",
+    "yasps_jacobi_apply",     "yasps_dot",           "yasps_pcg_init",
+    "yasps_pcg_update",       "yasps_pcg_direction", "yasps_pcg_scalar",
+    "yasps_spmv_any",         "yasps_ml_coarsen",    "yasps_ml_restrict",
+    "yasps_ml_prolong",       "yasps_ml_smooth",     "yasps_ml_residual",
+    "yasps_ml_dense_scatter", "yasps_ml_row_bound",  "yasps_ml_dense_invert",
+    "yasps_ml_dense_apply"};
 
 /// The specialised SpMV kernel of a rows x cols block, else the generic one.
 std::string spmvKernel(std::int64_t rows, std::int64_t cols) {
@@ -325,8 +314,8 @@ void GpuSystem::multiply(cu::DevicePtr x, cu::DevicePtr y) {
   addProducts(as<const double>(x), as<double>(y), nullptr);
 }
 
-double GpuSystem::recomputedResidual(cu::DevicePtr x,
-                                     const unsigned char *mask) {
+double GpuSystem::recomputedResidual(cu::DevicePtr x, const unsigned char *mask,
+                                     std::vector<double> *residual) {
   multiply(x, q.pointer());
   const std::size_t n = static_cast<std::size_t>(numDofs);
   std::vector<double> product(n), b(n);
@@ -338,9 +327,14 @@ double GpuSystem::recomputedResidual(cu::DevicePtr x,
     fixed.download(fixedHost.data(), n);
   }
   double sum = 0.0;
+  if (residual)
+    residual->assign(n, 0.0);
   for (std::size_t i = 0; i < n; ++i)
-    if (fixedHost.empty() || !fixedHost[i])
+    if (fixedHost.empty() || !fixedHost[i]) {
       sum += (b[i] - product[i]) * (b[i] - product[i]);
+      if (residual)
+        (*residual)[i] = b[i] - product[i];
+    }
   return std::sqrt(sum);
 }
 
@@ -349,10 +343,12 @@ PcgResult GpuSystem::solve(cu::DevicePtr x, const PcgOptions &options,
   checkPcgOptions(options, numDofs);
   if (options.preconditioner == PcgPreconditioner::Multilevel)
     prepareLevels(options);
-  if (options.stopping != PcgStopping::Residual)
-    throw std::invalid_argument("the GPU solve stops on the residual only; "
-                                "the energy-norm and preconditioned rules "
-                                "are the CPU's");
+  if (options.stopping == PcgStopping::EnergyNorm &&
+      options.energyDelay > kPcgMaxEnergyDelay)
+    throw std::invalid_argument(
+        "the GPU solve's energy-norm estimate looks at most " +
+        std::to_string(kPcgMaxEnergyDelay) + " iterations ahead, not " +
+        std::to_string(options.energyDelay));
   if (checkEvery < 1)
     throw std::invalid_argument("GpuSystem::solve: checkEvery must be >= 1");
   const unsigned char *mask = nullptr;
@@ -363,6 +359,11 @@ PcgResult GpuSystem::solve(cu::DevicePtr x, const PcgOptions &options,
   PcgState initial{};
   initial.tolerance = options.relativeTolerance;
   initial.maxIterations = options.maxIterations;
+  initial.rule =
+      options.stopping == PcgStopping::EnergyNorm       ? kPcgRuleEnergyNorm
+      : options.stopping == PcgStopping::Preconditioned ? kPcgRulePreconditioned
+                                                        : kPcgRuleResidual;
+  initial.energyDelay = static_cast<int>(options.energyDelay);
   state.upload(&initial, sizeof(initial));
   PcgState *st = as<PcgState>(state);
   double *partialSums = as<double>(partials);
@@ -375,7 +376,10 @@ PcgResult GpuSystem::solve(cu::DevicePtr x, const PcgOptions &options,
     state.download(&now, sizeof(now));
     return now;
   };
-  auto finish = [&](const PcgState &now) {
+  std::int64_t replacements = 0;
+  // `trueNorm`: ||b - H x|| when the caller has it, else < 0.
+  auto finish = [&](const PcgState &now, double trueNorm = -1.0,
+                    bool roundOff = false) {
     PcgResult out;
     out.iterations = now.iterations;
     out.relativeResidual = now.residual;
@@ -384,14 +388,17 @@ PcgResult GpuSystem::solve(cu::DevicePtr x, const PcgOptions &options,
                : now.stopped == kPcgBreakdown     ? PcgStop::Breakdown
                                                   : PcgStop::NonFinite;
     if (std::isfinite(now.residual) && now.bNorm > 0.0) {
-      // Judged, as on the CPU, by the residual recomputed from x; the GPU
-      // solve does not restart from it, it reports.
-      out.relativeResidual = recomputedResidual(x, mask) / now.bNorm;
-      if (out.stop == PcgStop::Converged &&
-          !(out.relativeResidual <= options.relativeTolerance))
-        out.stop = PcgStop::RoundOff;
+      // Reported, as on the CPU, as the residual recomputed from x.
+      if (trueNorm < 0.0)
+        trueNorm = recomputedResidual(x, mask);
+      out.relativeResidual = trueNorm / now.bNorm;
     }
+    if (roundOff)
+      out.stop = PcgStop::RoundOff;
     out.converged = out.stop == PcgStop::Converged;
+    out.energyError = now.energyError;
+    out.preconditionedResidual = now.preconditionedResidual;
+    out.residualReplacements = replacements;
     if (options.preconditioner == PcgPreconditioner::Multilevel)
       out.levels = levelCount();
     return out;
@@ -443,33 +450,61 @@ PcgResult GpuSystem::solve(cu::DevicePtr x, const PcgOptions &options,
                    partialSums, st});
     scalar(kPcgBeta, vectorBlocks);
   };
-  // p = z.
+  // p = z (beta is 0 while rz is).
   p.setZero();
   precondition();
   launch("yasps_pcg_direction", vectorBlocks, direction);
 
-  for (std::int64_t k = 0; k <= options.maxIterations; ++k) {
-    scalar(kPcgCheck, 0);
-    q.setZero();
-    addProducts(as<const double>(p), as<double>(q), st);
-    launch("yasps_dot", vectorBlocks,
-           DotArgs{numDofs, as<const double>(p), as<double>(q), mask,
-                   partialSums, st});
-    scalar(kPcgAlpha, vectorBlocks);
-    launch("yasps_pcg_update", vectorBlocks,
-           PcgUpdateArgs{numDofs, as<const double>(p), as<const double>(q),
-                         as<double>(x), as<double>(r), partialSums, st});
-    scalar(kPcgAfterUpdate, vectorBlocks);
+  const double threshold = options.relativeTolerance * now.bNorm;
+  double lastTrueNorm = std::numeric_limits<double>::infinity();
+  while (true) {
+    // The device stops itself by iteration maxIterations at the latest.
+    for (std::int64_t k = now.iterations; k <= options.maxIterations; ++k) {
+      scalar(kPcgCheck, 0);
+      q.setZero();
+      addProducts(as<const double>(p), as<double>(q), st);
+      launch("yasps_dot", vectorBlocks,
+             DotArgs{numDofs, as<const double>(p), as<double>(q), mask,
+                     partialSums, st});
+      scalar(kPcgAlpha, vectorBlocks);
+      launch("yasps_pcg_update", vectorBlocks,
+             PcgUpdateArgs{numDofs, as<const double>(p), as<const double>(q),
+                           as<double>(x), as<double>(r), partialSums, st});
+      scalar(kPcgAfterUpdate, vectorBlocks);
+      precondition();
+      launch("yasps_pcg_direction", vectorBlocks, direction);
+      if ((k + 1) % checkEvery == 0 && result().stopped)
+        break;
+    }
+    now = result();
+    if (now.stopped != kPcgConverged || !std::isfinite(now.residual) ||
+        options.stopping != PcgStopping::Residual)
+      return finish(now);
+    // The updated residual drifts from b - H x in round-off: judged, as on
+    // the CPU, by the recomputed one, and restarted from it once it does
+    // not meet the tolerance; if that did not help, the tolerance is below
+    // round-off.
+    std::vector<double> trueResidual;
+    const double trueNorm = recomputedResidual(x, mask, &trueResidual);
+    if (!std::isfinite(trueNorm)) {
+      now.stopped = kPcgNonFinite;
+      now.residual = std::numeric_limits<double>::quiet_NaN();
+      return finish(now);
+    }
+    if (trueNorm <= threshold)
+      return finish(now, trueNorm);
+    if (replacements >= 2 && trueNorm > 0.5 * lastTrueNorm)
+      return finish(now, trueNorm, true);
+    lastTrueNorm = trueNorm;
+    ++replacements;
+    r.upload(trueResidual.data(), trueResidual.size() * sizeof(double));
+    now.stopped = kPcgRunning;
+    now.rNorm = trueNorm;
+    now.rz = 0.0;
+    state.upload(&now, sizeof(now));
     precondition();
     launch("yasps_pcg_direction", vectorBlocks, direction);
-    if ((k + 1) % checkEvery == 0) {
-      now = result();
-      if (now.stopped)
-        return finish(now);
-    }
   }
-  // The check of iteration maxIterations has stopped the solve.
-  return finish(result());
 }
 
 std::size_t GpuSystem::storedBlocks() const {

@@ -289,6 +289,63 @@ TEST_P(GpuSystemTest, StopsLikeTheCpu) {
   expectSameSolve(options);
 }
 
+TEST_P(GpuSystemTest, StopsByTheEnergyNormLikeTheCpu) {
+  assemble();
+  PcgOptions options;
+  options.relativeTolerance = 1e-6;
+  options.stopping = PcgStopping::EnergyNorm;
+  expectSameSolve(options);
+  ThreadPool pool(1);
+  std::vector<double> expected(host->size());
+  PcgResult cpu = host->solve(expected.data(), options, pool);
+  DeviceBuffer x(*context, host->size() * sizeof(double));
+  PcgResult gpuResult = gpu->solve(x.pointer(), options);
+  EXPECT_TRUE(gpuResult.converged);
+  EXPECT_LE(gpuResult.energyError, options.relativeTolerance);
+  EXPECT_NEAR(gpuResult.energyError, cpu.energyError, 1e-6 * cpu.energyError);
+  options.energyDelay = 65;
+  EXPECT_THROW(gpu->solve(x.pointer(), options), std::invalid_argument);
+}
+
+TEST_P(GpuSystemTest, StopsByThePreconditionedResidualLikeTheCpu) {
+  assemble();
+  PcgOptions options;
+  options.relativeTolerance = 1e-3;
+  options.stopping = PcgStopping::Preconditioned;
+  expectSameSolve(options, 1);
+  ThreadPool pool(1);
+  std::vector<double> expected(host->size());
+  PcgResult cpu = host->solve(expected.data(), options, pool);
+  DeviceBuffer x(*context, host->size() * sizeof(double));
+  PcgResult gpuResult = gpu->solve(x.pointer(), options, 1);
+  EXPECT_TRUE(gpuResult.converged);
+  EXPECT_LE(gpuResult.preconditionedResidual, options.relativeTolerance);
+  EXPECT_NEAR(gpuResult.preconditionedResidual, cpu.preconditionedResidual,
+              1e-6 * cpu.preconditionedResidual);
+}
+
+TEST_P(GpuSystemTest, RestartsFromTheRecomputedResidualLikeTheCpu) {
+  // A tolerance below round-off: the updated residual meets it, the
+  // recomputed one cannot; both restart from the recomputed residual
+  // twice, then say so.
+  assemble();
+  PcgOptions options;
+  options.relativeTolerance = 1e-22;
+  options.maxIterations = 100000;
+  ThreadPool pool(1);
+  std::vector<double> expected(host->size());
+  PcgResult cpu = host->solve(expected.data(), options, pool);
+  DeviceBuffer x(*context, host->size() * sizeof(double));
+  PcgResult result = gpu->solve(x.pointer(), options);
+  ASSERT_EQ(cpu.stop, PcgStop::RoundOff);
+  EXPECT_EQ(result.stop, PcgStop::RoundOff);
+  EXPECT_FALSE(result.converged);
+  EXPECT_GE(result.residualReplacements, 2);
+  EXPECT_LT(result.relativeResidual, 1e-10);
+  EXPECT_GT(result.relativeResidual, options.relativeTolerance);
+  expectClose(download(x), expected, 1e-9, "PCG solution");
+}
+
 TEST_P(GpuSystemTest, ReportsBreakdownAndNonFiniteInput) {
   // A negative definite Hessian: CG breaks down on its first step.
   for (Energy &energy : scene.energies)

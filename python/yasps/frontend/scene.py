@@ -383,10 +383,10 @@ class Scene(Entity):
 
         ``stopping="residual"`` (the default) stops once ``||g - H dx|| <=
         tolerance ||g||``, on the residual recomputed from ``dx``;
-        ``"energy_norm"`` (CPU) once the estimated energy-norm error
+        ``"energy_norm"`` once the estimated energy-norm error
         ``||dx - dx*||_H`` is at most ``tolerance ||dx||_H``, which measures
         the step itself where stiff parts make the residual say little;
-        ``"preconditioned"`` (CPU) once ``r^T M^-1 r <= tolerance^2 g^T M^-1
+        ``"preconditioned"`` once ``r^T M^-1 r <= tolerance^2 g^T M^-1
         g`` with M the preconditioner, on the residual CG updates: the rule
         of GIPC and of the YASPS paper, which compare the squared ratio
         with their tolerance (their 1e-4 is a tolerance of 1e-2 here).

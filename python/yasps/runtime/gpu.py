@@ -271,12 +271,9 @@ class GpuBackend:
     def solve(self, system, x: np.ndarray, tolerance: float,
               max_iterations: int, threads: Optional[int],
               fixed: Optional[np.ndarray], stopping: str = "residual"):
-        if stopping != "residual":
-            raise SceneError(f"minimizeEnergy: the GPU's PCG stops on the "
-                             f"residual only, not {stopping!r}; use the CPU "
-                             f"backend for the energy-norm rule")
         preconditioner = config.resolve_preconditioner().replace("-", "_")
         return system.solve(x, tolerance, max_iterations, fixed,
                             preconditioner=getattr(
-                                native().PcgPreconditioner, preconditioner))
+                                native().PcgPreconditioner, preconditioner),
+                            stopping=getattr(native().PcgStopping, stopping))
 

@@ -48,8 +48,9 @@ constexpr int kMaxInner = 64;
   X(1, 1)                                                                      \
   X(1, 2)                                                                      \
   X(1, 3)                                                                      \
-  X(1, 12) X(2, 1) X(2, 2) X(2, 3) X(2, 12) X(3, 1) X(3, 2) X(3, 3) X(3, 12)   \
-      X(12, 1) X(12, 2) X(12, 3) X(12, 12)
+  X(1, 12)                                                                     \
+  X(2, 1) X(2, 2) X(2, 3) X(2, 12) X(3, 1) X(3, 2) X(3, 3) X(3, 12) X(12, 1)   \
+      X(12, 2) X(12, 3) X(12, 12)
 
 /// Why PCG stopped (PcgState::stopped); 0 while it runs.
 enum PcgStop : int {
@@ -63,9 +64,32 @@ enum PcgStop : int {
 /// The scalars of a PCG solve, kept on the device so that iterations run
 /// without waiting for the host. Every PCG kernel returns at once when
 /// `stopped` is set, so the host may queue iterations past the end.
+/// The stopping rules of PcgState::rule (PcgStopping's, in its order).
+enum PcgRule : int {
+  kPcgRuleResidual = 0,
+  kPcgRuleEnergyNorm = 1,
+  kPcgRulePreconditioned = 2,
+};
+
+/// The most iterations the energy-norm estimate may look ahead on the GPU
+/// (PcgOptions::energyDelay): its terms are kept in a ring of this size.
+constexpr int kPcgMaxEnergyDelay = 64;
+
 struct PcgState {
   double tolerance;
   long long maxIterations;
+  /// PcgRule; and for kPcgRuleEnergyNorm, the iterations it looks ahead.
+  int rule;
+  int energyDelay;
+  /// r^T M^-1 r at the start: the preconditioned rule's reference.
+  double rz0;
+  /// alpha_j r_j^T z_j of the last kPcgMaxEnergyDelay iterations (iteration
+  /// j at j % kPcgMaxEnergyDelay) and their sum over all iterations.
+  double terms[kPcgMaxEnergyDelay];
+  double termSum;
+  /// What the energy-norm and preconditioned rules compared with the
+  /// tolerance at the last check (NaN before they could).
+  double energyError, preconditionedResidual;
   double bNorm, threshold, rNorm, rz, alpha, beta;
   /// ||r|| / ||b|| when stopped (NaN for non-finite input or breakdown on
   /// a non-finite p^T H p).
@@ -525,6 +549,32 @@ YASPS_HD inline void pcgStop(PcgState &state, int why, double residual) {
   state.residual = residual;
 }
 
+/// Whether the stopping rule's tolerance is met now, as the CPU's PCG
+/// judges it (Pcg.cpp): the updated residual, the energy-norm estimate
+/// over energyDelay iterations, or r^T M^-1 r against its start.
+YASPS_HD inline bool pcgToleranceMet(PcgState &state) {
+  if (state.rz0 > 0.0)
+    state.preconditionedResidual =
+        hdSqrt((state.rz > 0.0 ? state.rz : 0.0) / state.rz0);
+  switch (state.rule) {
+  case kPcgRuleEnergyNorm: {
+    const long long d = state.energyDelay, k = state.iterations;
+    if (k < d)
+      return false;
+    double ahead = 0.0;
+    for (long long j = k - d; j < k; ++j)
+      ahead += state.terms[j % kPcgMaxEnergyDelay];
+    const double sum = state.termSum > 1e-300 ? state.termSum : 1e-300;
+    state.energyError = hdSqrt(ahead / sum);
+    return state.energyError <= state.tolerance;
+  }
+  case kPcgRulePreconditioned:
+    return state.preconditionedResidual <= state.tolerance;
+  default:
+    return state.rNorm <= state.threshold;
+  }
+}
+
 template <typename Block>
 YASPS_HD void pcgScalarBody(Block &block, const PcgScalarArgs &args) {
   block.forEachThread([&](int t) {
@@ -540,7 +590,8 @@ YASPS_HD void pcgScalarBody(Block &block, const PcgScalarArgs &args) {
     switch (args.step) {
     case kPcgBegin:
       state.iterations = 0;
-      state.rz = 0.0;
+      state.rz = state.rz0 = state.termSum = 0.0;
+      state.energyError = state.preconditionedResidual = nan;
       if (state.nonFinite)
         return pcgStop(state, kPcgNonFinite, nan);
       state.bNorm = state.rNorm = hdSqrt(sum);
@@ -551,7 +602,7 @@ YASPS_HD void pcgScalarBody(Block &block, const PcgScalarArgs &args) {
     case kPcgCheck:
       if (!hdIsFinite(state.rNorm))
         return pcgStop(state, kPcgNonFinite, nan);
-      if (state.rNorm <= state.threshold)
+      if (pcgToleranceMet(state))
         return pcgStop(state, kPcgConverged, state.rNorm / state.bNorm);
       if (state.iterations == state.maxIterations)
         return pcgStop(state, kPcgMaxIterations, state.rNorm / state.bNorm);
@@ -564,15 +615,24 @@ YASPS_HD void pcgScalarBody(Block &block, const PcgScalarArgs &args) {
                        hdIsFinite(sum) ? state.rNorm / state.bNorm : nan);
       state.alpha = state.rz / sum;
       return;
-    case kPcgAfterUpdate:
+    case kPcgAfterUpdate: {
+      // The energy-norm estimate's term of this iteration, alpha r^T z
+      // (rz is still this iteration's).
+      const double term = state.alpha * state.rz;
+      state.terms[state.iterations % kPcgMaxEnergyDelay] = term;
+      state.termSum += term;
       ++state.iterations;
       state.rNorm = hdSqrt(sum);
-      if (state.rNorm <= state.threshold)
+      // The other rules are judged at the next check, on the next r^T z.
+      if (state.rule == kPcgRuleResidual && state.rNorm <= state.threshold)
         pcgStop(state, kPcgConverged, state.rNorm / state.bNorm);
       return;
+    }
     case kPcgBeta:
       state.beta = state.rz == 0.0 ? 0.0 : sum / state.rz;
       state.rz = sum;
+      if (state.rz0 == 0.0)
+        state.rz0 = sum;
       return;
     }
   });

@@ -147,8 +147,10 @@ private:
                 bool columnMajorMaps);
   /// Launches the reduction-style kernels over `n` items: their grid.
   static std::int64_t reductionBlocks(std::int64_t n);
-  /// ||b - H x|| over the free DoFs (those `mask`, when set, leaves).
-  double recomputedResidual(cu::DevicePtr x, const unsigned char *mask);
+  /// ||b - H x|| over the free DoFs (those `mask`, when set, leaves); with
+  /// `residual`, b - H x itself (0 on fixed DoFs) goes there.
+  double recomputedResidual(cu::DevicePtr x, const unsigned char *mask,
+                            std::vector<double> *residual = nullptr);
 
   const CudaContext &ctx;
   const GlobalSystem &host;

@@ -126,10 +126,11 @@ struct PcgResult {
 void checkPcgOptions(const PcgOptions &options, std::int64_t size);
 
 /// Solves H x = b from x = 0 by CG preconditioned as options.preconditioner
-/// says (block-Jacobi by default). `b` and `x` hold H.size() values. H must be symmetric positive definite on the free
-/// DoFs; a diagonal block whose free part has no Cholesky factor (not
-/// positive definite) is preconditioned by the inverses of its diagonal
-/// entries' magnitudes instead, and by 1 where an entry is 0.
+/// says (block-Jacobi by default). `b` and `x` hold H.size() values. H must be
+/// symmetric positive definite on the free DoFs; a diagonal block whose free
+/// part has no Cholesky factor (not positive definite) is preconditioned by the
+/// inverses of its diagonal entries' magnitudes instead, and by 1 where an
+/// entry is 0.
 ///
 /// Never fails silently: stopping at maxIterations, a breakdown (p^T H p <=
 /// 0), non-finite input or a tolerance below round-off is reported with
