@@ -11,12 +11,17 @@
 // of kernels that do not run read as zeros. Launches of the GPU solver's
 // kernels
 // (GpuSolverKernels.h) also run: their bodies, the ones nvcc compiles, run
-// on the host one thread after another, on "device" memory that is host
-// memory here. Other kernels are not run.
+// on the host, on "device" memory that is host memory here: phase by phase
+// (every thread up to a barrier, then every thread to the next), or with
+// `fakeCudaSetThreads(1)` each thread on a fiber of its own that waits at
+// the barriers (FiberBlock.h), which a missing barrier cannot pass
+// unnoticed. Other kernels are not run.
 //
 //===----------------------------------------------------------------------===//
 
 #include "yasps/Runtime/GpuMultilevelKernels.h"
+
+#include "FiberBlock.h"
 
 #include <cstddef>
 #include <cstdlib>
@@ -45,15 +50,47 @@ constexpr ErrorText kErrors[] = {
 
 using namespace yasps::runtime::gpu;
 
-/// Runs a solver kernel's body over `grid` blocks of `threads` threads.
-template <typename Args, void (*Body)(HostBlock &, const Args &)>
+using ThreadBlock = yasps::runtime::test::FiberBlock<SharedMemory>;
+
+/// Whether a block's threads run as fibers that meet at barriers
+/// (FiberBlock.h; `fakeCudaSetThreads`, or YASPS_FAKE_CUDA_THREADS=1)
+/// rather than phase by phase.
+int threadsAsFibers = -1;
+/// The barrier that threads of `skipKernel` do not wait at, or -1
+/// (`fakeCudaSkipSync`): a missing __syncthreads, for tests that it shows.
+std::string skipKernel;
+int skipSync = -1;
+
+bool fibers() {
+  if (threadsAsFibers < 0) {
+    const char *value = std::getenv("YASPS_FAKE_CUDA_THREADS");
+    threadsAsFibers = value && std::strcmp(value, "1") == 0;
+  }
+  return threadsAsFibers == 1;
+}
+
+/// Runs a solver kernel's body over `grid` blocks of `threads` threads:
+/// each block phase by phase, or its threads as fibers.
+template <typename Args, void (*Body)(HostBlock &, const Args &),
+          void (*ThreadBody)(ThreadBlock &, const Args &)>
 void emulate(void **params, unsigned grid, unsigned threads) {
   const Args &args = *static_cast<const Args *>(params[0]);
   static SharedMemory shared;
-  for (unsigned b = 0; b < grid; ++b) {
-    HostBlock block{&shared, b, grid, static_cast<int>(threads)};
-    Body(block, args);
+  if (!fibers()) {
+    for (unsigned b = 0; b < grid; ++b) {
+      HostBlock block{&shared, b, grid, static_cast<int>(threads)};
+      Body(block, args);
+    }
+    return;
   }
+  static yasps::runtime::test::FiberScheduler scheduler;
+  const int skip = functionName == skipKernel ? skipSync : -1;
+  for (unsigned b = 0; b < grid; ++b)
+    scheduler.run(static_cast<int>(threads), [&](int t) {
+      ThreadBlock block{&shared, b,          grid, static_cast<int>(threads),
+                        t,       &scheduler, skip};
+      ThreadBody(block, args);
+    });
 }
 
 struct EmulatedKernel {
@@ -61,34 +98,50 @@ struct EmulatedKernel {
   void (*run)(void **, unsigned, unsigned);
 };
 #define YASPS_EMULATED_SPMV(R, C)                                              \
-  {"yasps_spmv_" #R "x" #C, emulate<SpmvArgs, spmvBody<R, C, HostBlock>>},
+  {"yasps_spmv_" #R "x" #C,                                                    \
+   emulate<SpmvArgs, spmvBody<R, C, HostBlock>, spmvBody<R, C, ThreadBlock>>},
 const EmulatedKernel kEmulated[] = {
-    {"yasps_assemble", emulate<AssembleArgs, assembleBody<HostBlock>>},
-    {"yasps_check_finite",
-     emulate<CheckFiniteArgs, checkFiniteBody<HostBlock>>},
+    {"yasps_assemble",
+     emulate<AssembleArgs, assembleBody<HostBlock>, assembleBody<ThreadBlock>>},
+    {"yasps_check_finite", emulate<CheckFiniteArgs, checkFiniteBody<HostBlock>,
+                                   checkFiniteBody<ThreadBlock>>},
     {"yasps_jacobi_invert",
-     emulate<JacobiInvertArgs, jacobiInvertBody<HostBlock>>},
-    {"yasps_jacobi_apply",
-     emulate<JacobiApplyArgs, jacobiApplyBody<HostBlock>>},
-    {"yasps_dot", emulate<DotArgs, dotBody<HostBlock>>},
-    {"yasps_pcg_init", emulate<PcgInitArgs, pcgInitBody<HostBlock>>},
-    {"yasps_pcg_update", emulate<PcgUpdateArgs, pcgUpdateBody<HostBlock>>},
+     emulate<JacobiInvertArgs, jacobiInvertBody<HostBlock>,
+             jacobiInvertBody<ThreadBlock>>},
+    {"yasps_jacobi_apply", emulate<JacobiApplyArgs, jacobiApplyBody<HostBlock>,
+                                   jacobiApplyBody<ThreadBlock>>},
+    {"yasps_dot", emulate<DotArgs, dotBody<HostBlock>, dotBody<ThreadBlock>>},
+    {"yasps_pcg_init",
+     emulate<PcgInitArgs, pcgInitBody<HostBlock>, pcgInitBody<ThreadBlock>>},
+    {"yasps_pcg_update", emulate<PcgUpdateArgs, pcgUpdateBody<HostBlock>,
+                                 pcgUpdateBody<ThreadBlock>>},
     {"yasps_pcg_direction",
-     emulate<PcgDirectionArgs, pcgDirectionBody<HostBlock>>},
-    {"yasps_pcg_scalar", emulate<PcgScalarArgs, pcgScalarBody<HostBlock>>},
-    {"yasps_spmv_any", emulate<SpmvArgs, spmvBody<0, 0, HostBlock>>},
-    {"yasps_ml_coarsen", emulate<CoarsenArgs, coarsenBody<HostBlock>>},
-    {"yasps_ml_restrict", emulate<TransferArgs, restrictBody<HostBlock>>},
-    {"yasps_ml_prolong", emulate<TransferArgs, prolongBody<HostBlock>>},
-    {"yasps_ml_smooth", emulate<SmoothArgs, smoothBody<HostBlock>>},
-    {"yasps_ml_residual", emulate<ResidualArgs, residualBody<HostBlock>>},
+     emulate<PcgDirectionArgs, pcgDirectionBody<HostBlock>,
+             pcgDirectionBody<ThreadBlock>>},
+    {"yasps_pcg_scalar", emulate<PcgScalarArgs, pcgScalarBody<HostBlock>,
+                                 pcgScalarBody<ThreadBlock>>},
+    {"yasps_spmv_any",
+     emulate<SpmvArgs, spmvBody<0, 0, HostBlock>, spmvBody<0, 0, ThreadBlock>>},
+    {"yasps_ml_coarsen",
+     emulate<CoarsenArgs, coarsenBody<HostBlock>, coarsenBody<ThreadBlock>>},
+    {"yasps_ml_restrict",
+     emulate<TransferArgs, restrictBody<HostBlock>, restrictBody<ThreadBlock>>},
+    {"yasps_ml_prolong",
+     emulate<TransferArgs, prolongBody<HostBlock>, prolongBody<ThreadBlock>>},
+    {"yasps_ml_smooth",
+     emulate<SmoothArgs, smoothBody<HostBlock>, smoothBody<ThreadBlock>>},
+    {"yasps_ml_residual",
+     emulate<ResidualArgs, residualBody<HostBlock>, residualBody<ThreadBlock>>},
     {"yasps_ml_dense_scatter",
-     emulate<DenseScatterArgs, denseScatterBody<HostBlock>>},
-    {"yasps_ml_row_bound", emulate<RowBoundArgs, rowBoundBody<HostBlock>>},
+     emulate<DenseScatterArgs, denseScatterBody<HostBlock>,
+             denseScatterBody<ThreadBlock>>},
+    {"yasps_ml_row_bound",
+     emulate<RowBoundArgs, rowBoundBody<HostBlock>, rowBoundBody<ThreadBlock>>},
     {"yasps_ml_dense_invert",
-     emulate<DenseInvertArgs, denseInvertBody<HostBlock>>},
-    {"yasps_ml_dense_apply",
-     emulate<DenseApplyArgs, denseApplyBody<HostBlock>>},
+     emulate<DenseInvertArgs, denseInvertBody<HostBlock>,
+             denseInvertBody<ThreadBlock>>},
+    {"yasps_ml_dense_apply", emulate<DenseApplyArgs, denseApplyBody<HostBlock>,
+                                     denseApplyBody<ThreadBlock>>},
     YASPS_SPMV_SHAPES(YASPS_EMULATED_SPMV)};
 #undef YASPS_EMULATED_SPMV
 
@@ -109,6 +162,15 @@ const ErrorText *findError(int code) {
 
 extern "C" {
 void fakeCudaSetMode(int m) { mode = m; }
+/// 1: a block's threads run as fibers meeting at barriers; 0: phase by
+/// phase (the default, unless YASPS_FAKE_CUDA_THREADS=1).
+void fakeCudaSetThreads(int on) { threadsAsFibers = on ? 1 : 0; }
+/// With fibers, every thread of `kernel` skips its barrier number `index`
+/// (from 0); a null kernel or index < 0 skips none.
+void fakeCudaSkipSync(const char *kernel, int index) {
+  skipKernel = kernel ? kernel : "";
+  skipSync = kernel ? index : -1;
+}
 /// How many cuMemAlloc calls succeeded so far.
 int fakeCudaAllocations() { return allocations; }
 void fakeCudaExpectParams(int n) { expectedParams = n; }

@@ -25,13 +25,29 @@ inline const char *fakeCudaPath() {
   return path && *path ? path : YASPS_FAKE_CUDA;
 }
 
-/// Loads the fake driver in `mode` (see FakeCuda.cpp).
-inline std::unique_ptr<CudaDriver> fakeDriver(int mode) {
+/// The stand-in's function `name` (valid while a driver from fakeDriver
+/// keeps the library loaded).
+template <typename Function> Function *fakeCudaFunction(const char *name) {
+  void *fake = dlopen(fakeCudaPath(), RTLD_NOW | RTLD_LOCAL);
+  EXPECT_NE(fake, nullptr) << dlerror();
+  auto *function = reinterpret_cast<Function *>(dlsym(fake, name));
+  EXPECT_NE(function, nullptr) << name;
+  dlclose(fake);
+  return function;
+}
+
+/// Loads the fake driver in `mode` (see FakeCuda.cpp); with `threads`, it
+/// runs a block's threads as fibers that meet at barriers (FiberBlock.h),
+/// else phase by phase.
+inline std::unique_ptr<CudaDriver> fakeDriver(int mode, bool threads = false) {
   void *fake = dlopen(fakeCudaPath(), RTLD_NOW | RTLD_LOCAL);
   EXPECT_NE(fake, nullptr) << dlerror();
   auto setMode =
       reinterpret_cast<void (*)(int)>(dlsym(fake, "fakeCudaSetMode"));
   setMode(mode);
+  auto setThreads =
+      reinterpret_cast<void (*)(int)>(dlsym(fake, "fakeCudaSetThreads"));
+  setThreads(threads ? 1 : 0);
   auto driver = std::make_unique<CudaDriver>(fakeCudaPath());
   dlclose(fake);
   return driver;

@@ -157,18 +157,35 @@ void expectClose(const std::vector<double> &actual,
         << what << " entry " << i;
 }
 
-/// Parameter: true for this machine's driver, false for the stand-in.
-class GpuSystemTest : public ::testing::TestWithParam<bool> {
+/// The drivers the tests run on: the stand-in running a block phase by
+/// phase, the stand-in running its threads as fibers that meet at
+/// barriers, and this machine's.
+enum class Driver { StandIn, StandInThreads, ThisMachine };
+
+#if defined(__SANITIZE_ADDRESS__)
+#define YASPS_TEST_ASAN 1
+#elif defined(__has_feature)
+#if __has_feature(address_sanitizer)
+#define YASPS_TEST_ASAN 1
+#endif
+#endif
+
+class GpuSystemTest : public ::testing::TestWithParam<Driver> {
 protected:
   void SetUp() override {
     if (gpuSolverImages().empty())
       GTEST_SKIP() << "built without nvcc: no GPU solver kernels";
-    if (GetParam()) {
+    if (GetParam() == Driver::ThisMachine) {
       driver = &CudaDriver::get();
       if (!driver->usable())
         GTEST_SKIP() << "no usable GPU: " << driver->unusableReason();
     } else {
-      fake = test::fakeDriver(0);
+#ifdef YASPS_TEST_ASAN
+      if (GetParam() == Driver::StandInThreads)
+        GTEST_SKIP() << "AddressSanitizer does not follow swapcontext's "
+                        "stack switches";
+#endif
+      fake = test::fakeDriver(0, GetParam() == Driver::StandInThreads);
       driver = fake.get();
     }
     context = std::make_unique<CudaContext>(*driver, 0);
@@ -415,8 +432,9 @@ TEST_P(GpuSystemTest, AssemblesFactoredHessians) {
 TEST_P(GpuSystemTest, FollowsANewDynamicPart) {
   // Fewer pairs than before: the buffers are reused (the stand-in driver
   // counts allocations).
-  void *fake = GetParam() ? nullptr
-                          : dlopen(test::fakeCudaPath(), RTLD_NOW | RTLD_LOCAL);
+  void *fake = GetParam() == Driver::ThisMachine
+                   ? nullptr
+                   : dlopen(test::fakeCudaPath(), RTLD_NOW | RTLD_LOCAL);
   auto allocations =
       fake ? reinterpret_cast<int (*)()>(dlsym(fake, "fakeCudaAllocations"))
            : nullptr;
@@ -539,9 +557,62 @@ TEST_P(GpuSystemTest, RejectsMisuse) {
   EXPECT_THROW(gpu->updateDynamic(other), std::invalid_argument);
 }
 
-INSTANTIATE_TEST_SUITE_P(Drivers, GpuSystemTest, ::testing::Values(false, true),
-                         [](const ::testing::TestParamInfo<bool> &info) {
-                           return info.param ? "ThisMachine" : "StandIn";
+INSTANTIATE_TEST_SUITE_P(Drivers, GpuSystemTest,
+                         ::testing::Values(Driver::StandIn,
+                                           Driver::StandInThreads,
+                                           Driver::ThisMachine),
+                         [](const ::testing::TestParamInfo<Driver> &info) {
+                           return info.param == Driver::ThisMachine
+                                      ? "ThisMachine"
+                                  : info.param == Driver::StandInThreads
+                                      ? "StandInThreads"
+                                      : "StandIn";
+                         });
+
+/// The stand-in's own fault injection: on both stand-ins, not a device.
+class StandInBarrierTest : public GpuSystemTest {};
+
+TEST_P(StandInBarrierTest, AMissingBarrierShowsWhereThreadsRunAsThreads) {
+  // Every thread of yasps_dot skips the first barrier of its block sum:
+  // thread 0 adds v[64] before thread 64 has written it. Phase by phase the
+  // stand-in cannot see that; with its threads as fibers the dot products,
+  // and so the solve, go wrong. (On a GPU the outcome would depend on the
+  // warps' timing.)
+  assemble();
+  PcgOptions options;
+  options.relativeTolerance = 1e-10;
+  ThreadPool pool(1);
+  std::vector<double> expected(host->size());
+  PcgResult cpu = host->solve(expected.data(), options, pool);
+  auto skipSync =
+      test::fakeCudaFunction<void(const char *, int)>("fakeCudaSkipSync");
+  skipSync("yasps_dot", 0);
+  DeviceBuffer x(*context, host->size() * sizeof(double));
+  PcgResult result = gpu->solve(x.pointer(), options);
+  skipSync(nullptr, -1);
+  std::vector<double> solution = download(x);
+  double error = 0.0, scale = 0.0;
+  for (std::size_t i = 0; i < solution.size(); ++i) {
+    error = std::max(error, std::fabs(solution[i] - expected[i]));
+    scale = std::max(scale, std::fabs(expected[i]));
+  }
+  const bool wrong = !(error <= 1e-6 * scale) ||
+                     result.converged != cpu.converged ||
+                     std::abs(result.iterations - cpu.iterations) > 1;
+  EXPECT_EQ(wrong, GetParam() == Driver::StandInThreads)
+      << "error " << error << " of " << scale << ", iterations "
+      << result.iterations << " against " << cpu.iterations;
+  // With the barrier back, the solve is the CPU's again.
+  expectSameSolve(options);
+}
+
+INSTANTIATE_TEST_SUITE_P(StandIns, StandInBarrierTest,
+                         ::testing::Values(Driver::StandIn,
+                                           Driver::StandInThreads),
+                         [](const ::testing::TestParamInfo<Driver> &info) {
+                           return info.param == Driver::StandInThreads
+                                      ? "StandInThreads"
+                                      : "StandIn";
                          });
 
 TEST(GpuSolverImages, HoldEveryKernelForSm80AndSm90) {
