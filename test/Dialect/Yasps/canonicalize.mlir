@@ -70,23 +70,46 @@ yasps.scene @s {
         yasps.yield %r : !yasps.mat<3x3xf64>
       }
 
+      // Adding -0.0 is the identity for every x; adding +0.0 is not (-0.0 +
+      // 0.0 is +0.0), so it stays, as in upstream's arith folds: values
+      // keep NumPy's bits.
       // CHECK-LABEL: yasps.attr @add_zero
       // CHECK-NEXT: %[[X:.*]] = yasps.read @m::@p::@x
       // CHECK-NEXT: yasps.yield %[[X]]
       yasps.attr @add_zero : !yasps.mat<3x2xf64> {
         %x = yasps.read @m::@p::@x : !yasps.mat<3x2xf64>
-        %z = yasps.constant dense<0.0> : tensor<3x2xf64>
+        %z = yasps.constant dense<-0.0> : tensor<3x2xf64>
         %l = yasps.add %z, %x : !yasps.mat<3x2xf64>
         %r = yasps.add %l, %z : !yasps.mat<3x2xf64>
         yasps.yield %r : !yasps.mat<3x2xf64>
       }
 
+      // CHECK-LABEL: yasps.attr @add_positive_zero
+      // CHECK: %[[S:.*]] = yasps.add
+      // CHECK-NEXT: yasps.yield %[[S]]
+      yasps.attr @add_positive_zero : !yasps.mat<3x2xf64> {
+        %x = yasps.read @m::@p::@x : !yasps.mat<3x2xf64>
+        %z = yasps.constant dense<0.0> : tensor<3x2xf64>
+        %r = yasps.add %z, %x : !yasps.mat<3x2xf64>
+        yasps.yield %r : !yasps.mat<3x2xf64>
+      }
+
+      // Subtracting +0.0 is the identity; subtracting -0.0 is adding +0.0.
       // CHECK-LABEL: yasps.attr @sub_zero
       // CHECK-NEXT: %[[X:.*]] = yasps.read @m::@p::@x
       // CHECK-NEXT: yasps.yield %[[X]]
       yasps.attr @sub_zero : !yasps.mat<3x2xf64> {
         %x = yasps.read @m::@p::@x : !yasps.mat<3x2xf64>
         %z = yasps.constant dense<0.0> : tensor<3x2xf64>
+        %r = yasps.sub %x, %z : !yasps.mat<3x2xf64>
+        yasps.yield %r : !yasps.mat<3x2xf64>
+      }
+
+      // CHECK-LABEL: yasps.attr @sub_negative_zero
+      // CHECK: yasps.sub
+      yasps.attr @sub_negative_zero : !yasps.mat<3x2xf64> {
+        %x = yasps.read @m::@p::@x : !yasps.mat<3x2xf64>
+        %z = yasps.constant dense<-0.0> : tensor<3x2xf64>
         %r = yasps.sub %x, %z : !yasps.mat<3x2xf64>
         yasps.yield %r : !yasps.mat<3x2xf64>
       }

@@ -56,6 +56,19 @@ static bool isSplatOf(Attribute attr, double value) {
   return true;
 }
 
+/// Whether every entry is a zero of the given sign: x + (-0) and x - (+0)
+/// are x for every x, -0 included; x + (+0) is +0 for x = -0, so it is no
+/// identity in IEEE arithmetic (upstream's arith folds alike).
+static bool isSplatOfZero(Attribute attr, bool negative) {
+  auto dense = dyn_cast_or_null<DenseFPElementsAttr>(attr);
+  if (!dense)
+    return false;
+  for (const APFloat &entry : dense.getValues<APFloat>())
+    if (!entry.isZero() || entry.isNegative() != negative)
+      return false;
+  return true;
+}
+
 static bool isIdentityMatrix(Value value, Attribute attr) {
   if (value.getDefiningOp<IdentityOp>())
     return true;
@@ -106,16 +119,16 @@ OpFoldResult IdentityOp::fold(FoldAdaptor) {
 }
 
 OpFoldResult AddOp::fold(FoldAdaptor adaptor) {
-  if (isSplatOf(adaptor.getRhs(), 0.0))
+  if (isSplatOfZero(adaptor.getRhs(), /*negative=*/true))
     return getLhs();
-  if (isSplatOf(adaptor.getLhs(), 0.0))
+  if (isSplatOfZero(adaptor.getLhs(), /*negative=*/true))
     return getRhs();
   return foldEntrywise(getMatrixType(), adaptor.getLhs(), adaptor.getRhs(),
                        addFn);
 }
 
 OpFoldResult SubOp::fold(FoldAdaptor adaptor) {
-  if (isSplatOf(adaptor.getRhs(), 0.0))
+  if (isSplatOfZero(adaptor.getRhs(), /*negative=*/false))
     return getLhs();
   return foldEntrywise(getMatrixType(), adaptor.getLhs(), adaptor.getRhs(),
                        subFn);
