@@ -15,7 +15,10 @@ from yasps.sim import (box_tet_mesh, cloth_corners, cloth_grid, hinges_of,
                        locality_order, read_surface_mesh, read_tet_mesh,
                        reorder_mesh, signed_tet_volumes)
 
-BUNNY = Path("/work/shared/data/bunny-1.8k.msh")
+from conftest import REPO
+
+# The paper's meshes sit beside the checkout, in ../shared/data.
+BUNNY = REPO.parent / "shared" / "data" / "bunny-1.8k.msh"
 
 
 def triangle_normals(verts: np.ndarray, faces: np.ndarray) -> np.ndarray:
