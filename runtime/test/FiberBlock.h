@@ -8,8 +8,10 @@
 // barrier: the fiber waits there until every thread of the block has come
 // to it. The schedule is thread-major (thread 0 runs to its next barrier,
 // then thread 1, ...), one of the schedules a GPU may pick, so that a
-// thread that reads what others write before a barrier it skipped reads
-// stale values, every time: the results differ from the CPU's. Threads
+// thread that reads what a later thread writes before a barrier it skipped
+// reads stale values, on every run: the results differ from the CPU's. (A
+// read of what an earlier thread wrote still sees it: that order cannot
+// catch every missing barrier.) Threads
 // that finish while others wait at a barrier are an error (divergent
 // barriers are undefined on a GPU), reported and aborted on.
 //
