@@ -112,7 +112,6 @@ def combined_bound(*bounds: Callable) -> Callable:
     return bound
 
 
-
 #: Per scene, the (positions, tets) whose steps must not invert a tet.
 _GUARDS: "WeakKeyDictionary[object, List[Tuple[object, np.ndarray]]]" = \
     WeakKeyDictionary()

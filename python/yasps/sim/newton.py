@@ -199,8 +199,8 @@ def newton(scene, x: Targets, tolerance: float,
     entry by ``tolerance`` or more (IPC's rule). A direction whose PCG
     stops at ``cg_max_iterations`` before ``cg_tolerance`` is used as it is
     (counted in ``inexactDirections``). ``cg_stopping``: minimizeEnergy's
-    stopping rule ("residual", "energy_norm" or "preconditioned"). ``compile_first``: compile
-    the scene's kernels (``yasps.compile``) before the first iteration,
+    stopping rule ("residual", "energy_norm" or "preconditioned").
+    ``compile_first``: compile the scene's kernels (``yasps.compile``) before the first iteration,
     timed as the report's ``compile`` stage; a caller that did so already
     passes False. ``projection``: one of PROJECTIONS. ``cg_forcing``: solve
     each direction only as tightly as an inexact Newton method needs
