@@ -200,9 +200,9 @@ def newton(scene, x: Targets, tolerance: float,
     stops at ``cg_max_iterations`` before ``cg_tolerance`` is used as it is
     (counted in ``inexactDirections``). ``cg_stopping``: minimizeEnergy's
     stopping rule ("residual", "energy_norm" or "preconditioned").
-    ``compile_first``: compile the scene's kernels (``yasps.compile``) before the first iteration,
-    timed as the report's ``compile`` stage; a caller that did so already
-    passes False. ``projection``: one of PROJECTIONS. ``cg_forcing``: solve
+    ``compile_first``: compile the scene's kernels (``yasps.compile``)
+    before the first iteration, timed as the report's ``compile`` stage; a
+    caller that did so already passes False. ``projection``: one of PROJECTIONS. ``cg_forcing``: solve
     each direction only as tightly as an inexact Newton method needs
     (:mod:`yasps.sim.forcing`: a relative residual between 1e-2 and
     ``cg_tolerance``, tighter as the gradient falls against the solve's
