@@ -161,10 +161,10 @@ void yasps::python::bindGpuRuntime(nb::module_ &m) {
         for (const CudaDeviceInfo &info : driver.devices())
           devices.emplace_back(info.name, info.chip(), info.totalMemory);
         return std::make_tuple(driver.usable(), driver.unusableReason(),
-                               devices);
+                               devices, driver.runsHostImages());
       },
-      "(usable, reason it is not, [(name, chip, total bytes)]) of the CUDA "
-      "driver, loaded on first call");
+      "(usable, reason it is not, [(name, chip, total bytes)], whether it "
+      "runs host images) of the CUDA driver, loaded on first call");
 
   nb::class_<PyDevice>(m, "GpuDevice", "A CUDA device's primary context.")
       .def(nb::new_(&openDevice), nb::arg("ordinal") = 0)

@@ -3,10 +3,11 @@ that are uploaded only when their values change, and (on a machine with a
 usable GPU) compute() on the GPU against the CPU.
 
 Without a GPU the host side still runs against the runtime's stand-in
-driver library (runtime/test/FakeCuda.cpp, which records the launches of
-compiled energy kernels without running them, and runs the GPU solver's
-kernels on the host), in a subprocess so that this process keeps its real
-driver status."""
+driver library (runtime/test/FakeCuda.cpp, which runs host images of the
+generated kernels and the GPU solver's kernels on the host), in a
+subprocess so that this process keeps its real driver status. The value
+comparisons with the CPU are test_gpu_against_cpu.py, run here against the
+stand-in."""
 
 import os
 import shutil
@@ -144,8 +145,8 @@ MINIMIZE_ON_BOTH = """
     sys.path.insert(0, %r)
     from test_minimize import soft_box, mixed_scene
 
-    # The stand-in driver does not run generated kernels: derivatives on the
-    # CPU, uploaded for the GPU solve.
+    # Derivatives on the CPU, uploaded for the GPU solve (with GPU
+    # derivatives: test_gpu_against_cpu.py).
     yasps.config.gpu_derivatives = False
 
     def solve(scene, backend, **kw):
@@ -188,56 +189,39 @@ GPU_DERIVATIVES = """
     import numpy as np, yasps
     sys.path.insert(0, %r)
     from test_minimize import soft_box
-    # Compression reads the indices first: the stand-in's zeros, all
-    # padding, would send every energy to the CPU.
-    yasps.config.compress_local_hessians = False
     box = soft_box()
-    # All padding, the stand-in's DoF maps read no target, which
-    # minimizeEnergy refuses unless the target is fixed: fixed it solves
-    # the zero system, and the path to it is what this checks.
-    fixed = [np.ones(len(box.m.v["x"].value), dtype=bool)]
-    (dx,) = box.minimizeEnergy(fixed=fixed)
-    info = box.lastSolve
-    print(info["backend"], info["energiesDifferentiatedOnGpu"],
-          info["converged"], info["iterations"], np.abs(dx).max())
+
+    def solve(backend):
+        yasps.config.backend = backend
+        (dx,) = box.minimizeEnergy(tolerance=1e-12)
+        return dx
+
+    def same():
+        cpu, gpu = solve("cpu"), solve("gpu")
+        info = box.lastSolve
+        return (info["backend"], info["energiesDifferentiatedOnGpu"],
+                np.abs(gpu - cpu).max() <= 1e-9 * np.abs(cpu).max())
+
+    yasps.config.compress_local_hessians = False
+    print(*same())
     # Once warm, a Newton iteration allocates no device memory, even with
     # new positions.
     import ctypes
     fake = ctypes.CDLL(%r)
     x = box.m.v["x"]
     counts = []
+    yasps.config.backend = "gpu"
     for step in range(3):
         x.updateValue(x.value[:, :, 0] + 0.01)
-        box.minimizeEnergy(fixed=fixed)
+        box.minimizeEnergy()
         counts.append(fake.fakeCudaAllocations())
     print(counts[2] - counts[1])
-    # With compression, instances whose indices repeat a DoF (here: all of
-    # them) are differentiated on the CPU, for energies projected in full:
-    # the inertia, and the elastic energy once it is not projected through
-    # F (compression applies before full projections only).
+    # Compression, and projection of the elastic energy on x rather than F.
     yasps.config.compress_local_hessians = True
-    box.minimizeEnergy(fixed=fixed)
-    print(box.lastSolve["energiesDifferentiatedOnGpu"])
+    print(*same())
     yasps.config.linear_map_projection = False
-    box.minimizeEnergy(fixed=fixed)
-    print(box.lastSolve["energiesDifferentiatedOnGpu"])
+    print(*same())
 """
-
-
-@pytest.mark.skipif(not FAKE_DRIVER.exists(),
-                    reason=f"the stand-in driver {FAKE_DRIVER} is not built")
-@pytest.mark.skipif(not HAS_PTXAS, reason="the CUDA toolkit (ptxas) is not "
-                    "installed")
-def test_minimize_energy_on_the_gpu_backend_matches_the_cpu():
-    """minimizeEnergy with the GPU backend: assembly and PCG through the
-    GPU solver's kernels, here run by the stand-in driver (which executes
-    the same kernel bodies on the host), against the CPU backend: a soft
-    box with and without fixed DoFs and by each stopping rule, a scene with
-    changing dynamic pairs, factored Hessians, and a solve stopped by its
-    iteration limit."""
-    out = run_python(MINIMIZE_ON_BOTH % str(REPO / "python" / "tests"),
-                     YASPS_CUDA_LIBRARY=str(FAKE_DRIVER))
-    assert out.split() == ["True"] * 18, out
 
 
 @pytest.mark.skipif(not FAKE_DRIVER.exists(),
@@ -246,74 +230,36 @@ def test_minimize_energy_on_the_gpu_backend_matches_the_cpu():
                     "installed")
 def test_gpu_derivatives_feed_the_gpu_assembly():
     """With config.gpu_derivatives, the derivative and index kernels are
-    compiled for the device and launched there, and assembly reads their
-    device outputs. The stand-in driver records those launches without
-    running them (its memory reads as zeros: no DoF, a zero system), so
-    this checks the path, not the numbers; the comparison with the CPU is
-    test_minimize_matches_the_cpu_on_a_gpu."""
+    compiled for the device and launched there (on the stand-in: their host
+    images), and assembly reads their device outputs: the direction is the
+    CPU's, with and without compression, and a warm Newton iteration
+    allocates nothing."""
     out = run_python(GPU_DERIVATIVES % (str(REPO / "python" / "tests"),
                                         str(FAKE_DRIVER)),
                      YASPS_CUDA_LIBRARY=str(FAKE_DRIVER))
-    assert out.split() == ["gpu", "2", "True", "0", "0.0", "0", "1", "0"]
+    assert out.split() == ["gpu", "2", "True", "0"] + ["gpu", "2", "True"] * 2
 
 
-# --- on a GPU: the same values as the CPU ------------------------------------
-
-def compute_on(backend: str, attribute, monkeypatch) -> np.ndarray:
-    monkeypatch.setattr(yasps.config, "backend", backend)
-    result = attribute.compute()
-    assert result.stats.get("backend", "cpu") == backend
-    return result.value
-
-
-def assert_same_as_cpu(attribute, monkeypatch):
-    cpu = compute_on("cpu", attribute, monkeypatch)
-    gpu = compute_on("gpu", attribute, monkeypatch)
-    scale = max(np.abs(cpu).max(), 1e-300)
-    assert np.abs(gpu - cpu).max() <= 1e-10 * scale
-
-
-@needs_gpu
-def test_running_example_attributes_match_the_cpu(monkeypatch):
-    s = running_example()
-    pos = s.bunnies.vertices["position"]
-    assert_same_as_cpu(pos, monkeypatch)
-    assert_same_as_cpu(s.bunny_affine.tets["positions"], monkeypatch)
-    assert_same_as_cpu((pos.dot(pos) + 1.0).log(), monkeypatch)
+@pytest.mark.skipif(not FAKE_DRIVER.exists(),
+                    reason=f"the stand-in driver {FAKE_DRIVER} is not built")
+@pytest.mark.skipif(not HAS_PTXAS, reason="the CUDA toolkit (ptxas) is not "
+                    "installed")
+def test_the_gpu_comparisons_pass_on_the_stand_in_driver():
+    """test_gpu_against_cpu.py, which needs a usable GPU backend, run
+    against the stand-in driver: the generated kernels' host images
+    against the CPU backend, f64 and f32, and a broken kernel caught."""
+    result = subprocess.run(
+        [sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider",
+         "-p", "no:randomly", "-p", "no:xdist",
+         str(Path(__file__).parent / "test_gpu_against_cpu.py")],
+        env=dict(os.environ, PYTHONPATH=str(REPO / "python"),
+                 YASPS_CUDA_LIBRARY=str(FAKE_DRIVER)),
+        capture_output=True, text=True, cwd=Path(__file__).parent)
+    assert result.returncode == 0, result.stdout[-4000:] + result.stderr
+    assert "skipped" not in result.stdout, result.stdout[-2000:]
 
 
-@needs_gpu
-def test_projection_matches_the_cpu(monkeypatch):
-    rng = np.random.default_rng(3)
-    s = yasps.scene("proj")
-    p = s.addMesh("m").addPrimitive("p", numInstances=1000)
-    h = p.addAttribute("h", rows=12, cols=12)
-    M = rng.normal(size=(1000, 12, 12))
-    h.updateValue(M + np.transpose(M, (0, 2, 1)))
-    for method in ("clamp", "abs"):
-        assert_same_as_cpu(h.project(method), monkeypatch)
-
-
-@needs_gpu
-def test_minimize_matches_the_cpu_on_a_gpu(monkeypatch):
-    """minimizeEnergy with derivatives, assembly and PCG on the GPU against
-    the CPU backend, with and without separated reduced Hessians."""
-    import test_minimize as tm
-
-    def solve(scene, backend):
-        monkeypatch.setattr(yasps.config, "backend", backend)
-        out = scene.minimizeEnergy(tolerance=1e-12)
-        assert scene.lastSolve["backend"] == backend
-        return np.concatenate([a.reshape(-1) for a in out])
-
-    for separate in (False, True):
-        monkeypatch.setattr(yasps.config, "separate_reduced_hessians", separate)
-        for scene in (tm.soft_box(), tm.mixed_scene([[0, 3], [1, 4]])[0]):
-            cpu = solve(scene, "cpu")
-            gpu = solve(scene, "gpu")
-            assert scene.lastSolve["energiesDifferentiatedOnGpu"] > 0
-            assert np.abs(gpu - cpu).max() <= 1e-9 * np.abs(cpu).max()
-
+# --- on a GPU only --------------------------------------------------------
 
 @needs_gpu
 def test_gpu_results_are_dlpack_views_of_device_memory(monkeypatch):
@@ -341,8 +287,7 @@ GPU_COMPILES_ONCE = """
     gpu.compile_ir = counting
     import numpy as np
     s, pp, *_ = mixed_scene([[0, 3], [1, 4]])
-    # The stand-in's DoF maps read as padding: fixed targets let the solve
-    # run (see GPU_DERIVATIVES).
+    # Fixed targets: the path to the solve is what this checks.
     fixed = [np.ones(t.owner.numInstances, dtype=bool)
              for t in s.minimizeTargets]
     # Requests of different kernel sets, in both orders, twice over.

@@ -71,6 +71,10 @@ void CudaDriver::load(const std::string &path) {
   resolve(cuLaunchKernel, "cuLaunchKernel");
   if (!complete)
     return;
+  // Not a CUDA entry point: only the stand-in driver has it.
+  if (auto standIn = reinterpret_cast<int (*)()>(
+          dlsym(handle, "yaspsStandInRunsHostImages")))
+    hostImages = standIn() != 0;
 
   try {
     check(cuInit(0), "cuInit");

@@ -1,6 +1,7 @@
 //===- GpuLaunch.cpp - loading and launching yasps GPU kernels ------------===//
 
 #include "yasps/Runtime/GpuLaunch.h"
+#include "yasps/Runtime/HostImage.h"
 
 #include <cstdlib>
 
@@ -19,6 +20,10 @@ yasps::runtime::selectGpuImage(const std::vector<GpuImage> &images,
                                const std::string &chip) {
   for (const GpuImage &image : images)
     if (image.format == "cubin" && image.chip == chip)
+      return image;
+  // The stand-in driver's "chip" runs host images only (HostImage.h).
+  for (const GpuImage &image : images)
+    if (chip == host_image::kChip && image.format == host_image::kFormat)
       return image;
   // A cubin runs on later chips of its major version (sm_80 on sm_86).
   const GpuImage *cubin = nullptr;

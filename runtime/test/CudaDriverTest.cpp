@@ -7,6 +7,7 @@
 
 #include "yasps/Runtime/CudaMemory.h"
 #include "yasps/Runtime/GpuLaunch.h"
+#include "yasps/Runtime/HostImage.h"
 
 #include "FakeCudaDriver.h"
 
@@ -58,6 +59,8 @@ TEST(CudaDriver, DevicesAreListed) {
   EXPECT_EQ(device.name, "Fake GPU");
   EXPECT_EQ(device.chip(), "sm_90");
   EXPECT_EQ(device.totalMemory, std::size_t(8) << 30);
+  // The stand-in says that it runs host images of the generated kernels.
+  EXPECT_TRUE(driver->runsHostImages());
   // Unknown codes still give a message.
   EXPECT_EQ(driver->describe(999), "CUresult 999");
   try {
@@ -127,6 +130,30 @@ TEST(GpuLaunch, PicksTheDevicesCubinElsePtx) {
     EXPECT_STREQ(error.what(),
                  "no GPU binary runs on this device (sm_75): the kernels were "
                  "compiled to sm_80 cubin, sm_90 cubin, sm_90 ptx");
+  }
+  // The stand-in's "host" runs the host image, and nothing else.
+  EXPECT_THROW(selectGpuImage(images, "host"), CudaError);
+  images.push_back({"host", "host", &bytes});
+  EXPECT_EQ(selectGpuImage(images, "host").format, "host");
+  EXPECT_EQ(selectGpuImage(images, "sm_90").format, "cubin");
+}
+
+TEST(GpuLaunch, AHostImageThatDoesNotLinkIsAnInvalidImage) {
+  auto driver = fakeDriver(0);
+  CudaContext context(*driver, 0);
+  std::string image(host_image::kMagic, sizeof(host_image::kMagic));
+  std::uint64_t bytes = 5;
+  image.append(reinterpret_cast<const char *>(&bytes), sizeof(bytes));
+  image += "\x7f"
+           "ELF?";
+  try {
+    CudaModule module(context, image);
+    FAIL() << "a broken host image loaded";
+  } catch (const CudaError &error) {
+    EXPECT_EQ(error.code, 200);
+    EXPECT_NE(std::string(error.what()).find("CUDA_ERROR_INVALID_IMAGE"),
+              std::string::npos)
+        << error.what();
   }
 }
 

@@ -15,19 +15,24 @@
 // (every thread up to a barrier, then every thread to the next), or with
 // `fakeCudaSetThreads(1)` each thread on a fiber of its own that waits at
 // the barriers (FiberBlock.h), which a missing barrier cannot pass
-// unnoticed. Other kernels are not run.
+// unnoticed. Host images of the generated kernels (HostImage.h) load and
+// run too (HostImageLoader.h), and `yaspsStandInRunsHostImages` tells the
+// runtime to compile them; other kernels are not run.
 //
 //===----------------------------------------------------------------------===//
 
 #include "yasps/Runtime/GpuMultilevelKernels.h"
 
 #include "FiberBlock.h"
+#include "HostImageLoader.h"
 
 #include <cstddef>
 #include <cstdlib>
 #include <cstring>
 
 #include <cstdint>
+#include <map>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -46,7 +51,18 @@ struct ErrorText {
 constexpr ErrorText kErrors[] = {
     {0, "CUDA_SUCCESS", "no error"},
     {2, "CUDA_ERROR_OUT_OF_MEMORY", "out of memory"},
-    {100, "CUDA_ERROR_NO_DEVICE", "no CUDA-capable device is detected"}};
+    {100, "CUDA_ERROR_NO_DEVICE", "no CUDA-capable device is detected"},
+    {200, "CUDA_ERROR_INVALID_IMAGE",
+     "device kernel image is invalid (a host image did not link)"}};
+
+using yasps::runtime::test::HostImageModule;
+using yasps::runtime::test::HostKernel;
+/// Loaded host images, by the handle cuModuleLoadData gave out.
+std::map<const void *, std::unique_ptr<HostImageModule>> hostModules;
+/// Every kernel handle of a host image.
+std::map<const void *, const HostKernel *> hostKernels;
+/// Why the last host image did not load.
+std::string hostImageError;
 
 using namespace yasps::runtime::gpu;
 
@@ -171,6 +187,11 @@ void fakeCudaSkipSync(const char *kernel, int index) {
   skipKernel = kernel ? kernel : "";
   skipSync = kernel ? index : -1;
 }
+/// Whether this driver runs host images (HostImage.h): the runtime then
+/// compiles generated kernels for the host rather than for a GPU.
+int yaspsStandInRunsHostImages() { return 1; }
+/// Why the last host image did not load ("" if it did).
+const char *fakeCudaHostImageError() { return hostImageError.c_str(); }
 /// How many cuMemAlloc calls succeeded so far.
 int fakeCudaAllocations() { return allocations; }
 void fakeCudaExpectParams(int n) { expectedParams = n; }
@@ -266,13 +287,41 @@ int cuMemsetD8_v2(unsigned long long dst, unsigned char value, std::size_t n) {
 }
 int cuModuleLoadData(void **module, const void *image) {
   static int token;
+  if (yasps::runtime::host_image::isHostImage(image)) {
+    loadedImage = "host image";
+    std::unique_ptr<HostImageModule> loaded =
+        HostImageModule::load(image, hostImageError);
+    if (!loaded)
+      return 200; // CUDA_ERROR_INVALID_IMAGE
+    *module = loaded.get();
+    hostModules[loaded.get()] = std::move(loaded);
+    return 0;
+  }
   loadedImage = static_cast<const char *>(image);
   *module = &token;
   return 0;
 }
-int cuModuleUnload(void *) { return 0; }
-int cuModuleGetFunction(void **function, void *, const char *name) {
+int cuModuleUnload(void *module) {
+  auto found = hostModules.find(module);
+  if (found != hostModules.end()) {
+    for (auto it = hostKernels.begin(); it != hostKernels.end();)
+      it = found->second->owns(it->second) ? hostKernels.erase(it) : ++it;
+    hostModules.erase(found);
+  }
+  return 0;
+}
+int cuModuleGetFunction(void **function, void *module, const char *name) {
   static int token;
+  auto host = hostModules.find(module);
+  if (host != hostModules.end()) {
+    const HostKernel *kernel = host->second->kernel(name);
+    if (!kernel)
+      return 500; // CUDA_ERROR_NOT_FOUND
+    functionName = name;
+    *function = const_cast<HostKernel *>(kernel);
+    hostKernels[kernel] = kernel;
+    return 0;
+  }
   if (std::string(name) == "missing")
     return 500; // CUDA_ERROR_NOT_FOUND
   functionName = name;
@@ -294,6 +343,12 @@ int cuLaunchKernel(void *function, unsigned gx, unsigned gy, unsigned gz,
     functionName = kernel->name;
     kernel->run(params, gx, bx);
     return 0;
+  }
+  auto host = hostKernels.find(function);
+  if (host != hostKernels.end()) {
+    functionName = host->second->name;
+    const unsigned grid[3] = {gx, gy, gz}, block[3] = {bx, by, bz};
+    yasps::runtime::test::runHostKernel(*host->second, params, grid, block);
   }
   for (int i = 0; i < expectedParams; ++i)
     lastParams.push_back(*static_cast<std::uint64_t *>(params[i]));

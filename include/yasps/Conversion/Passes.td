@@ -102,4 +102,28 @@ def YaspsPreciseGpuSqrt
   let dependentDialects = ["::mlir::LLVM::LLVMDialect"];
 }
 
+def YaspsNVVMToHost : Pass<"yasps-nvvm-to-host", "::mlir::gpu::GPUModuleOp"> {
+  let summary = "Make NVVM-level GPU kernels callable on the host";
+  let description = [{
+    Rewrites a GPU module at the NVVM level (after `convert-gpu-to-nvvm`,
+    the IR that NVPTX code generation and ptxas turn into a cubin) into LLVM
+    dialect code that the host can run, for the stand-in driver's host
+    images (`yasps/Runtime/HostImage.h`):
+
+    - each kernel `@k` becomes `@k__body`, internal, with one more argument,
+      a pointer to the thread's `ThreadContext`, from which it reads what
+      it read from `%tid`, `%ntid`, `%ctaid` and `%nctaid`;
+    - a new `@k(ptr params, ptr thread)` loads each parameter through
+      cuLaunchKernel's array of pointers and calls `@k__body`;
+    - libdevice calls (`__nv_exp`, ...) call the host's math library, and
+      the correctly rounded `sqrt.rn.f32` of `yasps-precise-gpu-sqrt`
+      becomes `llvm.intr.sqrt`, which is correctly rounded on the host too.
+
+    Anything else the host cannot run (barriers, shared memory, other NVVM
+    operations or inline assembly, a libdevice function without a C
+    counterpart) is an error: generated kernels have none.
+  }];
+  let dependentDialects = ["::mlir::LLVM::LLVMDialect"];
+}
+
 #endif // YASPS_CONVERSION_PASSES_TD

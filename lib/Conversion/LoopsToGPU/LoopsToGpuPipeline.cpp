@@ -34,6 +34,16 @@ void mlir::yasps::buildLoopsToGpuKernelsPipeline(OpPassManager &pm,
   pm.addPass(createCSEPass());
 }
 
+/// The NVVM lowering of a gpu.module that cubins and host images share.
+static void addGpuToNVVMPasses(OpPassManager &modules) {
+  modules.addPass(createSCFToControlFlowPass());
+  modules.addPass(mlir::yasps::createYaspsPreciseGpuSqrt());
+  modules.addPass(createConvertGpuOpsToNVVMOps());
+  modules.addPass(createCanonicalizerPass());
+  modules.addPass(createCSEPass());
+  modules.addPass(createReconcileUnrealizedCastsPass());
+}
+
 void mlir::yasps::buildGpuSerializationPipeline(
     OpPassManager &pm, const std::vector<std::string> &chips,
     const std::string &format) {
@@ -45,16 +55,16 @@ void mlir::yasps::buildGpuSerializationPipeline(
     // chip CUDA 13 supports (see TOOLCHAIN.md).
     pm.addPass(createGpuNVVMAttachTarget(target));
   }
-  OpPassManager &modules = pm.nest<gpu::GPUModuleOp>();
-  modules.addPass(createSCFToControlFlowPass());
-  modules.addPass(createYaspsPreciseGpuSqrt());
-  modules.addPass(createConvertGpuOpsToNVVMOps());
-  modules.addPass(createCanonicalizerPass());
-  modules.addPass(createCSEPass());
-  modules.addPass(createReconcileUnrealizedCastsPass());
+  addGpuToNVVMPasses(pm.nest<gpu::GPUModuleOp>());
   GpuModuleToBinaryPassOptions binary;
   binary.compilationTarget = format;
   pm.addPass(createGpuModuleToBinaryPass(binary));
+}
+
+void mlir::yasps::buildGpuHostImagePipeline(OpPassManager &pm) {
+  OpPassManager &modules = pm.nest<gpu::GPUModuleOp>();
+  addGpuToNVVMPasses(modules);
+  modules.addPass(mlir::yasps::createYaspsNVVMToHost());
 }
 
 namespace {
@@ -70,7 +80,8 @@ struct LoopsToGpuPipelineOptions
                      "none: stop at outlined gpu.func kernels")};
   Option<std::string> format{
       *this, "format",
-      llvm::cl::desc("Serialisation format: bin (cubin) or isa (PTX)"),
+      llvm::cl::desc("Serialisation format: bin (cubin), isa (PTX) or host "
+                     "(the LLVM IR of a host image; no chips needed)"),
       llvm::cl::init("bin")};
 };
 } // namespace
@@ -81,7 +92,9 @@ void mlir::yasps::registerLoopsToGpuPipeline() {
       "Turn yasps loop kernels into GPU kernels and, given chips, binaries",
       [](OpPassManager &pm, const LoopsToGpuPipelineOptions &options) {
         buildLoopsToGpuKernelsPipeline(pm, options.threadsPerBlock);
-        if (!options.chips.empty())
+        if (options.format == "host")
+          buildGpuHostImagePipeline(pm);
+        else if (!options.chips.empty())
           buildGpuSerializationPipeline(
               pm,
               std::vector<std::string>(options.chips.begin(),

@@ -4,6 +4,8 @@
 
 #include "yasps/Conversion/LoopsToGPU/LoopsToGpuPipeline.h"
 #include "yasps/Dialect/Yasps/IR/Yasps.h"
+#include "yasps/Runtime/HostImage.h"
+#include "yasps/Target/GPU/HostImage.h"
 
 #include "mlir/Conversion/ArithToLLVM/ArithToLLVM.h"
 #include "mlir/Conversion/ControlFlowToLLVM/ControlFlowToLLVM.h"
@@ -230,17 +232,31 @@ mlir::yasps::compileGpuKernels(ModuleOp module,
   OwningOpRef<ModuleOp> device = gatherDeviceCode(*kernels);
   st.lowerSeconds = secondsSince(start);
 
-  // 2. The binaries wanted: cubins per chip, PTX of the newest.
-  std::vector<GpuBinary> wanted;
+  // 2. The binaries wanted: cubins per chip, PTX of the newest, and a host
+  // image where the chip "host" is asked for.
+  namespace host_image = ::yasps::runtime::host_image;
+  std::vector<std::string> chips;
+  bool hostImage = false;
   for (const std::string &chip : options.chips)
+    if (chip == host_image::kChip)
+      hostImage = true;
+    else
+      chips.push_back(chip);
+  std::vector<GpuBinary> wanted;
+  for (const std::string &chip : chips)
     wanted.push_back({chip, "cubin", ""});
   std::string newest =
-      *std::max_element(options.chips.begin(), options.chips.end(),
-                        [](const std::string &a, const std::string &b) {
-                          return chipNumber(a) < chipNumber(b);
-                        });
-  if (options.keepPtx)
+      chips.empty()
+          ? std::string()
+          : *std::max_element(chips.begin(), chips.end(),
+                              [](const std::string &a, const std::string &b) {
+                                return chipNumber(a) < chipNumber(b);
+                              });
+  bool keepPtx = options.keepPtx && !chips.empty();
+  if (keepPtx)
     wanted.push_back({newest, "ptx", ""});
+  if (hostImage)
+    wanted.push_back({host_image::kChip, host_image::kFormat, ""});
   std::string extra = std::string(kGpuCodegenVersion) + "\n";
   for (const GpuBinary &binary : wanted)
     extra += binary.chip + "." + binary.format + "\n";
@@ -254,16 +270,25 @@ mlir::yasps::compileGpuKernels(ModuleOp module,
       return library;
     }
 
-  // 3. NVVM, PTX and cubins (ptxas).
-  auto cubins = serialize(*device, options.chips, "bin");
-  if (!cubins)
-    return cubins.takeError();
-  library->binaries = std::move(*cubins);
-  if (options.keepPtx) {
+  // 3. NVVM, PTX and cubins (ptxas); the host image.
+  if (!chips.empty()) {
+    auto cubins = serialize(*device, chips, "bin");
+    if (!cubins)
+      return cubins.takeError();
+    library->binaries = std::move(*cubins);
+  }
+  if (keepPtx) {
     auto ptx = serialize(*device, {newest}, "isa");
     if (!ptx)
       return ptx.takeError();
     library->binaries.insert(library->binaries.end(), ptx->begin(), ptx->end());
+  }
+  if (hostImage) {
+    auto image = compileHostImage(*device);
+    if (!image)
+      return image.takeError();
+    library->binaries.push_back(
+        {host_image::kChip, host_image::kFormat, std::move(*image)});
   }
   st.serializeSeconds = secondsSince(serializeStart);
   if (!options.cacheDir.empty())

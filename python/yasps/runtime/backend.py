@@ -45,12 +45,17 @@ class GpuStatus:
     reason: str
     #: (name, compute capability such as "sm_90", memory in bytes) per device.
     devices: Tuple[Tuple[str, str, int], ...]
+    #: Whether the driver is the test stand-in that runs host images of the
+    #: generated kernels (``yasps/Runtime/HostImage.h``): the GPU backend
+    #: then compiles them for the host, not for the device's chip.
+    host_images: bool = False
 
 
 def gpu_status() -> GpuStatus:
     """Loads the CUDA driver (once per process) and reports on it."""
-    usable, reason, devices = native().cuda_status()
-    return GpuStatus(usable, reason, tuple(tuple(d) for d in devices))
+    usable, reason, devices, host_images = native().cuda_status()
+    return GpuStatus(usable, reason, tuple(tuple(d) for d in devices),
+                     host_images)
 
 
 def gpu_toolchain_missing() -> str:

@@ -36,7 +36,12 @@ class GpuSession:
     def __init__(self, ordinal: int = 0):
         self._native = native()
         self.device = self._native.GpuDevice(ordinal)
-        self.chip = gpu_status().devices[ordinal][1]
+        status = gpu_status()
+        self.chip = status.devices[ordinal][1]
+        #: what kernels are compiled for: the device's chip, or "host" for
+        #: the test stand-in driver, which runs host images of the kernels
+        #: (yasps/Runtime/HostImage.h)
+        self.target = "host" if status.host_images else self.chip
         self._libraries: Dict[Tuple[str, str, str], GpuKernels] = {}
         #: the compiled library of each kernel, by (IR, pipeline, path)
         self._library_of: Dict[Tuple[str, str, str], GpuKernels] = {}
@@ -67,7 +72,7 @@ class GpuSession:
                    if (ir, pipeline, p) not in self._library_of]
         if missing:
             library = compile_ir(ir, missing, name, pipeline,
-                                 chips=(self.chip,), keep_ptx=False)
+                                 chips=(self.target,), keep_ptx=False)
             for kernel in library.kernels:
                 self._library_of[(ir, pipeline, kernel.attribute)] = library
             stats = dict(library.stats, from_memory=False)
@@ -85,7 +90,7 @@ class GpuSession:
         key = kernels.stats.get("key") or str(id(kernels))
         if key not in self._modules:
             chip, fmt = self._native.gpu_select_image(list(kernels.binaries),
-                                                      self.chip)
+                                                      self.target)
             self._modules[key] = self._native.gpu_load_module(
                 self.device, kernels.binaries[(chip, fmt)])
         return self._modules[key]

@@ -2,7 +2,8 @@
 //
 // The GPU side of the compiler: the loop kernels of yasps-lower-to-loops
 // (one scf.parallel over instances) become gpu.func kernels, one GPU thread
-// per instance, then NVVM and a binary per requested compute capability.
+// per instance, then NVVM and a binary per requested compute capability,
+// or a host image for the stand-in driver.
 //
 //===----------------------------------------------------------------------===//
 
@@ -33,6 +34,12 @@ void buildLoopsToGpuKernelsPipeline(OpPassManager &pm, int64_t threadsPerBlock);
 void buildGpuSerializationPipeline(OpPassManager &pm,
                                    const std::vector<std::string> &chips,
                                    const std::string &format);
+
+/// Adds the passes that lower every gpu.module to NVVM, as the
+/// serialisation does, and then make its kernels callable on the host
+/// (yasps-nvvm-to-host): the IR of a host image (HostImage.h), which
+/// lib/Target/GPU/HostImage.cpp compiles for the host CPU.
+void buildGpuHostImagePipeline(OpPassManager &pm);
 
 /// Registers the `yasps-loops-to-gpu` pass pipeline (both of the above) for
 /// yasps-opt.

@@ -6,6 +6,8 @@
 // serialised by gpu-module-to-binary into a cubin per compute capability
 // (ptxas from the CUDA toolkit) plus PTX for newer devices. Binaries are
 // cached on disk like CPU objects. Nothing here needs a GPU or a driver.
+// Asked for the chip "host", it compiles the same NVVM-level IR for the host
+// CPU instead (HostImage.h), for tests on machines without a GPU.
 //
 //===----------------------------------------------------------------------===//
 
@@ -35,7 +37,7 @@ struct GpuKernel : KernelDescription {
 /// A serialised gpu.module: a cubin for one chip, or PTX.
 struct GpuBinary {
   std::string chip;   ///< e.g. "sm_90"
-  std::string format; ///< "cubin" or "ptx"
+  std::string format; ///< "cubin", "ptx" or "host" (a host image)
   std::string bytes;
 };
 
@@ -45,7 +47,8 @@ struct GpuKernelLibrary {
 };
 
 struct GpuCompileOptions {
-  /// Compute capabilities to build cubins for.
+  /// Compute capabilities to build cubins for; "host" asks for a host
+  /// image instead (HostImage.h), which the stand-in driver runs.
   std::vector<std::string> chips = {"sm_80", "sm_90"};
   /// Also emit PTX for the newest chip, which the driver compiles for
   /// devices newer than every cubin.

@@ -82,6 +82,10 @@ public:
   void requireUsable() const;
 
   const std::vector<CudaDeviceInfo> &devices() const { return deviceList; }
+  /// Whether the library is a stand-in that runs host images of the
+  /// generated kernels (yasps/Runtime/HostImage.h) instead of cubins: it
+  /// exports `yaspsStandInRunsHostImages`, which returns nonzero.
+  bool runsHostImages() const { return hostImages; }
 
   /// Throws a CudaError for a failed `result` of the call named `call`:
   /// "cuModuleLoadData failed: CUDA_ERROR_INVALID_IMAGE (device kernel
@@ -126,6 +130,7 @@ private:
   void *handle = nullptr;
   std::string reason;
   std::vector<CudaDeviceInfo> deviceList;
+  bool hostImages = false;
 };
 
 } // namespace yasps::runtime

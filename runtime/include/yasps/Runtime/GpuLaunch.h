@@ -37,7 +37,8 @@ struct GpuImage {
 
 /// The image a device of compute capability `chip` runs: its own cubin, else
 /// a cubin of an older chip of the same major version (binary compatible),
-/// else PTX for an older or equal chip (which the driver compiles). Throws
+/// else PTX for an older or equal chip (which the driver compiles); for the
+/// stand-in driver's chip "host", the host image (HostImage.h). Throws
 /// CudaError naming what there is when nothing fits.
 const GpuImage &selectGpuImage(const std::vector<GpuImage> &images,
                                const std::string &chip);

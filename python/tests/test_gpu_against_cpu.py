@@ -1,0 +1,180 @@
+"""The generated GPU kernels against the CPU backend: compute(), energies'
+values, gradients, Hessians and projected Hessians, placement indices
+(through assembly) and Newton directions, in f64 and f32.
+
+These tests need a usable GPU backend. On a machine with a GPU they run on
+it. Without one, ``test_gpu_runtime.py::test_the_gpu_comparisons_pass_on_
+the_stand_in_driver`` runs this file in a subprocess against the stand-in
+driver (runtime/test/FakeCuda.cpp), which loads host images of the same
+kernels: their NVVM-level IR, the IR that becomes the cubins, compiled for
+the host (``yasps-nvvm-to-host``) and run block by block and thread by
+thread through cuLaunchKernel's parameters. Only NVPTX code generation and
+ptxas are left out.
+"""
+
+import numpy as np
+import pytest
+
+from conftest import point_over_triangle, running_example
+from test_minimize import cloth_patch, mixed_scene, soft_box
+
+import yasps
+import yasps.runtime.gpu as gpu_runtime
+from yasps import energies as E
+from yasps.ir.emit import KernelIR
+from yasps.runtime.backend import gpu_toolchain_missing
+
+STATUS = yasps.gpu_status()
+pytestmark = pytest.mark.skipif(
+    not STATUS.usable or bool(gpu_toolchain_missing()),
+    reason=f"no usable GPU backend: {STATUS.reason or gpu_toolchain_missing()}")
+
+#: Largest difference from the CPU, relative to the largest CPU value: f64
+#: kernels compute what the CPU's do, in another order at most (the CPU's
+#: are vectorised); f32 ones round every operation to 24 bits, and their
+#: differences grow with the depth of the expression (the projected
+#: Hessians' eigenvectors, docs/accuracy.md).
+TOLERANCE = {"f64": 1e-12, "f32": 1e-4}
+
+
+def on(backend: str, monkeypatch, work):
+    monkeypatch.setattr(yasps.config, "backend", backend)
+    return work()
+
+
+def assert_close(cpu, gpu, tolerance: float, what: str) -> None:
+    cpu, gpu = np.asarray(cpu, dtype=float), np.asarray(gpu, dtype=float)
+    assert cpu.shape == gpu.shape, what
+    scale = max(float(np.abs(cpu).max(initial=0.0)), 1e-300)
+    error = float(np.abs(gpu - cpu).max(initial=0.0)) / scale
+    assert error <= tolerance, f"{what}: GPU differs from CPU by {error:.2e}"
+
+
+def assert_compute_matches(attribute, monkeypatch, tolerance=1e-12):
+    cpu = on("cpu", monkeypatch, lambda: attribute.compute().value)
+    result = on("gpu", monkeypatch, attribute.compute)
+    assert result.stats["backend"] == "gpu"
+    assert_close(cpu, result.value, tolerance, attribute.describe())
+
+
+def test_compute_matches_the_cpu(monkeypatch):
+    s = running_example()
+    pos = s.bunnies.vertices["position"]
+    assert_compute_matches(pos, monkeypatch)
+    assert_compute_matches(s.bunny_affine.tets["positions"], monkeypatch)
+    assert_compute_matches((pos.dot(pos) + 1.0).log(), monkeypatch)
+
+
+def test_projection_matches_the_cpu(monkeypatch):
+    rng = np.random.default_rng(3)
+    s = yasps.scene("proj")
+    p = s.addMesh("m").addPrimitive("p", numInstances=1000)
+    h = p.addAttribute("h", rows=12, cols=12)
+    M = rng.normal(size=(1000, 12, 12))
+    h.updateValue(M + np.transpose(M, (0, 2, 1)))
+    for method in ("clamp", "abs"):
+        assert_compute_matches(h.project(method), monkeypatch)
+
+
+def fixed_corotated_box():
+    """soft_box with fixed corotated elasticity (singular_value_sum)."""
+    s = soft_box()
+    t = s.m.t
+    F = E.deformation_gradient(t["c"], t["inv"])
+    s.addEnergy(t.addAttribute("fcr", computed_attribute=E.fixed_corotated(
+        F, 10.0, 100.0, t["vol"])))
+    return s
+
+
+def contact_scene():
+    """A point 5 mm over a triangle, within the barrier's reach."""
+    stepper, _, contact = point_over_triangle("near", 0.005)
+    contact.update()
+    return stepper.scene
+
+
+SCENES = {"soft box": soft_box, "fixed corotated": fixed_corotated_box,
+          "mixed": lambda: mixed_scene([[0, 3], [1, 4]])[0],
+          "cloth": cloth_patch, "contact": contact_scene}
+
+
+@pytest.mark.parametrize("precision", ["f64", "f32"])
+@pytest.mark.parametrize("name", list(SCENES))
+def test_energy_derivatives_match_the_cpu(name, precision, monkeypatch):
+    """Every energy's values, gradients, Hessians and projected Hessians:
+    stable Neo-Hookean, fixed corotated, inertia, affine orthogonality
+    through a UNION, Baraff-Witkin, dihedral bending and the IPC barrier."""
+    monkeypatch.setattr(yasps.config, "precision", precision)
+    monkeypatch.setattr(yasps.config, "gpu_derivatives", True)
+    s = SCENES[name]()
+    checked = 0
+    for energy in s.energies:
+        if energy.owner.numInstances == 0:
+            continue
+        cpu = on("cpu", monkeypatch, lambda: s.energyDerivatives(energy))
+        gpu = on("gpu", monkeypatch, lambda: s.energyDerivatives(energy))
+        what = f"{energy.describe()} ({precision})"
+        assert_close(cpu.value, gpu.value, TOLERANCE[precision],
+                     f"value of {what}")
+        assert_close(cpu.gradient, gpu.gradient, TOLERANCE[precision],
+                     f"gradient of {what}")
+        if cpu.hessian is not None:
+            assert_close(cpu.hessian, gpu.hessian, TOLERANCE[precision],
+                         f"Hessian of {what}")
+        assert_close(cpu.projectedHessian, gpu.projectedHessian,
+                     TOLERANCE[precision], f"projected Hessian of {what}")
+        checked += 1
+    assert checked >= 1
+
+
+def newton_directions(monkeypatch, precision: str):
+    monkeypatch.setattr(yasps.config, "precision", precision)
+    monkeypatch.setattr(yasps.config, "gpu_derivatives", True)
+    for separate in (False, True):
+        monkeypatch.setattr(yasps.config, "separate_reduced_hessians", separate)
+        for scene in (soft_box(), mixed_scene([[0, 3], [1, 4]])[0],
+                      cloth_patch()):
+            directions = {}
+            for backend in ("cpu", "gpu"):
+                out = on(backend, monkeypatch,
+                         lambda: scene.minimizeEnergy(tolerance=1e-12))
+                assert scene.lastSolve["backend"] == backend
+                directions[backend] = np.concatenate(
+                    [a.reshape(-1) for a in out])
+            assert scene.lastSolve["energiesDifferentiatedOnGpu"] > 0
+            yield scene, separate, directions
+
+
+@pytest.mark.parametrize("precision", ["f64", "f32"])
+def test_newton_directions_match_the_cpu(precision, monkeypatch):
+    """minimizeEnergy with derivatives, placement indices, assembly and PCG
+    on the GPU, with and without separated reduced Hessians. PCG to 1e-12
+    amplifies the kernels' round-off by the system's condition number."""
+    tolerance = {"f64": 1e-9, "f32": 1e-3}[precision]
+    for scene, separate, d in newton_directions(monkeypatch, precision):
+        assert_close(d["cpu"], d["gpu"], tolerance,
+                     f"direction of {scene.name} (separate {separate})")
+
+
+def test_a_broken_generated_kernel_is_caught(monkeypatch):
+    """The comparisons above would see a kernel that computes something
+    else: here the GPU's stable Neo-Hookean is compiled from IR whose
+    lambda / 2 (the constant 50 of lambda = 100) was changed to 55."""
+    compile_ir = gpu_runtime.compile_ir
+
+    def broken(ir, *args, **kwargs):
+        assert ir.count("dense<50.0>") == 1
+        changed = KernelIR(ir.replace("dense<50.0>", "dense<55.0>"),
+                           ir.locations)
+        return compile_ir(changed, *args, **kwargs)
+
+    monkeypatch.setattr(gpu_runtime, "compile_ir", broken)
+    monkeypatch.setattr(yasps.config, "gpu_derivatives", True)
+    s = soft_box()
+    # IR of its own: kernels compiled earlier in this process are not reused.
+    s.m.t.addConstant("unused", rows=1)
+    energy = s.m.t["snh"]
+    cpu = on("cpu", monkeypatch, lambda: s.energyDerivatives(energy))
+    gpu = on("gpu", monkeypatch, lambda: s.energyDerivatives(energy))
+    with pytest.raises(AssertionError, match="GPU differs from CPU"):
+        assert_close(cpu.gradient, gpu.gradient, TOLERANCE["f64"], "gradient")
