@@ -16,11 +16,14 @@ import numpy as np
 import pytest
 
 from conftest import point_over_triangle, running_example
+from test_contact import rotation, two_soft_boxes
 from test_minimize import cloth_patch, mixed_scene, soft_box
 
 import yasps
 import yasps.runtime.gpu as gpu_runtime
+from yasps.sim import box_tet_mesh
 from yasps import energies as E
+from yasps.contact import Contact, surface_of
 from yasps.ir.emit import KernelIR
 from yasps.runtime.backend import gpu_toolchain_missing
 
@@ -29,12 +32,12 @@ pytestmark = pytest.mark.skipif(
     not STATUS.usable or bool(gpu_toolchain_missing()),
     reason=f"no usable GPU backend: {STATUS.reason or gpu_toolchain_missing()}")
 
-#: Largest difference from the CPU, relative to the largest CPU value: f64
-#: kernels compute what the CPU's do, in another order at most (the CPU's
-#: are vectorised); f32 ones round every operation to 24 bits, and their
-#: differences grow with the depth of the expression (the projected
-#: Hessians' eigenvectors, docs/accuracy.md).
-TOLERANCE = {"f64": 1e-12, "f32": 1e-4}
+#: Largest difference from the CPU, relative to the largest CPU value. The
+#: host images gave the CPU's values bit for bit in f64 and, but for one
+#: barrier Hessian at 1.3e-8, in f32 (the CPU's kernels are vectorised and
+#: may contract or reorder differently); a GPU's libdevice and FMA
+#: contraction may differ more, within these bounds.
+TOLERANCE = {"f64": 1e-12, "f32": 1e-6}
 
 
 def on(backend: str, monkeypatch, work):
@@ -93,9 +96,27 @@ def contact_scene():
     return stepper.scene
 
 
+def boxes_in_contact():
+    """Two soft boxes within dhat, one turned: point-edge, point-triangle
+    and edge-edge barriers, and lagged friction on their pairs."""
+    verts, tets = box_tet_mesh(2, 0.5)
+    faces = surface_of(tets)
+    turned = (verts - 0.25) @ rotation(0.3, [1, 2, 0.5]).T + 0.25
+    start = turned + [0.1, 0.05, 0.5 - turned[:, 2].min() + 0.02]
+    s, _, (xa, xb), union = two_soft_boxes("touching", verts, start)
+    contact = Contact(s, union, faces=np.concatenate([faces, faces + len(verts)]),
+                      dhat=0.05, kappa=3.0, friction=0.3, eps_v=0.1)
+    s.addMinimizeTarget([xa, xb])
+    contact.update(lag=True, dt=0.01)
+    xb.updateValue(start + 1e-3)
+    contact.update()
+    return s
+
+
 SCENES = {"soft box": soft_box, "fixed corotated": fixed_corotated_box,
           "mixed": lambda: mixed_scene([[0, 3], [1, 4]])[0],
-          "cloth": cloth_patch, "contact": contact_scene}
+          "cloth": cloth_patch, "point over triangle": contact_scene,
+          "boxes in contact": boxes_in_contact}
 
 
 @pytest.mark.parametrize("precision", ["f64", "f32"])
@@ -103,11 +124,12 @@ SCENES = {"soft box": soft_box, "fixed corotated": fixed_corotated_box,
 def test_energy_derivatives_match_the_cpu(name, precision, monkeypatch):
     """Every energy's values, gradients, Hessians and projected Hessians:
     stable Neo-Hookean, fixed corotated, inertia, affine orthogonality
-    through a UNION, Baraff-Witkin, dihedral bending and the IPC barrier."""
+    through a UNION, Baraff-Witkin, dihedral bending, the IPC barrier of
+    every pair kind and lagged friction."""
     monkeypatch.setattr(yasps.config, "precision", precision)
     monkeypatch.setattr(yasps.config, "gpu_derivatives", True)
     s = SCENES[name]()
-    checked = 0
+    checked = []
     for energy in s.energies:
         if energy.owner.numInstances == 0:
             continue
@@ -123,8 +145,11 @@ def test_energy_derivatives_match_the_cpu(name, precision, monkeypatch):
                          f"Hessian of {what}")
         assert_close(cpu.projectedHessian, gpu.projectedHessian,
                      TOLERANCE[precision], f"projected Hessian of {what}")
-        checked += 1
-    assert checked >= 1
+        checked.append(energy.owner.name)
+    assert checked, "no energy has instances"
+    if name == "boxes in contact":
+        assert {"ev", "fv", "ee", "friction3", "friction4"} <= set(checked), \
+            checked
 
 
 def newton_directions(monkeypatch, precision: str):
@@ -148,9 +173,11 @@ def newton_directions(monkeypatch, precision: str):
 @pytest.mark.parametrize("precision", ["f64", "f32"])
 def test_newton_directions_match_the_cpu(precision, monkeypatch):
     """minimizeEnergy with derivatives, placement indices, assembly and PCG
-    on the GPU, with and without separated reduced Hessians. PCG to 1e-12
-    amplifies the kernels' round-off by the system's condition number."""
-    tolerance = {"f64": 1e-9, "f32": 1e-3}[precision]
+    on the GPU, with and without separated reduced Hessians. The GPU's PCG
+    sums in another order, and a solve to 1e-12 amplifies that and the
+    kernels' round-off by the system's condition number (measured: 1e-10 in
+    f64, 2.9e-6 in f32 on the mixed scene)."""
+    tolerance = {"f64": 1e-9, "f32": 1e-4}[precision]
     for scene, separate, d in newton_directions(monkeypatch, precision):
         assert_close(d["cpu"], d["gpu"], tolerance,
                      f"direction of {scene.name} (separate {separate})")
