@@ -4,8 +4,9 @@ timing on a GPU machine without this toolchain.
 
     python3 bench/gpu_kit.py KIT
 
-Writes two kits under KIT, each with the kernels' cubins (sm_80, sm_90) and
-PTX, the launch record ``kernels.txt``, the scene's input buffers and the
+Writes two kits under KIT, each with the kernels' cubins (sm_80, sm_90),
+PTX and host image (which the stand-in driver runs in a dry run of
+scripts/device_check.sh), the launch record ``kernels.txt``, the scene's input buffers and the
 CPU kernels' values of the first instances (.npy):
 
 - ``snh``: gradient, Hessian and projected Hessian of stable Neo-Hookean on
@@ -70,7 +71,8 @@ def write_kit(kit: Path, scene, kernels: List[Tuple[str, str, int, np.ndarray]],
     kit.mkdir(parents=True, exist_ok=True)
     compiled = yasps.compiler.gpu.compile_ir(
         emit_scene(scene, locations=True), [p for _, p, _, _ in kernels],
-        scene.name, DIFFERENTIATION_PIPELINE, chips=("sm_80", "sm_90"))
+        scene.name, DIFFERENTIATION_PIPELINE,
+        chips=("sm_80", "sm_90", "host"))
     lines = []
     for (chip, fmt), data in sorted(compiled.binaries.items()):
         name = f"kernels_{chip}.{fmt}"

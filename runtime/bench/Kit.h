@@ -19,6 +19,7 @@
 #define YASPS_RUNTIME_BENCH_KIT_H
 
 #include "yasps/Runtime/GpuLaunch.h"
+#include "yasps/Runtime/HostImage.h"
 
 #include "BenchMain.h"
 
@@ -155,12 +156,18 @@ class KitRunner {
 public:
   KitRunner(const Kit &kit, const CudaContext &context)
       : kit(kit), ctx(context),
-        image(selectGpuImage(
-            kit.images,
-            context.driver().devices().at(context.ordinal()).chip())),
+        image(selectGpuImage(kit.images, targetOf(context))),
         module(context, *image.bytes) {}
 
   const GpuImage &selectedImage() const { return image; }
+
+  /// What the kit's images are chosen for: the device's chip, or the host
+  /// image where the driver is the stand-in that runs those (a dry run).
+  static std::string targetOf(const CudaContext &context) {
+    if (context.driver().runsHostImages())
+      return host_image::kChip;
+    return context.driver().devices().at(context.ordinal()).chip();
+  }
 
   /// Launches the kernel on all its instances (asynchronously).
   void launch(const KitKernel &kernel) {

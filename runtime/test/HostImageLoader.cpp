@@ -38,12 +38,21 @@ std::unique_ptr<HostImageModule> HostImageModule::load(const void *image,
   auto session = llvm::orc::LLJITBuilder().create();
   if (!session)
     return fail(session.takeError());
-  // The kernels call the host's math library (sqrt, exp, ...).
-  auto process = llvm::orc::DynamicLibrarySearchGenerator::GetForCurrentProcess(
-      (*session)->getDataLayout().getGlobalPrefix());
-  if (!process)
-    return fail(process.takeError());
-  (*session)->getMainJITDylib().addGenerator(std::move(*process));
+  // The kernels call the host's math library (sqrt, exp, ...): from the
+  // process, or from libm itself where the process has not loaded it
+  // globally (a tool that dlopens this driver with RTLD_LOCAL).
+  const char prefix = (*session)->getDataLayout().getGlobalPrefix();
+  for (const char *library :
+       {static_cast<const char *>(nullptr), "libm.so.6"}) {
+    auto generator =
+        library
+            ? llvm::orc::DynamicLibrarySearchGenerator::Load(library, prefix)
+            : llvm::orc::DynamicLibrarySearchGenerator::GetForCurrentProcess(
+                  prefix);
+    if (!generator)
+      return fail(generator.takeError());
+    (*session)->getMainJITDylib().addGenerator(std::move(*generator));
+  }
   if (llvm::Error err = (*session)->addObjectFile(std::move(object)))
     return fail(std::move(err));
   std::unique_ptr<HostImageModule> module(new HostImageModule());
