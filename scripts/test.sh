@@ -2,8 +2,9 @@
 # The test command: installs what is missing, builds, and runs every test
 # (lit/FileCheck compiler tests, runtime unit tests, Python tests), then the
 # robustness checks: the same lit and unit tests in the sanitizer build
-# (ASan + UBSan), the Python tests of inputs and values on its extensions,
-# and a bounded fuzz run (docs/robustness.md). FUZZ_SECONDS (default 120)
+# (ASan + UBSan), the GPU solver's unit tests under ThreadSanitizer, the
+# Python tests of inputs and values on the ASan build's extensions, and a
+# bounded fuzz run (docs/robustness.md). FUZZ_SECONDS (default 120)
 # bounds the fuzz run; 0 skips it.
 set -euo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
@@ -25,6 +26,7 @@ YASPS_BUILD_DIR="$build" python3 -m pytest -q -n "${PYTEST_WORKERS:-$(nproc)}" \
   --dist worksteal "$root/python/tests"
 
 bash "$root/scripts/sanitize.sh"
+bash "$root/scripts/tsan.sh"
 
 echo "== pytest under the sanitizers: inputs, values and errors"
 # The extensions of the sanitizer build need the ASan runtime loaded first;

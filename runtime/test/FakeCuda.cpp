@@ -15,9 +15,11 @@
 // (every thread up to a barrier, then every thread to the next), or with
 // `fakeCudaSetThreads(1)` each thread on a fiber of its own that waits at
 // the barriers (FiberBlock.h), which a missing barrier cannot pass
-// unnoticed. Host images of the generated kernels (HostImage.h) load and
-// run too (HostImageLoader.h), and `yaspsStandInRunsHostImages` tells the
-// runtime to compile them; other kernels are not run.
+// unnoticed, or with `fakeCudaSetThreads(2)` each on an OS thread, all at
+// once (OsThreadTeam.h), for ThreadSanitizer. Host images of the generated
+// kernels (HostImage.h) load and run too (HostImageLoader.h), and
+// `yaspsStandInRunsHostImages` tells the runtime to compile them; other kernels
+// are not run.
 //
 //===----------------------------------------------------------------------===//
 
@@ -25,6 +27,7 @@
 
 #include "FiberBlock.h"
 #include "HostImageLoader.h"
+#include "OsThreadTeam.h"
 
 #include <cstddef>
 #include <cstdlib>
@@ -66,45 +69,53 @@ std::string hostImageError;
 
 using namespace yasps::runtime::gpu;
 
-using ThreadBlock = yasps::runtime::test::FiberBlock<SharedMemory>;
+using ThreadBlock = yasps::runtime::test::ThreadedBlock<SharedMemory>;
 
-/// Whether a block's threads run as fibers that meet at barriers
-/// (FiberBlock.h; `fakeCudaSetThreads`, or YASPS_FAKE_CUDA_THREADS=1)
-/// rather than phase by phase.
-int threadsAsFibers = -1;
+/// How a block's threads run (`fakeCudaSetThreads`, or
+/// YASPS_FAKE_CUDA_THREADS): 0 phase by phase, 1 each thread on a fiber
+/// (FiberBlock.h), 2 each on an OS thread (OsThreadTeam.h); -1 not read yet.
+int threadMode = -1;
 /// The barrier that threads of `skipKernel` do not wait at, or -1
 /// (`fakeCudaSkipSync`): a missing __syncthreads, for tests that it shows.
 std::string skipKernel;
 int skipSync = -1;
 
-bool fibers() {
-  if (threadsAsFibers < 0) {
+/// The scheduler of blocks whose threads run the body themselves, or null
+/// for phase by phase. One of each kind serves every kernel: the OS thread
+/// team keeps its threads between launches.
+yasps::runtime::test::BlockScheduler *blockScheduler() {
+  if (threadMode < 0) {
     const char *value = std::getenv("YASPS_FAKE_CUDA_THREADS");
-    threadsAsFibers = value && std::strcmp(value, "1") == 0;
+    threadMode = value ? std::atoi(value) : 0;
   }
-  return threadsAsFibers == 1;
+  static yasps::runtime::test::FiberScheduler fibers;
+  static yasps::runtime::test::OsThreadTeam team;
+  return threadMode == 1
+             ? static_cast<yasps::runtime::test::BlockScheduler *>(&fibers)
+         : threadMode == 2 ? &team
+                           : nullptr;
 }
 
 /// Runs a solver kernel's body over `grid` blocks of `threads` threads:
-/// each block phase by phase, or its threads as fibers.
+/// each block phase by phase, or its threads through the whole body.
 template <typename Args, void (*Body)(HostBlock &, const Args &),
           void (*ThreadBody)(ThreadBlock &, const Args &)>
 void emulate(void **params, unsigned grid, unsigned threads) {
   const Args &args = *static_cast<const Args *>(params[0]);
   static SharedMemory shared;
-  if (!fibers()) {
+  yasps::runtime::test::BlockScheduler *scheduler = blockScheduler();
+  if (!scheduler) {
     for (unsigned b = 0; b < grid; ++b) {
       HostBlock block{&shared, b, grid, static_cast<int>(threads)};
       Body(block, args);
     }
     return;
   }
-  static yasps::runtime::test::FiberScheduler scheduler;
   const int skip = functionName == skipKernel ? skipSync : -1;
   for (unsigned b = 0; b < grid; ++b)
-    scheduler.run(static_cast<int>(threads), [&](int t) {
-      ThreadBlock block{&shared, b,          grid, static_cast<int>(threads),
-                        t,       &scheduler, skip};
+    scheduler->run(static_cast<int>(threads), [&](int t) {
+      ThreadBlock block{&shared, b,         grid, static_cast<int>(threads),
+                        t,       scheduler, skip};
       ThreadBody(block, args);
     });
 }
@@ -178,9 +189,10 @@ const ErrorText *findError(int code) {
 
 extern "C" {
 void fakeCudaSetMode(int m) { mode = m; }
-/// 1: a block's threads run as fibers meeting at barriers; 0: phase by
-/// phase (the default, unless YASPS_FAKE_CUDA_THREADS=1).
-void fakeCudaSetThreads(int on) { threadsAsFibers = on ? 1 : 0; }
+/// How a block's threads run: 0 phase by phase (the default, unless
+/// YASPS_FAKE_CUDA_THREADS says otherwise), 1 as fibers meeting at
+/// barriers, 2 as OS threads meeting at barriers.
+void fakeCudaSetThreads(int mode) { threadMode = mode; }
 /// With fibers, every thread of `kernel` skips its barrier number `index`
 /// (from 0); a null kernel or index < 0 skips none.
 void fakeCudaSkipSync(const char *kernel, int index) {

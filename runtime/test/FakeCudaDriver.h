@@ -36,10 +36,17 @@ template <typename Function> Function *fakeCudaFunction(const char *name) {
   return function;
 }
 
-/// Loads the fake driver in `mode` (see FakeCuda.cpp); with `threads`, it
-/// runs a block's threads as fibers that meet at barriers (FiberBlock.h),
-/// else phase by phase.
-inline std::unique_ptr<CudaDriver> fakeDriver(int mode, bool threads = false) {
+/// How the stand-in runs a block of a solver kernel (fakeCudaSetThreads).
+enum class BlockThreads {
+  Phases = 0,    ///< every thread up to a barrier, then to the next
+  Fibers = 1,    ///< each thread on a fiber, meeting at barriers
+  OsThreads = 2, ///< each thread on an OS thread, all at once
+};
+
+/// Loads the fake driver in `mode` (see FakeCuda.cpp), running blocks as
+/// `threads` says.
+inline std::unique_ptr<CudaDriver>
+fakeDriver(int mode, BlockThreads threads = BlockThreads::Phases) {
   void *fake = dlopen(fakeCudaPath(), RTLD_NOW | RTLD_LOCAL);
   EXPECT_NE(fake, nullptr) << dlerror();
   auto setMode =
@@ -47,7 +54,7 @@ inline std::unique_ptr<CudaDriver> fakeDriver(int mode, bool threads = false) {
   setMode(mode);
   auto setThreads =
       reinterpret_cast<void (*)(int)>(dlsym(fake, "fakeCudaSetThreads"));
-  setThreads(threads ? 1 : 0);
+  setThreads(static_cast<int>(threads));
   auto driver = std::make_unique<CudaDriver>(fakeCudaPath());
   dlclose(fake);
   return driver;

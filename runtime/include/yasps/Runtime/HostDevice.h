@@ -4,8 +4,8 @@
 // the host code that checks them share their per-thread bodies. This header
 // gives those bodies what differs between the two compilations: the
 // function qualifiers, the few math functions they use and atomic addition.
-// On the host, atomicAddDouble is a plain addition: the host runs a
-// kernel's threads one after another (see GpuSolverKernels.h).
+// On the host, atomicAddDouble is atomic too: the tests' stand-in driver
+// may run a block's threads on concurrent OS threads (OsThreadTeam.h).
 //
 //===----------------------------------------------------------------------===//
 
@@ -43,12 +43,18 @@ YASPS_HD inline double hdFabs(double x) { return x < 0.0 ? -x : x; }
 /// semantics: neither compilation uses fast-math.
 YASPS_HD inline bool hdIsFinite(double x) { return x - x == 0.0; }
 
-/// *target += value; atomic on the GPU.
+/// *target += value, atomically.
 YASPS_HD inline void atomicAddDouble(double *target, double value) {
 #if defined(__CUDA_ARCH__)
   atomicAdd(target, value);
 #else
-  *target += value;
+  double expected;
+  __atomic_load(target, &expected, __ATOMIC_RELAXED);
+  double desired = expected + value;
+  while (!__atomic_compare_exchange(target, &expected, &desired,
+                                    /*weak=*/true, __ATOMIC_RELAXED,
+                                    __ATOMIC_RELAXED))
+    desired = expected + value;
 #endif
 }
 
