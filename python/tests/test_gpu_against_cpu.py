@@ -1,6 +1,6 @@
 """The generated GPU kernels against the CPU backend: compute(), energies'
-values, gradients, Hessians and projected Hessians, placement indices
-(through assembly) and Newton directions, in f64 and f32.
+values, gradients, Hessians and projected Hessians, the systems assembled
+through their placement indices, and Newton directions, in f64 and f32.
 
 These tests need a usable GPU backend. On a machine with a GPU they run on
 it. Without one, ``test_gpu_runtime.py::test_the_gpu_comparisons_pass_on_
@@ -25,6 +25,8 @@ from yasps.sim import box_tet_mesh
 from yasps import energies as E
 from yasps.contact import Contact, surface_of
 from yasps.ir.emit import KernelIR
+from yasps.runtime import current as current_backend
+from yasps.solve import assemble as assemble_on
 from yasps.runtime.backend import gpu_toolchain_missing
 
 STATUS = yasps.gpu_status()
@@ -150,6 +152,43 @@ def test_energy_derivatives_match_the_cpu(name, precision, monkeypatch):
     if name == "boxes in contact":
         assert {"ev", "fv", "ee", "friction3", "friction4"} <= set(checked), \
             checked
+
+
+def assembled(system):
+    """The gradient and the dense Hessian of an assembled system: read out
+    on the CPU, and column by column through H e_j on the GPU."""
+    g = np.zeros(system.size)
+    system.gradient(g)
+    H = np.zeros((system.size, system.size))
+    if hasattr(system, "dense"):
+        system.dense(H.reshape(-1))
+        return g, H
+    unit, column = np.zeros(system.size), np.zeros(system.size)
+    for j in range(system.size):
+        unit[j] = 1.0
+        system.multiply(unit, column)
+        H[:, j] = column
+        unit[j] = 0.0
+    return g, H
+
+
+@pytest.mark.parametrize("precision", ["f64", "f32"])
+@pytest.mark.parametrize("name", ["soft box", "mixed", "cloth",
+                                  "boxes in contact"])
+def test_assembled_systems_match_the_cpu(name, precision, monkeypatch):
+    """Gradients and projected Hessians placed by the generated index
+    kernels and assembled on the device, against the CPU's assembly."""
+    monkeypatch.setattr(yasps.config, "precision", precision)
+    monkeypatch.setattr(yasps.config, "gpu_derivatives", True)
+    s = SCENES[name]()
+    systems = {}
+    for backend in ("cpu", "gpu"):
+        monkeypatch.setattr(yasps.config, "backend", backend)
+        system, _ = assemble_on(s, current_backend())
+        systems[backend] = assembled(system)
+    for k, part in enumerate(("gradient", "Hessian")):
+        assert_close(systems["cpu"][k], systems["gpu"][k],
+                     TOLERANCE[precision], f"assembled {part} of {name}")
 
 
 def newton_directions(monkeypatch, precision: str):
