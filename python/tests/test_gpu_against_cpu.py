@@ -115,10 +115,33 @@ def boxes_in_contact():
     return s
 
 
+def vertices_over_a_plane():
+    """Vertices within dhat of a tilted plane: the half-space barrier and
+    its lagged friction, then the vertices moved sideways."""
+    rng = np.random.default_rng(7)
+    origin, normal = np.array([0.1, -0.2, 0.3]), np.array([0.3, -0.2, 1.0])
+    normal /= np.linalg.norm(normal)
+    points = origin + rng.normal(scale=0.2, size=(6, 3))
+    points += (np.linspace(2e-3, 9e-3, 6) - (points - origin) @ normal)[:, None] \
+        * normal
+    s = yasps.scene("plane")
+    v = s.addMesh("m").addPrimitive("v", numInstances=len(points))
+    x = v.addAttribute("position", rows=3)
+    x.updateValue(points)
+    s.addMinimizeTarget(x)
+    contact = Contact(s, v, dhat=1e-2, kappa=2.0, friction=0.3, eps_v=0.1,
+                      halfspaces=[(origin, normal)])
+    contact.update(lag=True, dt=0.01)
+    x.updateValue(points + rng.normal(scale=1e-3, size=points.shape))
+    contact.update()
+    return s
+
+
 SCENES = {"soft box": soft_box, "fixed corotated": fixed_corotated_box,
           "mixed": lambda: mixed_scene([[0, 3], [1, 4]])[0],
           "cloth": cloth_patch, "point over triangle": contact_scene,
-          "boxes in contact": boxes_in_contact}
+          "boxes in contact": boxes_in_contact,
+          "vertices over a plane": vertices_over_a_plane}
 
 
 @pytest.mark.parametrize("precision", ["f64", "f32"])
@@ -127,7 +150,7 @@ def test_energy_derivatives_match_the_cpu(name, precision, monkeypatch):
     """Every energy's values, gradients, Hessians and projected Hessians:
     stable Neo-Hookean, fixed corotated, inertia, affine orthogonality
     through a UNION, Baraff-Witkin, dihedral bending, the IPC barrier of
-    every pair kind and lagged friction."""
+    every pair kind and of half-spaces, and lagged friction."""
     monkeypatch.setattr(yasps.config, "precision", precision)
     monkeypatch.setattr(yasps.config, "gpu_derivatives", True)
     s = SCENES[name]()
