@@ -14,3 +14,7 @@ if [ ! -f "$build/build.ninja" ]; then
     -DPython_EXECUTABLE="$(command -v python3)"
 fi
 cmake --build "$build" -- -j"${JOBS:-$(nproc)}"
+
+# `import yasps` from any folder: this checkout's python/ goes on the
+# interpreter's path (a .pth file in its site-packages).
+python3 "$root/scripts/register_checkout.py" "$root" "$build"
