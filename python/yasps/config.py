@@ -79,6 +79,13 @@
   energies' local derivatives on the device, where assembly reads them
   (``yasps.gpu_derivatives``). Off, they are computed on the CPU and
   uploaded; the solve still runs on the device. On by default.
+
+Each setting is checked when it is set (``ArgumentError`` for a value it
+does not take). ``override(**settings)`` sets some for a ``with`` block
+and restores them after it, also when the block raises::
+
+    with yasps.config.override(precision="f32", num_threads=1):
+        ...
 """
 
 from __future__ import annotations
@@ -86,8 +93,9 @@ from __future__ import annotations
 import os
 import sys
 import types
+from contextlib import contextmanager
 from pathlib import Path
-from typing import Optional
+from typing import Iterator, Optional
 
 from .errors import ArgumentError
 
@@ -184,6 +192,35 @@ def _check(name: str, value) -> None:
     if wrong is not None:
         raise ArgumentError(f"yasps.config.{name} must be {wrong}, got "
                             f"{value!r}")
+
+
+#: Every setting, by name (what ``override`` takes).
+SETTINGS = ("cache_dir", "num_threads", "opt_level", "backend", "simd_lanes",
+            "separate_reduced_hessians", "linear_map_projection",
+            "slot_jacobians", "compress_local_hessians", "gpu_derivatives",
+            "precision", "hessian_storage", "preconditioner")
+
+
+@contextmanager
+def override(**settings) -> Iterator[None]:
+    """Sets ``settings`` (each checked first: an unknown name or a bad value
+    raises ``ArgumentError`` and changes nothing) for the ``with`` block,
+    and restores their previous values after it."""
+    unknown = sorted(set(settings) - set(SETTINGS))
+    if unknown:
+        raise ArgumentError(f"yasps.config has no setting {unknown[0]!r}; "
+                            f"the settings are {', '.join(SETTINGS)}")
+    for name, value in settings.items():
+        _check(name, value)
+    module = sys.modules[__name__]
+    previous = {name: getattr(module, name) for name in settings}
+    try:
+        for name, value in settings.items():
+            setattr(module, name, value)
+        yield
+    finally:
+        for name, value in previous.items():
+            setattr(module, name, value)
 
 
 class _Config(types.ModuleType):
