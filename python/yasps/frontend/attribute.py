@@ -36,7 +36,7 @@ PROJECTION_METHODS = ("clamp", "abs", "none")
 #: The yasps package: frames in it are not the user's.
 _PACKAGE_DIR = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 
-Operand = Union["Attribute", numbers.Real, np.ndarray, Sequence]
+Operand = Union["Attribute", float, numbers.Real, np.ndarray, Sequence]
 
 
 def _user_location() -> Optional[Tuple[str, int]]:
