@@ -12,10 +12,12 @@ thread through cuLaunchKernel's parameters. Only NVPTX code generation and
 ptxas are left out.
 """
 
+import importlib
+
 import numpy as np
 import pytest
 
-from conftest import point_over_triangle, running_example
+from conftest import REPO, point_over_triangle, running_example
 from test_contact import rotation, two_soft_boxes
 from test_minimize import cloth_patch, mixed_scene, soft_box
 
@@ -212,6 +214,46 @@ def test_assembled_systems_match_the_cpu(name, precision, monkeypatch):
     for k, part in enumerate(("gradient", "Hessian")):
         assert_close(systems["cpu"][k], systems["gpu"][k],
                      TOLERANCE[precision], f"assembled {part} of {name}")
+
+
+#: The paper's scenes (examples/paper) at small scale, at their first frame:
+#: every kind of kernel they use (cages and their hex8 Gauss points,
+#: angles of a pendulum, affine bunnies, cloth, soft bodies, contact).
+PAPER_SCENES = {
+    "cloths on bunny": ("cloths_on_bunny", lambda m: m.build("small", 1)),
+    "caged bunny tet4": ("caged_bunny", lambda m: m.build("small", "tet4", 4)),
+    "caged bunny hex8": ("caged_bunny", lambda m: m.build("small", "hex8", 4)),
+    "mixed materials": ("mixed_materials", lambda m: m.build("small")),
+    "many bunnies": ("many_bunnies", lambda m: m.build("small", 2)),
+    "mat twist": ("mat_twist", lambda m: m.build("small")),
+    "pendulum": ("pendulum", lambda m: m.build()),
+}
+
+
+@pytest.mark.skipif(not (REPO.parent / "shared" / "data" /
+                         "bunny-1.8k.msh").exists(),
+                    reason="../shared/data/bunny-1.8k.msh missing")
+@pytest.mark.parametrize("name", list(PAPER_SCENES))
+def test_paper_scene_kernels_match_the_cpu(name, monkeypatch):
+    """Every energy with instances of each paper scene: values, gradients,
+    Hessians and projected Hessians, f64."""
+    monkeypatch.syspath_prepend(str(REPO / "examples" / "paper"))
+    module_name, build = PAPER_SCENES[name]
+    built = build(importlib.import_module(module_name))
+    scene = getattr(built[0], "scene", built[0])
+    monkeypatch.setattr(yasps.config, "gpu_derivatives", True)
+    checked = 0
+    for energy in scene.energies:
+        if energy.owner.numInstances == 0 or not scene.minimizeTargets:
+            continue
+        cpu = on("cpu", monkeypatch, lambda: scene.energyDerivatives(energy))
+        gpu = on("gpu", monkeypatch, lambda: scene.energyDerivatives(energy))
+        for part in ("value", "gradient", "hessian", "projectedHessian"):
+            if getattr(cpu, part) is not None:
+                assert_close(getattr(cpu, part), getattr(gpu, part),
+                             TOLERANCE["f64"], f"{part} of {energy.describe()}")
+        checked += 1
+    assert checked >= 2
 
 
 def newton_directions(monkeypatch, precision: str):

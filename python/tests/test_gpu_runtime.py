@@ -244,13 +244,14 @@ def test_gpu_derivatives_feed_the_gpu_assembly():
                     reason=f"the stand-in driver {FAKE_DRIVER} is not built")
 @pytest.mark.skipif(not HAS_PTXAS, reason="the CUDA toolkit (ptxas) is not "
                     "installed")
-@pytest.mark.parametrize("selection", ["not assembled and not newton",
-                                       "assembled or newton"])
+@pytest.mark.parametrize("selection", ["not assembled and not newton and "
+                                       "not paper", "assembled or newton",
+                                       "paper"])
 def test_the_gpu_comparisons_pass_on_the_stand_in_driver(selection):
     """test_gpu_against_cpu.py, which needs a usable GPU backend, run
     against the stand-in driver: the generated kernels' host images
     against the CPU backend, f64 and f32, and a broken kernel caught (in
-    two halves, which two test workers run side by side)."""
+    three parts, which test workers run side by side)."""
     result = subprocess.run(
         [sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider",
          "-p", "no:randomly", "-p", "no:xdist", "-k", selection,
