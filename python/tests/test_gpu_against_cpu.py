@@ -218,7 +218,8 @@ def test_assembled_systems_match_the_cpu(name, precision, monkeypatch):
 
 #: The paper's scenes (examples/paper) at small scale, at their first frame:
 #: every kind of kernel they use (cages and their hex8 Gauss points,
-#: angles of a pendulum, affine bunnies, cloth, soft bodies, contact).
+#: angles of a pendulum, points on a sphere, affine bunnies, cloth, soft
+#: bodies, contact).
 PAPER_SCENES = {
     "cloths on bunny": ("cloths_on_bunny", lambda m: m.build("small", 1)),
     "caged bunny tet4": ("caged_bunny", lambda m: m.build("small", "tet4", 4)),
@@ -227,7 +228,16 @@ PAPER_SCENES = {
     "many bunnies": ("many_bunnies", lambda m: m.build("small", 2)),
     "mat twist": ("mat_twist", lambda m: m.build("small")),
     "pendulum": ("pendulum", lambda m: m.build()),
+    "repulsive curve": ("repulsive_curve", lambda m: repulsive_curve(m)),
 }
+
+
+def repulsive_curve(module):
+    """Stage 3 of repulsive_curve.py: 64 points on the sphere, uniform
+    density."""
+    curve = module.Curve(64, lambda points: np.ones(len(points)))
+    curve.prepare()
+    return (curve,)
 
 
 @pytest.mark.skipif(not (REPO.parent / "shared" / "data" /
