@@ -34,8 +34,10 @@
 #include <cstring>
 
 #include <cstdint>
+#include <iterator>
 #include <map>
 #include <memory>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -63,7 +65,7 @@ using yasps::runtime::test::HostKernel;
 /// Loaded host images, by the handle cuModuleLoadData gave out.
 std::map<const void *, std::unique_ptr<HostImageModule>> hostModules;
 /// Every kernel handle of a host image.
-std::map<const void *, const HostKernel *> hostKernels;
+std::set<const void *> hostKernels;
 /// Why the last host image did not load.
 std::string hostImageError;
 
@@ -317,7 +319,9 @@ int cuModuleUnload(void *module) {
   auto found = hostModules.find(module);
   if (found != hostModules.end()) {
     for (auto it = hostKernels.begin(); it != hostKernels.end();)
-      it = found->second->owns(it->second) ? hostKernels.erase(it) : ++it;
+      it = found->second->owns(static_cast<const HostKernel *>(*it))
+               ? hostKernels.erase(it)
+               : std::next(it);
     hostModules.erase(found);
   }
   return 0;
@@ -331,7 +335,7 @@ int cuModuleGetFunction(void **function, void *module, const char *name) {
       return 500; // CUDA_ERROR_NOT_FOUND
     functionName = name;
     *function = const_cast<HostKernel *>(kernel);
-    hostKernels[kernel] = kernel;
+    hostKernels.insert(kernel);
     return 0;
   }
   if (std::string(name) == "missing")
@@ -356,11 +360,11 @@ int cuLaunchKernel(void *function, unsigned gx, unsigned gy, unsigned gz,
     kernel->run(params, gx, bx);
     return 0;
   }
-  auto host = hostKernels.find(function);
-  if (host != hostKernels.end()) {
-    functionName = host->second->name;
+  if (hostKernels.count(function)) {
+    const auto &kernel = *static_cast<const HostKernel *>(function);
+    functionName = kernel.name;
     const unsigned grid[3] = {gx, gy, gz}, block[3] = {bx, by, bz};
-    yasps::runtime::test::runHostKernel(*host->second, params, grid, block);
+    yasps::runtime::test::runHostKernel(kernel, params, grid, block);
   }
   for (int i = 0; i < expectedParams; ++i)
     lastParams.push_back(*static_cast<std::uint64_t *>(params[i]));

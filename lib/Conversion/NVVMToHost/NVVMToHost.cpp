@@ -49,25 +49,22 @@ const llvm::StringSet<> &libmNames() {
   return names;
 }
 
+/// The axis (0, 1, 2 for x, y, z) of a read of one register, or -1.
+template <typename X, typename Y, typename Z> int64_t axisOf(Operation *op) {
+  return isa<X>(op) ? 0 : isa<Y>(op) ? 1 : isa<Z>(op) ? 2 : -1;
+}
+
 /// The ThreadContext slot of a special register read, or -1.
 int64_t slotOf(Operation *op) {
   using namespace NVVM;
-  if (isa<ThreadIdXOp, ThreadIdYOp, ThreadIdZOp>(op))
-    return host_image::kTid + (isa<ThreadIdXOp>(op)   ? 0
-                               : isa<ThreadIdYOp>(op) ? 1
-                                                      : 2);
-  if (isa<BlockDimXOp, BlockDimYOp, BlockDimZOp>(op))
-    return host_image::kNtid + (isa<BlockDimXOp>(op)   ? 0
-                                : isa<BlockDimYOp>(op) ? 1
-                                                       : 2);
-  if (isa<BlockIdXOp, BlockIdYOp, BlockIdZOp>(op))
-    return host_image::kCtaid + (isa<BlockIdXOp>(op)   ? 0
-                                 : isa<BlockIdYOp>(op) ? 1
-                                                       : 2);
-  if (isa<GridDimXOp, GridDimYOp, GridDimZOp>(op))
-    return host_image::kNctaid + (isa<GridDimXOp>(op)   ? 0
-                                  : isa<GridDimYOp>(op) ? 1
-                                                        : 2);
+  const std::pair<int64_t, int64_t> reads[] = {
+      {host_image::kTid, axisOf<ThreadIdXOp, ThreadIdYOp, ThreadIdZOp>(op)},
+      {host_image::kNtid, axisOf<BlockDimXOp, BlockDimYOp, BlockDimZOp>(op)},
+      {host_image::kCtaid, axisOf<BlockIdXOp, BlockIdYOp, BlockIdZOp>(op)},
+      {host_image::kNctaid, axisOf<GridDimXOp, GridDimYOp, GridDimZOp>(op)}};
+  for (auto [slot, axis] : reads)
+    if (axis >= 0)
+      return slot + axis;
   return -1;
 }
 
