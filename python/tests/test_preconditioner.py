@@ -22,8 +22,9 @@ from test_minimize import system_arrays
 
 @pytest.fixture
 def restore_preconditioner():
+    kept = yasps.config.preconditioner
     yield
-    yasps.config.preconditioner = "block-jacobi"
+    yasps.config.preconditioner = kept
 
 
 def stiff_box(n: int, seed: int = 0):

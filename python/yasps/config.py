@@ -65,15 +65,18 @@
   Newton update stay f64 (mixed precision). The solve is then of a matrix
   within f32's round-off of the assembled one, entry by entry. The GPU
   solve keeps f64 blocks (and warns once).
-- ``preconditioner``: PCG's preconditioner on the CPU, ``"block-jacobi"``
-  (the default: the inverses of the Hessian's diagonal blocks) or
+- ``preconditioner``: PCG's preconditioner, ``"auto"`` (the default),
+  ``"block-jacobi"`` (the inverses of the Hessian's diagonal blocks) or
   ``"multilevel"`` (a V-cycle over coarse levels of aggregated blocks,
   ``runtime/include/yasps/Runtime/Multilevel.h``), on the CPU and the GPU.
   The multilevel one needs several times fewer iterations on meshes; each
-  costs about three products with the Hessian instead of one, and every
-  solve computes the levels' values first (their structure is kept while
-  the Hessian's static structure stays), so on the CPU it pays off where
-  block-Jacobi needs many iterations (fine meshes, stiff materials).
+  costs about three to four of block-Jacobi's and every solve computes the
+  levels' values first (their structure is kept while the Hessian's
+  static structure stays), so it pays where block-Jacobi needs many
+  iterations (fine meshes, stiff materials). ``"auto"`` chooses per scene
+  between them by bounded trials and a fixed cost model (deterministic:
+  iteration counts, not clocks; :mod:`yasps.solve.preconditioner_choice`);
+  ``lastSolve["preconditioner"]`` says which one a solve used.
   ``docs/benchmarks.md`` has the figures.
 - ``gpu_derivatives``: on the GPU backend, ``minimizeEnergy`` computes the
   energies' local derivatives on the device, where assembly reads them
@@ -135,10 +138,10 @@ def resolve_hessian_storage() -> str:
     return hessian_storage
 
 
-preconditioner: str = "block-jacobi"
+preconditioner: str = "auto"
 
 #: The values ``preconditioner`` may take.
-PRECONDITIONERS = ("block-jacobi", "multilevel")
+PRECONDITIONERS = ("auto", "block-jacobi", "multilevel")
 
 
 def resolve_preconditioner() -> str:

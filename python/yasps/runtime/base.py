@@ -98,9 +98,10 @@ class Backend(Protocol):
 
     def solve(self, system: Any, x: np.ndarray, tolerance: float,
               max_iterations: int, threads: Optional[int],
-              fixed: Optional[np.ndarray], stopping: str = "residual") -> Any:
-        """PCG on the assembled system into ``x``, preconditioned as
-        ``config.preconditioner`` says; ``stopping`` is "residual",
+              fixed: Optional[np.ndarray], stopping: str = "residual",
+              preconditioner: str = "block-jacobi") -> Any:
+        """PCG on the assembled system into ``x`` with ``preconditioner``
+        ("block-jacobi" or "multilevel"); ``stopping`` is "residual",
         "energy_norm" or "preconditioned" (see Scene.minimizeEnergy). Returns the native
         PcgReport (iterations, relative_residual recomputed from x,
         converged, stop, energy_error, condition_estimate, diagonal_ratio,

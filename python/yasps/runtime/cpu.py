@@ -156,8 +156,9 @@ class CpuBackend:
 
     def solve(self, system, x: np.ndarray, tolerance: float,
               max_iterations: int, threads: Optional[int],
-              fixed: Optional[np.ndarray], stopping: str = "residual"):
-        preconditioner = config.resolve_preconditioner().replace("-", "_")
+              fixed: Optional[np.ndarray], stopping: str = "residual",
+              preconditioner: str = "block-jacobi"):
+        preconditioner = preconditioner.replace("-", "_")
         return system.solve(x, tolerance, max_iterations, _threads(threads),
                             fixed, getattr(native().PcgStopping, stopping),
                             getattr(native().PcgPreconditioner,

@@ -275,8 +275,9 @@ class GpuBackend:
 
     def solve(self, system, x: np.ndarray, tolerance: float,
               max_iterations: int, threads: Optional[int],
-              fixed: Optional[np.ndarray], stopping: str = "residual"):
-        preconditioner = config.resolve_preconditioner().replace("-", "_")
+              fixed: Optional[np.ndarray], stopping: str = "residual",
+              preconditioner: str = "block-jacobi"):
+        preconditioner = preconditioner.replace("-", "_")
         return system.solve(x, tolerance, max_iterations, fixed,
                             preconditioner=getattr(
                                 native().PcgPreconditioner, preconditioner),

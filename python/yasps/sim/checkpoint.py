@@ -7,8 +7,9 @@ What a step reads: every stored value of the scene (targets, predictions,
 materials, the contact's stiffness and friction pairs: any constant a
 script may have changed), the instance counts and connectivities of its
 dynamic primitives (collision and friction pairs), the stepper's
-velocities and time (prescribed motion reads it) and the contact's
-adaptive-stiffness state. Caches that only
+velocities and time (prescribed motion reads it), the contact's
+adaptive-stiffness state and the choice of preconditioner
+(``config.preconditioner = "auto"``). Caches that only
 save work (derivatives at a point, the last step's broad phase) are not
 saved: a step starts without them (``ImplicitEuler.step``), resumed or
 not, so that their absence changes no bit.
@@ -24,6 +25,7 @@ import numpy as np
 from ..frontend.attribute import STORED_KINDS
 from ..frontend.errors import SceneError
 from ..frontend.scene import Entity, Primitive
+from ..solve import preconditioner_choice
 
 #: The format of the file, checked on reading.
 VERSION = 1
@@ -132,6 +134,9 @@ def save(stepper, path: Union[str, PathLike]) -> None:
             np.nan if adaptive.kappa is None else adaptive.kappa,
             adaptive.max_kappa,
             np.nan if adaptive.previous is None else adaptive.previous])
+    choice = preconditioner_choice.state(stepper.scene)
+    if choice is not None:
+        arrays["preconditioner_choice"] = choice
     np.savez(path, **arrays)
 
 
@@ -175,6 +180,8 @@ def restore(stepper, path: Union[str, PathLike]) -> None:
     for inertia, v in zip(stepper.world, world):
         inertia.velocity = v.copy()
     stepper.time = float(arrays["time"])
+    preconditioner_choice.restore(stepper.scene,
+                                  arrays.get("preconditioner_choice"))
     if adaptive is not None:
         kappa, max_kappa, previous = (float(x) for x in arrays["adaptive"])
         adaptive.kappa = None if np.isnan(kappa) else kappa

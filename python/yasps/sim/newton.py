@@ -279,7 +279,8 @@ def newton(scene, x: Targets, tolerance: float,
             report.seconds["derivatives"] += spent["derivatives"]
             report.seconds["assembly"] += spent["indices"] + spent["assembly"]
             report.seconds["pcg"] += spent["solve"]
-            cg += int(solve["iterations"])
+            # A redone trial of the other preconditioner was work too.
+            cg += int(solve["iterations"]) + int(solve["trialIterations"])
             if threshold is None or \
                     solve["projectedInstances"] == solve["instances"]:
                 break

@@ -1,6 +1,6 @@
 """``Scene.minimizeEnergy``: the Newton direction from the assembled system,
-solved by PCG on the backend (section 8; block-Jacobi or multilevel,
-``config.preconditioner``), with what the solve
+solved by PCG on the backend (section 8; block-Jacobi, multilevel or
+the cheaper of them, ``config.preconditioner``), with what the solve
 says about itself (:mod:`.diagnosis`)."""
 
 from __future__ import annotations
@@ -14,6 +14,7 @@ import numpy as np
 from .. import config
 from ..frontend.errors import SceneError, YaspsError
 from ..runtime import Backend
+from . import preconditioner_choice
 from .assembly import DofLayout, assemble
 from .projection import GradientThreshold, free_gradient_max
 from .diagnosis import (ERROR_BOUND_WARNING, IllConditionedSolve,
@@ -164,8 +165,10 @@ def minimize_energy(scene, backend: Backend,
                                 f"{tolerance}, not a number >= 0")
     x = np.zeros(system.size)
     start = time.perf_counter()
-    pcg = backend.solve(system, x, float(tolerance), int(maxIterations),
-                        threads, mask, stopping)
+    pcg, preconditioner, trial_iterations = preconditioner_choice.solve(
+        scene, config.resolve_preconditioner(), int(maxIterations),
+        lambda chosen, cap: backend.solve(system, x, float(tolerance), cap,
+                                          threads, mask, stopping, chosen))
     timings["solve"] = time.perf_counter() - start
     stop = pcg.stop.name
     bound = residual_error_bound(pcg)
@@ -180,6 +183,8 @@ def minimize_energy(scene, backend: Backend,
             "errorBound": bound,
             "residualReplacements": int(pcg.residual_replacements),
             "preconditionerLevels": int(pcg.levels),
+            "preconditioner": preconditioner,
+            "trialIterations": trial_iterations,
             "tolerance": float(tolerance),
             "seconds": timings, "backend": backend.name, **report}
     if gradient_max is not None:

@@ -39,7 +39,7 @@ namespace yasps::runtime {
 
 struct MultilevelOptions {
   /// A level with at most this many DoFs is the coarsest, solved exactly.
-  std::int64_t coarsestDofs = 512;
+  std::int64_t coarsestDofs = 128;
   /// Levels at most, the fine one included.
   std::int64_t maxLevels = 10;
   /// Lanczos steps that estimate each level's lmax(D^-1 A).

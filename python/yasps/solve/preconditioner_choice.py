@@ -1,0 +1,204 @@
+"""``config.preconditioner = "auto"``: per scene, the preconditioner whose
+solves cost less, chosen by trials whose cost is bounded.
+
+The multilevel preconditioner needs several times fewer CG iterations than
+block-Jacobi, but each of its iterations costs about four of block-Jacobi's
+and its setup (the levels' values, every solve) about thirty
+(``docs/benchmarks.md``, "Preconditioners"). Whether it pays depends on how
+many iterations block-Jacobi needs, which changes during a simulation: the
+paper-scale cloths-on-bunny needs 180 per solve while falling, where the
+multilevel one needs 16, and about 150 against 45 once in contact, where
+block-Jacobi is the cheaper.
+
+The choice is made from iteration counts and a fixed cost model, never from
+clocks, so that a run repeats bit for bit (and resumes so from a
+checkpoint: :func:`state` and :func:`restore` carry it). The cost of a solve
+in units of one block-Jacobi iteration is ``SETUP[p] + ITERATION[p] * k``
+for k iterations of preconditioner p. Every ``period`` solves the other
+preconditioner is tried with an iteration cap that stops it as soon as it
+would have cost more than the current one's solves (a moving average of
+their costs): a trial that
+converges within it is the solve, and the choice switches; one that does
+not is redone with the current preconditioner (about twice a solve's cost
+once per period) and the period doubles, up to ``MAX_PERIOD``, unless the
+current preconditioner's solves grow ``RISE`` times costlier than when it
+last won a trial: then the verdict is stale and the next solve is a trial.
+"""
+
+from __future__ import annotations
+
+import math
+import weakref
+from dataclasses import dataclass, field
+from typing import Any, Callable, Dict, Optional, Tuple
+
+import numpy as np
+
+BLOCK_JACOBI = "block-jacobi"
+MULTILEVEL = "multilevel"
+
+#: Cost of a solve's setup, in block-Jacobi iterations: the preconditioner's
+#: construction and the residual's finiteness checks (bench/preconditioners.py
+#: on this project's 2-core machine: 3.8-8.6 ms against 0.8-1.1 ms per
+#: iteration for block-Jacobi; 21-38 ms for multilevel, whose levels'
+#: values, damping estimates and coarse factor are computed every solve).
+SETUP = {BLOCK_JACOBI: 5.0, MULTILEVEL: 35.0}
+#: Cost of one CG iteration, in block-Jacobi iterations (the V-cycle's two
+#: smoothing products and its levels: 3.2-3.7x on one thread, 2.8-5.9x on
+#: two, the most on the smallest systems).
+ITERATION = {BLOCK_JACOBI: 1.0, MULTILEVEL: 4.0}
+#: A trial needs room for at least this many iterations to be worth running.
+MIN_TRIAL_ITERATIONS = 3
+#: Solves between trials: at the start, after a switch, at most.
+FIRST_PERIOD, PERIOD_AFTER_SWITCH, MAX_PERIOD = 1, 4, 64
+#: How much costlier than when it last won a trial the current solves may
+#: grow before the other is tried again at once.
+RISE = 1.25
+#: The weight of the newest solve in the moving average of solve costs.
+SMOOTHING = 0.5
+
+
+def other(preconditioner: str) -> str:
+    """The preconditioner that is not ``preconditioner``."""
+    return MULTILEVEL if preconditioner == BLOCK_JACOBI else BLOCK_JACOBI
+
+
+def solve_cost(preconditioner: str, iterations: int) -> float:
+    """A solve's cost in block-Jacobi iterations (the module's model)."""
+    return SETUP[preconditioner] + ITERATION[preconditioner] * iterations
+
+
+@dataclass(frozen=True)
+class Attempt:
+    """One PCG run the choice asks for."""
+    preconditioner: str
+    max_iterations: int
+    #: Whether it is a trial of the preconditioner not chosen.
+    trial: bool
+
+
+@dataclass
+class PreconditionerChoice:
+    """The choice of one scene, and what it was made from."""
+    current: str = BLOCK_JACOBI
+    #: The cost of its solves, per preconditioner (model units): the
+    #: winning trial's, then a moving average.
+    costs: Dict[str, float] = field(default_factory=dict)
+    period: int = FIRST_PERIOD
+    since_trial: int = 0
+    #: The current one's cost when it last won a trial (None: not since the
+    #: last switch).
+    won_at: Optional[float] = None
+
+    def next_attempt(self, max_iterations: int) -> Attempt:
+        """What the next solve runs first."""
+        trying = other(self.current)
+        last = self.costs.get(self.current)
+        stale = self.won_at is not None and last is not None and \
+            last > RISE * self.won_at
+        if (self.since_trial >= self.period or stale) and last is not None:
+            budget = math.floor((last - SETUP[trying]) / ITERATION[trying])
+            if budget >= MIN_TRIAL_ITERATIONS:
+                return Attempt(trying, min(budget, max_iterations), True)
+        return Attempt(self.current, max_iterations, False)
+
+    def record(self, attempt: Attempt, iterations: int, stop: str) -> bool:
+        """Takes what ``attempt`` did (its iterations and PcgStop name);
+        returns whether the solve must be redone with the current
+        preconditioner (a trial that did not converge within its cap)."""
+        cost = solve_cost(attempt.preconditioner, iterations)
+        if attempt.trial:
+            self.since_trial = 0
+            if stop == "converged":
+                self.current = attempt.preconditioner
+                self.costs[self.current] = cost
+                self.period = PERIOD_AFTER_SWITCH
+                self.won_at = None
+                return False
+            self.period = min(2 * self.period, MAX_PERIOD)
+            self.won_at = self.costs.get(self.current)
+            return True
+        self.since_trial += 1
+        # A breakdown (an indefinite exact Hessian) says nothing of cost.
+        if stop in ("converged", "max_iterations"):
+            # Averaged: within a frame a Newton iteration's system may need
+            # twice the iterations of the one before, and one cheap solve of
+            # the other must not win against one dear solve of this one.
+            last = self.costs.get(self.current)
+            self.costs[self.current] = cost if last is None else \
+                (1.0 - SMOOTHING) * last + SMOOTHING * cost
+        if stop == "max_iterations":
+            # Stopped at the cap: the other may do what this could not.
+            self.since_trial = max(self.since_trial, self.period)
+        return False
+
+    def as_array(self) -> np.ndarray:
+        """The state as numbers (what a checkpoint stores)."""
+        nan = float("nan")
+        return np.array([
+            1.0 if self.current == MULTILEVEL else 0.0,
+            self.costs.get(BLOCK_JACOBI, nan), self.costs.get(MULTILEVEL, nan),
+            float(self.period), float(self.since_trial),
+            nan if self.won_at is None else self.won_at])
+
+    @classmethod
+    def from_array(cls, values: np.ndarray) -> "PreconditionerChoice":
+        """The inverse of as_array."""
+        current, jacobi, multilevel, period, since, won_at = (
+            float(v) for v in values)
+        costs = {name: cost for name, cost in ((BLOCK_JACOBI, jacobi),
+                                               (MULTILEVEL, multilevel))
+                 if not math.isnan(cost)}
+        return cls(MULTILEVEL if current == 1.0 else BLOCK_JACOBI, costs,
+                   int(period), int(since),
+                   None if math.isnan(won_at) else won_at)
+
+
+_choices: "weakref.WeakKeyDictionary[object, PreconditionerChoice]" = \
+    weakref.WeakKeyDictionary()
+
+
+def choice_for(scene) -> PreconditionerChoice:
+    """The scene's choice (made on its first auto solve)."""
+    choice = _choices.get(scene)
+    if choice is None:
+        choice = _choices[scene] = PreconditionerChoice()
+    return choice
+
+
+def state(scene) -> Optional[np.ndarray]:
+    """The scene's choice as numbers, None before its first auto solve."""
+    choice = _choices.get(scene)
+    return None if choice is None else choice.as_array()
+
+
+def restore(scene, values: Optional[np.ndarray]) -> None:
+    """Sets the scene's choice from :func:`state` (None: not made yet)."""
+    if values is None:
+        _choices.pop(scene, None)
+    else:
+        _choices[scene] = PreconditionerChoice.from_array(values)
+
+
+#: ``config.preconditioner``'s value that asks for this choice.
+AUTO = "auto"
+
+
+def solve(scene, requested: str, max_iterations: int,
+          run: Callable[[str, int], Any]) -> Tuple[Any, str, int]:
+    """Runs a scene's PCG solve, ``run(preconditioner, max_iterations)``
+    (returning the native PcgReport), with the preconditioner ``requested``
+    or, for AUTO, the scene's choice. Returns the report of the solve kept,
+    its preconditioner and the iterations of a trial that was redone."""
+    if requested != AUTO:
+        return run(requested, max_iterations), requested, 0
+    choice = choice_for(scene)
+    attempt = choice.next_attempt(max_iterations)
+    report = run(attempt.preconditioner, attempt.max_iterations)
+    if not choice.record(attempt, int(report.iterations), report.stop.name):
+        return report, attempt.preconditioner, 0
+    spent = int(report.iterations)
+    again = choice.next_attempt(max_iterations)
+    report = run(again.preconditioner, again.max_iterations)
+    choice.record(again, int(report.iterations), report.stop.name)
+    return report, again.preconditioner, spent
