@@ -167,7 +167,8 @@ def feed(choice: PreconditionerChoice, needs: dict, solves: int,
             stop = "converged" if needs[attempt.preconditioner] <= \
                 attempt.max_iterations else "max_iterations"
             cost += solve_cost(attempt.preconditioner, done)
-            if not choice.record(attempt, done, stop):
+            if not choice.record(attempt, done, stop,
+                                 done / needs[attempt.preconditioner]):
                 break
         costs.append(cost)
         kept.append(attempt.preconditioner)
@@ -222,3 +223,30 @@ def test_the_state_survives_its_array():
     assert PreconditionerChoice.from_array(choice.as_array()) == choice
     assert PreconditionerChoice.from_array(
         PreconditionerChoice().as_array()) == PreconditionerChoice()
+
+
+def test_a_trial_far_from_converging_waits_the_longest():
+    """A trial stopped at a tenth of the way to its tolerance (in orders of
+    magnitude) sets the period to its longest at once; one nearly there
+    doubles it; a rise of the current's costs above what it won at calls a
+    trial before the period is out."""
+    reached = type("Report", (), {"relative_residual": 10 ** -0.4,
+                                  "preconditioned_residual": float("nan"),
+                                  "energy_error": float("nan")})()
+    assert pc.progress(reached, 1e-4, "residual") == pytest.approx(0.1)
+    assert pc.progress(reached, 1e-4, "preconditioned") == 0.0
+    choices = []
+    for progress, period in ((0.1, pc.MAX_PERIOD), (0.9, 2)):
+        choice = PreconditionerChoice()
+        choices.append(choice)
+        choice.record(choice.next_attempt(1000), 200, "converged")
+        trial = choice.next_attempt(1000)
+        assert trial.trial
+        assert choice.record(trial, trial.max_iterations, "max_iterations",
+                             progress)
+        assert choice.period == period and choice.won_at == 205.0
+    choice = choices[0]
+    choice.record(choice.next_attempt(1000), 200, "converged")
+    assert not choice.next_attempt(1000).trial
+    choice.record(choice.next_attempt(1000), 400, "converged")
+    assert choice.next_attempt(1000).trial

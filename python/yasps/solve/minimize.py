@@ -168,7 +168,8 @@ def minimize_energy(scene, backend: Backend,
     pcg, preconditioner, trial_iterations = preconditioner_choice.solve(
         scene, config.resolve_preconditioner(), int(maxIterations),
         lambda chosen, cap: backend.solve(system, x, float(tolerance), cap,
-                                          threads, mask, stopping, chosen))
+                                          threads, mask, stopping, chosen),
+        float(tolerance), stopping)
     timings["solve"] = time.perf_counter() - start
     stop = pcg.stop.name
     bound = residual_error_bound(pcg)

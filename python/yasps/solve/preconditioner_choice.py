@@ -20,9 +20,11 @@ would have cost more than the current one's solves (a moving average of
 their costs): a trial that
 converges within it is the solve, and the choice switches; one that does
 not is redone with the current preconditioner (about twice a solve's cost
-once per period) and the period doubles, up to ``MAX_PERIOD``, unless the
-current preconditioner's solves grow ``RISE`` times costlier than when it
-last won a trial: then the verdict is stale and the next solve is a trial.
+once per period) and the period doubles, up to ``MAX_PERIOD`` (at once
+where the trial came less than ``FAR`` of the way to its tolerance), unless
+the current preconditioner's solves grow ``RISE`` times costlier than when
+it last won a trial: then the verdict is stale and the next solve is a
+trial.
 """
 
 from __future__ import annotations
@@ -56,6 +58,9 @@ FIRST_PERIOD, PERIOD_AFTER_SWITCH, MAX_PERIOD = 1, 4, 64
 RISE = 1.25
 #: The weight of the newest solve in the moving average of solve costs.
 SMOOTHING = 0.5
+#: A trial that came less than this share of the way to its tolerance (in
+#: orders of magnitude) before its cap is far from converging.
+FAR = 0.5
 
 
 def other(preconditioner: str) -> str:
@@ -102,10 +107,13 @@ class PreconditionerChoice:
                 return Attempt(trying, min(budget, max_iterations), True)
         return Attempt(self.current, max_iterations, False)
 
-    def record(self, attempt: Attempt, iterations: int, stop: str) -> bool:
-        """Takes what ``attempt`` did (its iterations and PcgStop name);
-        returns whether the solve must be redone with the current
-        preconditioner (a trial that did not converge within its cap)."""
+    def record(self, attempt: Attempt, iterations: int, stop: str,
+               progress: float = 1.0) -> bool:
+        """Takes what ``attempt`` did (its iterations and PcgStop name; for
+        a trial stopped at its cap, ``progress``: the share of the way to
+        the tolerance it came, in orders of magnitude); returns whether the
+        solve must be redone with the current preconditioner (a trial that
+        did not converge within its cap)."""
         cost = solve_cost(attempt.preconditioner, iterations)
         if attempt.trial:
             self.since_trial = 0
@@ -115,8 +123,15 @@ class PreconditionerChoice:
                 self.period = PERIOD_AFTER_SWITCH
                 self.won_at = None
                 return False
-            self.period = min(2 * self.period, MAX_PERIOD)
-            self.won_at = self.costs.get(self.current)
+            # Far from converging (it would have needed twice its cap and
+            # more), it will not win soon: wait the longest (a rise of the
+            # current's costs still calls a trial).
+            self.period = MAX_PERIOD if progress < FAR else \
+                min(2 * self.period, MAX_PERIOD)
+            # The highest cost the current one won at: the solves may swing
+            # within a frame; only a rise above it makes the verdict stale.
+            self.won_at = max(self.won_at or 0.0,
+                              self.costs.get(self.current, 0.0))
             return True
         self.since_trial += 1
         # A breakdown (an indefinite exact Hessian) says nothing of cost.
@@ -184,18 +199,34 @@ def restore(scene, values: Optional[np.ndarray]) -> None:
 AUTO = "auto"
 
 
+def progress(report, tolerance: float, stopping: str) -> float:
+    """How far a stopped solve came toward ``tolerance`` under its stopping
+    rule, in orders of magnitude: log(reached) / log(tolerance), in [0, 1]
+    (0 where nothing says: no iteration, a NaN, a tolerance of 1 or more)."""
+    reached = {"residual": report.relative_residual,
+               "preconditioned": report.preconditioned_residual,
+               "energy_norm": report.energy_error}[stopping]
+    if not (0.0 < tolerance < 1.0) or not (0.0 < reached):
+        return 0.0
+    return min(max(math.log(reached) / math.log(tolerance), 0.0), 1.0)
+
+
 def solve(scene, requested: str, max_iterations: int,
-          run: Callable[[str, int], Any]) -> Tuple[Any, str, int]:
+          run: Callable[[str, int], Any], tolerance: float = 0.0,
+          stopping: str = "residual") -> Tuple[Any, str, int]:
     """Runs a scene's PCG solve, ``run(preconditioner, max_iterations)``
     (returning the native PcgReport), with the preconditioner ``requested``
-    or, for AUTO, the scene's choice. Returns the report of the solve kept,
-    its preconditioner and the iterations of a trial that was redone."""
+    or, for AUTO, the scene's choice; ``tolerance`` and ``stopping`` are
+    the solve's (they say how far a trial came). Returns the report of the
+    solve kept, its preconditioner and the iterations of a trial that was
+    redone."""
     if requested != AUTO:
         return run(requested, max_iterations), requested, 0
     choice = choice_for(scene)
     attempt = choice.next_attempt(max_iterations)
     report = run(attempt.preconditioner, attempt.max_iterations)
-    if not choice.record(attempt, int(report.iterations), report.stop.name):
+    if not choice.record(attempt, int(report.iterations), report.stop.name,
+                         progress(report, tolerance, stopping)):
         return report, attempt.preconditioner, 0
     spent = int(report.iterations)
     again = choice.next_attempt(max_iterations)
