@@ -1,10 +1,10 @@
 #!/usr/bin/env bash
 # The test command: installs what is missing, builds, and runs every test
-# (lit/FileCheck compiler tests, runtime unit tests, Python tests), then the
-# robustness checks: the same lit and unit tests in the sanitizer build
-# (ASan + UBSan), the GPU solver's unit tests under ThreadSanitizer, the
-# Python tests of inputs and values on the ASan build's extensions, and a
-# bounded fuzz run (docs/robustness.md). FUZZ_SECONDS (default 120)
+# (lit/FileCheck compiler tests, runtime unit tests, the type checker, Python
+# tests), then the robustness checks: the same lit and unit tests in the
+# sanitizer build (ASan + UBSan), the GPU solver's unit tests under
+# ThreadSanitizer, the Python tests of inputs and values on the ASan build's
+# extensions, and a bounded fuzz run (docs/robustness.md). FUZZ_SECONDS (default 120)
 # bounds the fuzz run; 0 skips it.
 set -euo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
@@ -16,6 +16,10 @@ bash "$root/scripts/build.sh"
 
 echo "== lit: compiler and runtime unit tests"
 cmake --build "$build" --target check-yasps
+
+echo "== mypy: the package's types"
+# pyproject.toml's [tool.mypy] names the package and the settings.
+(cd "$root" && python3 -m mypy)
 
 echo "== pytest: Python package"
 # One pytest worker per core (pytest-xdist; PYTEST_WORKERS overrides): a

@@ -4,7 +4,7 @@ on disk); this module keeps the compiled libraries of this process."""
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Callable, Dict, List, Optional, Sequence, Tuple
+from typing import Any, Callable, Dict, List, Optional, Sequence, Tuple
 
 import numpy as np
 
@@ -29,7 +29,8 @@ class KernelInfo:
 class CpuKernels:
     """Compiled CPU kernels of some attributes and how this request for them
     was served (``stats``: cache hits and compile times)."""
-    library: object
+    #: the native library (the compiler extension's object: untyped)
+    library: Any
     stats: dict
 
     @property
@@ -91,7 +92,7 @@ def requests_lowered() -> int:
 #: kernel cache lookup. The IR is ir.kernel_ir's, without the counts of
 #: dynamic primitives, so new numbers of collision pairs find their library
 #: here.
-_libraries: Dict[tuple, object] = {}
+_libraries: Dict[tuple, Any] = {}
 
 #: What each library's kernels take, by id(library) (libraries stay
 #: alive in _libraries for the life of the process).

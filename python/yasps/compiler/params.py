@@ -89,7 +89,9 @@ def _record_path(ir: str, pipeline: str, paths: Sequence[str]
     a cache directory."""
     if not config.cache_dir:
         return None
-    library = Path(native().__file__)
+    module_file = native().__file__
+    assert module_file is not None  # an extension module comes from a file
+    library = Path(module_file)
     built = library.stat()
     text = "\0".join([ir, pipeline, *paths, str(library), str(built.st_size),
                       str(built.st_mtime_ns)])

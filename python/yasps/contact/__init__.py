@@ -139,8 +139,10 @@ class Contact:
                     f"adaptive one: no primitive of {vertices.describe()} "
                     f"records its vertices' masses (a 1x1 stored '{MASS}', "
                     f"as add_free_vertices and add_affine_body keep)")
-        self.adaptive = None if kappa is not None else \
-            AdaptiveStiffness(self.dhat, average_mass)
+        self.adaptive: Optional[AdaptiveStiffness] = None
+        if kappa is None:
+            assert average_mass is not None  # found above, or raised
+            self.adaptive = AdaptiveStiffness(self.dhat, average_mass)
         count = vertices.numInstances
         faces = np.zeros((0, 3), dtype=np.int32) if faces is None else \
             np.ascontiguousarray(faces, dtype=np.int32).reshape(-1, 3)
@@ -248,6 +250,7 @@ class Contact:
                       start: np.ndarray) -> Dict[str, int]:
         """The friction pairs at positions V (whose normal pairs are
         built), with tangential motion measured from ``start``."""
+        assert self.eps_u is not None  # update() lags only with friction
         self.eps_u.updateValue([self.eps_v * dt])
         barrier = ipctk.BarrierPotential(self.dhat, self.kappa)
         Vc = self.colliding(V)
@@ -300,6 +303,7 @@ class Contact:
         if self._last_pairs is None or \
                 not np.array_equal(self._last_pairs[0], V):
             self._normal_pairs(V)
+        assert self._last_pairs is not None  # _normal_pairs sets it
         return self._last_pairs[1]
 
     def stepBound(self, steps: Sequence[np.ndarray],

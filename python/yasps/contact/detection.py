@@ -19,7 +19,7 @@ some pair is already closer than twice MIN_SEPARATION.
 
 from __future__ import annotations
 
-from typing import Dict, Optional, Tuple
+from typing import Dict, Optional, Tuple, Type, Union
 
 import ipctk
 import numpy as np
@@ -149,4 +149,5 @@ def _close_range_bound(mesh: ipctk.CollisionMesh,
 
 
 #: Contact's ``detection`` choices.
-DETECTIONS = {"runtime": RuntimeDetection, "ipctk": IpctkDetection}
+DETECTIONS: Dict[str, Union[Type[RuntimeDetection], Type[IpctkDetection]]] = {
+    "runtime": RuntimeDetection, "ipctk": IpctkDetection}

@@ -61,6 +61,8 @@ class ContactForces:
         self.positions.updateValue(V)
         self.model.stiffness.updateValue(source.stiffness.value)
         if source.eps_u is not None:
+            # Built with the contact's friction flag: it has eps_u as well.
+            assert self.model.eps_u is not None
             self.model.eps_u.updateValue(source.eps_u.value)
         for mine, theirs in zip(self.model.dynamic_primitives(),
                                 source.dynamic_primitives()):

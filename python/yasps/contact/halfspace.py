@@ -41,8 +41,8 @@ class HalfSpaces:
                  planes: Sequence[Tuple[Sequence[float], Sequence[float]]],
                  dhat: float, kappa: Attribute, projection: str):
         normals, offsets = [], []
-        for origin, normal in planes:
-            n = np.asarray(normal, float).reshape(3)
+        for origin, direction in planes:
+            n = np.asarray(direction, float).reshape(3)
             if not np.linalg.norm(n) > 0:
                 raise SceneError(f"Contact: a half-space needs a non-zero "
                                  f"normal, got {list(n)}")

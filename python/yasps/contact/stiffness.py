@@ -62,4 +62,7 @@ class AdaptiveStiffness:
                 diagonal,
                 dhat_epsilon_scale=CLOSE_FRACTION * self.dhat / diagonal)
         self.previous = min_distance2
+        # Set by initial() (or by a checkpoint) before any update: the
+        # contact updates only a kappa it has.
+        assert self.kappa is not None
         return self.kappa

@@ -24,6 +24,9 @@ from . import values as _values
 from .services import services
 
 if TYPE_CHECKING:  # pragma: no cover
+    from types import FrameType
+    from typing import TypeGuard  # Python 3.10; only the checker reads it
+
     from .scene import Entity
 
 #: Kinds of attribute. Stored kinds hold values; named kinds live on an entity.
@@ -41,7 +44,7 @@ Operand = Union["Attribute", float, numbers.Real, np.ndarray, Sequence]
 
 def _user_location() -> Optional[Tuple[str, int]]:
     """The first stack frame outside the yasps package: where the user is."""
-    frame = sys._getframe(1)
+    frame: Optional[FrameType] = sys._getframe(1)
     while frame is not None:
         filename = frame.f_code.co_filename
         if not os.path.abspath(filename).startswith(_PACKAGE_DIR):
@@ -50,7 +53,7 @@ def _user_location() -> Optional[Tuple[str, int]]:
     return None
 
 
-def _is_scalar(value: Any) -> bool:
+def _is_scalar(value: Any) -> "TypeGuard[numbers.Real]":
     return isinstance(value, numbers.Real) and not isinstance(value, bool)
 
 
@@ -158,7 +161,7 @@ class Attribute:
             raise ValueUpdateError(
                 f"{self.describe()} is computed from other attributes and has "
                 "no stored values to update")
-        count = self._owner.numInstances
+        count = owner_of(self).numInstances
         self._values = _values.to_column_major(
             values, count, self._rows, self._cols, self.describe())
         self._version = next(_value_versions)
@@ -173,7 +176,7 @@ class Attribute:
         if self._values is None:
             raise ValueUpdateError(
                 f"{self.describe()} has no values for the current "
-                f"{self._owner.numInstances} instances; call updateValue")
+                f"{owner_of(self).numInstances} instances; call updateValue")
         return _values.from_column_major(self._values, self._rows, self._cols)
 
     def compute(self, threads: Optional[int] = None):
@@ -520,6 +523,16 @@ class Attribute:
 # ---------------------------------------------------------------- free functions
 
 
+def owner_of(attr: Attribute) -> "Entity":
+    """The owner of an attribute known to have one, for the type checker:
+    ``attr.owner`` is Optional because constants have none, but an entity
+    creates its named attributes (data, constant, computed, JOIN, UNION)
+    with itself as their owner, and an expression reading one has one."""
+    owner = attr.owner
+    assert owner is not None, f"{attr.describe()} has no owner"
+    return owner
+
+
 def _literal(array: np.ndarray) -> Attribute:
     lit = Attribute(owner=None, rows=array.shape[0], cols=array.shape[1],
                     kind="literal", op="constant")
@@ -570,7 +583,7 @@ def lift(value: Operand, like: Optional[Attribute] = None,
         raise type(err)(f"{op}: {err}") from None
 
 
-def _lineage(entity: "Entity") -> list:
+def _lineage(entity: Optional["Entity"]) -> list:
     chain = []
     while entity is not None:
         chain.append(entity)

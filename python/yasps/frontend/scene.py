@@ -17,14 +17,14 @@ import itertools
 
 import keyword
 import re
-from typing import Any, Dict, List, Optional, Sequence, Union
+from typing import Any, Dict, List, Optional, Sequence, Tuple, Union, cast
 
 import numpy as np
 
 from .. import config
 from . import values as _values
 from .values import MAX_MATRIX_ENTRIES, as_count
-from .attribute import PROJECTION_METHODS, Attribute
+from .attribute import PROJECTION_METHODS, Attribute, owner_of
 from .errors import (ArgumentError, LineageError, NameLookupError,
                      SceneError, ShapeError)
 from .services import services
@@ -68,7 +68,7 @@ class Entity:
         entity: Entity = self
         while entity._parent is not None:
             entity = entity._parent
-        return entity  # type: ignore[return-value]
+        return cast("Scene", entity)  # the root of every lineage is a scene
 
     @property
     def path(self) -> List[str]:
@@ -132,8 +132,10 @@ class Entity:
         return name
 
     def _register(self, attr: Attribute) -> Attribute:
-        self._symbols[attr.name] = attr
-        self._attributes[attr.name] = attr
+        name = attr.name
+        assert name is not None  # every caller creates it with its name
+        self._symbols[name] = attr
+        self._attributes[name] = attr
         self._changed()
         return attr
 
@@ -337,7 +339,7 @@ class Scene(Entity):
                     f"addMinimizeTarget: {what} is not a data attribute; only "
                     "attributes added with addAttribute(name, rows=, cols=) "
                     "can be minimised")
-            if target.owner.scene is not self:
+            if owner_of(target).scene is not self:
                 raise SceneError(f"addMinimizeTarget: {target.describe()} does "
                                  f"not belong to scene '{self._name}'")
             if any(t is target for t in self._targets + new):
@@ -641,11 +643,14 @@ class PrimitiveUnion(Entity):
     def _add_without_shape(self, name: str) -> Attribute:
         # UNION of the members' attributes called `name`.
         self._check_new_symbol(name, "attribute")
-        found = []
-        missing = []
+        found: List[Tuple[Union[Primitive, PrimitiveUnion], Attribute]] = []
+        missing: List[Tuple[Union[Primitive, PrimitiveUnion], None]] = []
         for member in self._members:
             attr = member._attributes.get(name)
-            (found if attr is not None else missing).append((member, attr))
+            if attr is not None:
+                found.append((member, attr))
+            else:
+                missing.append((member, attr))
         if missing:
             raise LineageError(
                 f"addAttribute({name!r}) on {self.describe()}: UNION needs "

@@ -5,13 +5,15 @@ from __future__ import annotations
 
 from typing import Any
 
-from ..frontend.attribute import Attribute
+from ..frontend.attribute import Attribute, owner_of
 from ..frontend.scene import Entity, Scene
 
 
 def symbol_path(attr: Attribute) -> str:
     """Scene-relative symbol path of a named attribute, e.g. @m::@v::@x."""
-    return "::".join("@" + name for name in attr.owner.path + [attr.name])
+    name = attr.name
+    assert name is not None  # named attributes only, as said
+    return "::".join("@" + n for n in owner_of(attr).path + [name])
 
 
 def entity_path(entity: Entity) -> str:

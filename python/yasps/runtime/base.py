@@ -49,7 +49,7 @@ class Backend(Protocol):
     slot_factors: bool
 
     @property
-    def host(self) -> "Backend":
+    def host(self) -> "HostBackend":
         """The backend that runs host-side steps (the CPU)."""
 
     @property
@@ -93,6 +93,9 @@ class Backend(Protocol):
             threads: Optional[int]) -> None:
         """Assembles one energy's local derivatives into ``system``."""
 
+    def finish_assembly(self, system: Any) -> None:
+        """Ends an assembly of ``system`` (after its ``add`` calls)."""
+
     def synchronize(self, system: Any = None) -> None:
         """Waits for this backend's queued work (on ``system`` if given)."""
 
@@ -106,3 +109,14 @@ class Backend(Protocol):
         PcgReport (iterations, relative_residual recomputed from x,
         converged, stop, energy_error, condition_estimate, diagonal_ratio,
         residual_replacements, levels)."""
+
+
+class HostBackend(Backend, Protocol):
+    """The backend of host-side steps (``Backend.host``), which can also add
+    to some instances of an energy alone."""
+
+    def add_to_instances(self, system: Any, energy_index: int,
+                         instances: np.ndarray, hessians: np.ndarray) -> None:
+        """Adds f64 local Hessians (k x n x n) to the k listed instances of
+        an energy only (progressive projection's update), nothing to the
+        gradient."""

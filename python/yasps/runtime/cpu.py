@@ -52,7 +52,7 @@ class CpuBackend:
     name = "cpu"
     slot_factors = True
 
-    def __init__(self):
+    def __init__(self) -> None:
         # Outputs run with ``reuse`` keep their memory from call to call,
         # per scene: a warm Newton loop writes into pages it has touched
         # already instead of faulting in fresh ones.
@@ -181,6 +181,7 @@ def add_host_arrays(system, energy_index: int, inputs: LocalInputs,
     count, n, m = inputs.count, inputs.n, inputs.inner_size
     slots = inputs.slot_factors
     if slots is not None:
+        assert inputs.inner_hessian is not None  # slots come with their P
         # P is symmetric: row- and column-major storage agree.
         system.add_slot_factored(
             energy_index, _f64(inputs.gradient).reshape(count, m),
@@ -188,6 +189,7 @@ def add_host_arrays(system, energy_index: int, inputs: LocalInputs,
             m, slots.tables, slots.slots, slots.sources, *options)
         return
     if inputs.inner_map is not None:
+        assert inputs.inner_hessian is not None  # J comes with its P
         # Hessians kept as factors: J^T P J is formed while assembling.
         maps = _f64(from_column_major(inputs.inner_map, m, n, copy=False))
         inner = _f64(inputs.inner_hessian).reshape(count, m, m)
@@ -195,6 +197,7 @@ def add_host_arrays(system, energy_index: int, inputs: LocalInputs,
             count, n), maps, inner, m, *options)
         return
     gradient, hessian = inputs.gradient, inputs.hessian
+    assert hessian is not None  # no factors: the Hessians themselves
     if not (f32 and gradient.dtype == hessian.dtype == np.float32):
         gradient, hessian = _f64(gradient), _f64(hessian)
     # Symmetric: row- and column-major storage agree.

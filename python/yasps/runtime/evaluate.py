@@ -13,7 +13,7 @@ from typing import Any, Dict, List, Optional, Tuple
 
 import numpy as np
 
-from ..frontend.attribute import Attribute
+from ..frontend.attribute import Attribute, owner_of
 from ..frontend.errors import SceneError
 from ..frontend.scene import Entity
 from ..compiler.specs import KernelRequest
@@ -78,7 +78,7 @@ def _target(attr: Attribute) -> Tuple[Dict[Entity, List[Tuple[str, Attribute]]],
     if not attr.isNamed:
         return ({owner: [(_TEMPORARY, attr)]},
                 "::".join("@" + n for n in owner.path + [_TEMPORARY]))
-    return {}, "::".join("@" + n for n in owner.path + [attr.name])
+    return {}, symbol_path(attr)
 
 
 def compute_request(attr: Attribute) -> KernelRequest:
@@ -88,7 +88,7 @@ def compute_request(attr: Attribute) -> KernelRequest:
     collision detection reads world positions. Only the derivatives (the
     Newton system) are computed in f32."""
     extra, path = _target(attr)
-    scene = attr.owner.scene
+    scene = owner_of(attr).scene  # _target raised if it had none
     return KernelRequest(kernel_ir(scene, extra, precision="f64"), (path,),
                          scene.name)
 
@@ -98,7 +98,7 @@ def compute(attr: Attribute, backend: Backend,
     """Evaluates ``attr`` on every instance of its owner on ``backend``, in
     f64 (``config.precision`` applies to derivatives only)."""
     request = compute_request(attr)
-    owner = attr.owner
+    owner = owner_of(attr)  # compute_request raised if it had none
     count = owner.numInstances
     kernels = backend.compile(request.ir, request.paths, request.name)
     output = backend.run(kernels, owner.scene, request.paths[0], count,

@@ -14,7 +14,7 @@ from __future__ import annotations
 
 import warnings
 import weakref
-from typing import Callable, Dict, List, Optional, Sequence, Tuple
+from typing import Any, Callable, Dict, List, Optional, Sequence, Tuple, cast
 
 import numpy as np
 
@@ -45,15 +45,16 @@ class GpuSession:
         self._libraries: Dict[Tuple[str, str, str], GpuKernels] = {}
         #: the compiled library of each kernel, by (IR, pipeline, path)
         self._library_of: Dict[Tuple[str, str, str], GpuKernels] = {}
-        self._modules: Dict[str, object] = {}
+        # Loaded modules, by their library's stats' "key" (else its id).
+        self._modules: Dict[object, Any] = {}
         # (kind, path) -> (what the copy was made from, device buffer, and
         # the source object, held so that its id is not reused by another
         # object while the copy is cached)
-        self._copies: Dict[Tuple[str, str], Tuple[object, object, object]] = {}
+        self._copies: Dict[Tuple[str, str], Tuple[object, Any, object]] = {}
         #: (kind, path) of every upload, in order (for tests and tuning).
         self.uploads: List[Tuple[str, str]] = []
         # Reused outputs (see output()), by key.
-        self._outputs: Dict[object, object] = {}
+        self._outputs: Dict[object, Any] = {}
         #: what the driver raises (an allocation that fails, a bad launch)
         self.driver_error = self._native.CudaError
 
@@ -217,8 +218,10 @@ class GpuBackend:
                 f"{path}: {count} instances of {kernel.rows}x{kernel.cols} "
                 f"doubles need {8 * size:,} bytes on the GPU: {err}") from None
         before = len(gpu.uploads)
+        # host_input gave every argument but the output its array.
         buffers = [out if a.kind == "out" else
-                   gpu.copy_of(a.kind, a.path, source_of(scene, a), host)
+                   gpu.copy_of(a.kind, a.path, source_of(scene, a),
+                               cast(np.ndarray, host))
                    for a, host in zip(kernel.arguments, inputs)]
         gpu.launch(kernels, path, count, buffers)
         self.last_uploads = gpu.uploads[before:]

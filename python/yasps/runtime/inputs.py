@@ -9,6 +9,7 @@ from typing import Any, Optional
 import numpy as np
 
 from ..compiler.params import KernelArgument
+from ..frontend.attribute import owner_of
 from ..frontend.errors import SceneError, ValueUpdateError
 from ..frontend.scene import Connectivity, PrimitiveUnion, Scene
 from ..ir import resolve
@@ -17,7 +18,7 @@ from ..ir import resolve
 def target_dof_offsets(scene: Scene) -> np.ndarray:
     """The first global DoF of each minimisation target, in order: targets
     one after another, instance after instance (paper appendix A.1)."""
-    sizes = [t.owner.numInstances * t.rows * t.cols
+    sizes = [owner_of(t).numInstances * t.rows * t.cols
              for t in scene.minimizeTargets]
     return np.concatenate([[0], np.cumsum(sizes)[:-1]]).astype(np.int64) \
         if sizes else np.zeros(0, dtype=np.int64)

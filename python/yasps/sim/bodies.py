@@ -9,7 +9,7 @@ values (a parameter sweep) reuses the compiled kernels, and
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Optional, Sequence, Tuple
+from typing import Optional, Sequence, Tuple, Union, cast
 
 import numpy as np
 
@@ -17,9 +17,15 @@ from ..frontend import energies as E
 from ..frontend.energies import Number
 from ..frontend.attribute import Attribute
 from ..frontend.errors import ArgumentError, SceneError
-from ..frontend.scene import Mesh, Primitive
+from ..frontend.scene import Mesh, Primitive, PrimitiveUnion
 from . import inversion
 from .meshes import HEX_CORNERS, hinges_of
+
+
+def _vertices_of(positions: Attribute) -> Union[Primitive, PrimitiveUnion]:
+    """The owner of ``positions``, as the target of a connectivity to the
+    vertices: addConnectivity raises SceneError if it is not a primitive."""
+    return cast(Union[Primitive, PrimitiveUnion], positions.owner)
 
 
 def material_constant(mesh: Mesh, name: str, value: Number) -> Attribute:
@@ -61,7 +67,7 @@ MATERIALS = {"stable_neo_hookean": E.stable_neo_hookean,
 INVERSION_BARRIERS = frozenset({"neo_hookean"})
 
 
-def lame(young: Number, poisson: Number) -> Tuple[float, float]:
+def lame(young: float, poisson: float) -> Tuple[float, float]:
     """Lame's (mu, lambda) from Young's modulus and Poisson's ratio (3-D)."""
     if not young > 0 or not -1.0 < poisson < 0.5:
         raise ArgumentError(f"lame: need Young's modulus > 0 and -1 < Poisson's "
@@ -101,7 +107,7 @@ def add_elastic_tets(mesh: Mesh, positions: Attribute, rest: np.ndarray,
     t.addConstant("vol", rows=1).updateValue(
         np.abs(np.linalg.det(edges))[:, None] / 6)
     gathered = t.addAttribute("c", through=t.addConnectivity(
-        "t2v", positions.owner, tets, 4), source=positions)
+        "t2v", _vertices_of(positions), tets, 4), source=positions)
     mu, lam, scale = (material_constant(mesh, f"{name}_{what}", value)
                       for what, value in (("mu", mu), ("lam", lam),
                                           ("scale", scale)))
@@ -190,7 +196,7 @@ def add_cloth(mesh: Mesh, positions: Attribute, rest: np.ndarray,
     tri.addConstant("uv_inv", rows=2, cols=2).updateValue(inverse)
     tri.addConstant("area", rows=1).updateValue(areas[:, None])
     corners = tri.addAttribute("c", through=tri.addConnectivity(
-        "f2v", positions.owner, faces, 3), source=positions)
+        "f2v", _vertices_of(positions), faces, 3), source=positions)
     energy = tri.addAttribute("stretch", computed_attribute=scale *
                               E.baraff_witkin(corners, tri["uv_inv"],
                                               tri["area"], stretch, shear))
@@ -201,7 +207,7 @@ def add_cloth(mesh: Mesh, positions: Attribute, rest: np.ndarray,
         h.addConstant("length", rows=1).updateValue(np.linalg.norm(
             rest[hinges[:, 1]] - rest[hinges[:, 0]], axis=1)[:, None])
         joined = h.addAttribute("h", through=h.addConnectivity(
-            "h2v", positions.owner, hinges, 4), source=positions)
+            "h2v", _vertices_of(positions), hinges, 4), source=positions)
         mesh.scene.addEnergy(h.addAttribute(
             "bending", computed_attribute=scale * E.dihedral_bending(
                 joined, h["length"], bending)), projection=projection)
@@ -362,7 +368,7 @@ def add_hex8_neo_hookean(mesh: Mesh, positions: Attribute, rest: np.ndarray,
     q.addConstant("G", rows=8, cols=3).updateValue(G)
     q.addConstant("vol", rows=1).updateValue(w[:, None])
     x = q.addAttribute("c", through=q.addConnectivity(
-        "q2v", positions.owner, corners, 8), source=positions)
+        "q2v", _vertices_of(positions), corners, 8), source=positions)
     energy = q.addAttribute("elastic", computed_attribute=scale *
                             E.stable_neo_hookean(x.T * q["G"], mu, lam,
                                                  q["vol"]))
@@ -378,7 +384,7 @@ def add_caged_surface(mesh: Mesh, cage_positions: Attribute,
     p = mesh.addPrimitive(name, numInstances=len(cage.cell_of))
     p.addConstant("w", rows=8).updateValue(cage.weights[:, :, None])
     corners = p.addAttribute("c", through=p.addConnectivity(
-        "p2c", cage_positions.owner, cage.corners_of_points(), 8),
+        "p2c", _vertices_of(cage_positions), cage.corners_of_points(), 8),
         source=cage_positions)
     p.addAttribute("position", computed_attribute=corners.T * p["w"])
     return p

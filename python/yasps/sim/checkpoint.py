@@ -18,7 +18,7 @@ not, so that their absence changes no bit.
 from __future__ import annotations
 
 from os import PathLike
-from typing import Dict, Iterator, List, Tuple, Union
+from typing import Any, Dict, Iterator, List, Tuple, Union
 
 import numpy as np
 
@@ -120,7 +120,9 @@ def restore_scene_state(scene, state: Dict[str, np.ndarray]) -> None:
 
 def save(stepper, path: Union[str, PathLike]) -> None:
     """Writes ``stepper``'s state (an ImplicitEuler) to ``path`` (.npz)."""
-    arrays = {f"scene|{k}": v for k, v in scene_state(stepper.scene).items()}
+    # Any: np.savez's keywords also include allow_pickle, a bool.
+    arrays: Dict[str, Any] = {
+        f"scene|{k}": v for k, v in scene_state(stepper.scene).items()}
     arrays["version"] = np.array(VERSION)
     arrays["dt"] = np.array(stepper.dt)
     arrays["time"] = np.array(stepper.time)

@@ -19,6 +19,8 @@ would stop it at the caller's own tolerance (see its ``cg_forcing``).
 from __future__ import annotations
 
 import math
+from typing import Optional
+
 from ..frontend.errors import ArgumentError
 
 #: The loosest relative residual a direction is solved to (SymX's cap).
@@ -34,7 +36,7 @@ class Forcing:
             raise ArgumentError(f"Forcing: tightest must be >= 0, got {tightest}")
         self.tightest = float(tightest)
         self.loosest = max(float(loosest), self.tightest)
-        self._first = None
+        self._first: Optional[float] = None
 
     def tolerance(self, gradient_max: float) -> float:
         """The tolerance of a solve whose gradient's largest free entry is

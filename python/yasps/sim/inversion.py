@@ -18,7 +18,7 @@ whose targets include their positions bounds its steps by them
 
 from __future__ import annotations
 
-from typing import Callable, List, Optional, Sequence, Tuple, Union
+from typing import Callable, List, Optional, Sequence, Tuple, Union, cast
 from weakref import WeakKeyDictionary
 
 import numpy as np
@@ -100,7 +100,9 @@ def inversion_bound(tets: np.ndarray, target: int = 0,
               p: Union[np.ndarray, Sequence[np.ndarray]]) -> float:
         if isinstance(x, (list, tuple)):
             x, p = x[target], p[target]
-        return inversion_free_fraction(x, p, tets, keep)
+        # One target's values now (a list or tuple holds one per target).
+        return inversion_free_fraction(cast(np.ndarray, x), cast(np.ndarray, p),
+                                       tets, keep)
 
     return bound
 

@@ -16,7 +16,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..frontend.attribute import Attribute
+from ..frontend.attribute import Attribute, owner_of
 from ..frontend.errors import SceneError
 from .bodies import material_constant, position_owner
 
@@ -32,7 +32,7 @@ class Loads:
 
     @property
     def count(self) -> int:
-        return self.positions.owner.numInstances
+        return owner_of(self.positions).numInstances
 
     def _mask(self, mask) -> np.ndarray:
         if mask is None:

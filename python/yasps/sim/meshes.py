@@ -46,8 +46,8 @@ def cloth_grid(n: int, size: float = 1.0,
     x, y = np.meshgrid(ticks, ticks, indexing="xy")
     verts = np.stack([x.ravel(), y.ravel(),
                       np.full(x.size, float(height))], axis=1)
-    i, j = np.meshgrid(np.arange(n), np.arange(n), indexing="xy")
-    i, j = i.ravel(), j.ravel()
+    grid_i, grid_j = np.meshgrid(np.arange(n), np.arange(n), indexing="xy")
+    i, j = grid_i.ravel(), grid_j.ravel()
     a = i + (n + 1) * j          # the cell's corners: a b below, c d above
     b, c, d = a + 1, a + n + 1, a + n + 2
     # Alternating the diagonal per cell (a checkerboard) keeps the grid
@@ -118,8 +118,8 @@ def locality_order(cells: np.ndarray, num_vertices: int) -> np.ndarray:
 
     cells = np.asarray(cells, dtype=np.int64)
     k = cells.shape[1] if cells.ndim == 2 else 0
-    pairs = [cells[:, [a, b]] for a in range(k) for b in range(k) if a != b]
-    pairs = np.concatenate(pairs) if pairs else np.zeros((0, 2), np.int64)
+    blocks = [cells[:, [a, b]] for a in range(k) for b in range(k) if a != b]
+    pairs = np.concatenate(blocks) if blocks else np.zeros((0, 2), np.int64)
     graph = sparse.csr_matrix((np.ones(len(pairs), dtype=np.int8),
                                (pairs[:, 0], pairs[:, 1])),
                               shape=(num_vertices, num_vertices))

@@ -11,7 +11,8 @@ from __future__ import annotations
 
 import time
 import warnings
-from typing import Callable, Dict, List, Optional, Sequence, Tuple, Union
+from typing import (Callable, Dict, List, Optional, Sequence, Tuple, Union,
+                    overload)
 
 import numpy as np
 from tqdm import tqdm
@@ -32,6 +33,8 @@ from .prescribed import (Prescription, add_pull, entry_mask,
                          pull_prescribed)
 
 Targets = Union[Attribute, Sequence[Attribute]]
+#: Predictions of targets: None for a target whose inertia is in world space.
+Predictions = Union[Attribute, Sequence[Optional[Attribute]]]
 
 #: The stages of a Newton iteration that a report times; ``compile`` is the
 #: kernels' compilation (or their loading from the caches), done before the
@@ -61,7 +64,7 @@ class NewtonReport:
     energy), ``assembly`` (indices and the global system), ``pcg`` and
     ``energy`` (the line search's energy evaluations)."""
 
-    def __init__(self):
+    def __init__(self) -> None:
         self.iterations = 0
         self.energies: List[float] = []
         self.stepEnergies: List[Tuple[float, float]] = []
@@ -135,7 +138,16 @@ def compile_kernels(scene, contact, progress: bool) -> float:
     return compile_scene(scene, also=also, progress=progress).seconds
 
 
-def _as_list(targets: Targets) -> List[Attribute]:
+# Typed per use: a list of targets, or of predictions (None: world inertia).
+@overload
+def _as_list(targets: Targets) -> List[Attribute]: ...
+
+
+@overload
+def _as_list(targets: Predictions) -> List[Optional[Attribute]]: ...
+
+
+def _as_list(targets: Predictions) -> list:
     return [targets] if isinstance(targets, Attribute) else list(targets)
 
 
@@ -463,7 +475,8 @@ class ImplicitEuler:
     world positions (:func:`yasps.sim.wrap_rotation_vectors`)."""
 
     def __init__(self, scene, x: Optional[Targets] = None,
-                 x_hat: Optional[Targets] = None, dt: Optional[float] = None,
+                 x_hat: Optional[Predictions] = None,
+                 dt: Optional[float] = None,
                  gravity=DEFAULT_GRAVITY, velocity_tolerance: float = 1e-2,
                  step_bound: Optional[Callable[[np.ndarray, np.ndarray],
                                                float]] = None,
@@ -473,7 +486,7 @@ class ImplicitEuler:
                  cg_stopping: str = "residual",
                  friction_iterations: int = 1,
                  *, targets: Optional[Sequence[Attribute]] = None,
-                 predicted: Optional[Sequence[Attribute]] = None,
+                 predicted: Optional[Sequence[Optional[Attribute]]] = None,
                  projection: str = "progressive", cg_forcing: bool = True,
                  warm_start: bool = True, velocities=None, world=None,
                  world_velocities=None,
@@ -779,6 +792,7 @@ class ImplicitEuler:
             if fn is not None:
                 t.updateValue(fn(t.value))
         self.time += self.dt
+        assert report is not None  # friction_iterations >= 1: one solve
         report.prescribedLag = lagging
         report.seconds["compile"] += compile_seconds
         if warn and not report.converged and not self._warned:

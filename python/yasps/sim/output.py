@@ -23,8 +23,9 @@ PathArg = Union[str, os.PathLike]
 Color = Union[str, Tuple[float, float, float]]
 #: One surface to draw: vertices (N, 3), triangles (M, 3) and a colour.
 SurfaceMesh = Tuple[np.ndarray, np.ndarray, Color]
-#: ((xmin, ymin, zmin), (xmax, ymax, zmax)).
-Bounds = Tuple[Sequence[float], Sequence[float]]
+#: ((xmin, ymin, zmin), (xmax, ymax, zmax)), as sequences or arrays.
+Bounds = Tuple[Union[Sequence[float], np.ndarray],
+               Union[Sequence[float], np.ndarray]]
 
 #: The light comes from above, a little from the front left: a fixed world
 #: direction, so that shading does not flicker when the view turns.
@@ -184,13 +185,13 @@ def _draw(meshes: Sequence[SurfaceMesh], view: Tuple[float, float],
     ax.view_init(elev=view[0], azim=view[1])
     # One collection for all meshes: matplotlib depth-sorts the faces
     # within a collection only, so separate ones would occlude wrongly.
-    polygons, colors = [], []
+    polygons, shaded = [], []
     for verts, faces, color in meshes:
         verts = np.asarray(verts, dtype=float).reshape(-1, 3)
         faces = np.asarray(faces, dtype=np.int64).reshape(-1, 3)
         polygons.append(verts[faces])
-        colors.append(face_shades(verts, faces)[:, None] * np.array(to_rgb(color)))
-    colors = np.concatenate(colors)
+        shaded.append(face_shades(verts, faces)[:, None] * np.array(to_rgb(color)))
+    colors = np.concatenate(shaded)
     # Edges in the face colour close the hairline seams that antialiasing
     # leaves between neighbouring triangles.
     ax.add_collection3d(Poly3DCollection(np.concatenate(polygons),
@@ -397,7 +398,10 @@ def write_video(path: PathArg, images: Sequence[np.ndarray],
         with imageio_v2.get_writer(path, format="FFMPEG", fps=fps,
                                    codec="libx264", macro_block_size=2) as writer:
             for frame in frames:
-                writer.append_data(_pad_to_even(frame))
+                # imageio's stub types __enter__ as the base class; the
+                # writer it returns (itself) has append_data.
+                writer.append_data(  # type: ignore[attr-defined]
+                    _pad_to_even(frame))
         return path
     path = path.with_suffix(".gif")
     imageio_v3.imwrite(path, np.stack(frames), plugin="pillow",

@@ -14,11 +14,11 @@ friction push the free bodies out of their way.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Callable, List, Optional, Sequence
+from typing import Callable, List, Optional, Sequence, TypeVar
 
 import numpy as np
 
-from ..frontend.attribute import Attribute
+from ..frontend.attribute import Attribute, owner_of
 from ..frontend.errors import SceneError
 from ..solve.minimize import checked_fixed_mask
 
@@ -55,7 +55,7 @@ class Pull:
 def add_pull(target: Attribute, index: int) -> Pull:
     """Registers the :class:`Pull` penalty of prescription ``index`` on
     ``target``'s primitive (off until a step needs it)."""
-    owner = target.owner
+    owner = owner_of(target)  # a target: a data attribute
     rows, cols = target.shape
     wanted = owner.addConstant(f"prescribed{index}_value", rows=rows,
                                cols=cols)
@@ -175,8 +175,12 @@ def curvature(scene, targets: Sequence[Attribute],
     return abs(e2 - 2 * e1 + e0) / (h * size) ** 2
 
 
+#: What a penalty solve of :func:`pull_prescribed` returns (its report).
+_Report = TypeVar("_Report")
+
+
 def pull_prescribed(prescriptions: List[Prescription], targets, time: float,
-                    solve: Callable[[], object], scene) -> List[object]:
+                    solve: Callable[[], _Report], scene) -> List[_Report]:
     """Brings prescribed entries that CCD stopped short towards their
     values at ``time`` by the penalty solves ``solve()`` (Newton with them
     free); returns the solves' reports."""
@@ -195,12 +199,13 @@ def pull_prescribed(prescriptions: List[Prescription], targets, time: float,
         # material's barrier: a tet would invert): no pull can get there.
         return []
     k = 100.0 * max(bend, 1e-300)
-    reports = []
+    reports: List[_Report] = []
     try:
         for _ in range(PULL_ROUNDS):
             if not np.isfinite(k):
                 break
             for p in prescriptions:
+                assert p.pull is not None  # prescribe() gave each its pull
                 p.pull.set(wanted[id(p)], p.mask, k)
             reports.append(solve())
             left = max(float(np.abs((targets[p.index].value
@@ -211,6 +216,7 @@ def pull_prescribed(prescriptions: List[Prescription], targets, time: float,
             k *= 100.0
     finally:
         for p in prescriptions:
+            assert p.pull is not None  # as above
             p.pull.off()
     return reports
 

@@ -21,7 +21,7 @@ from typing import Optional
 import numpy as np
 
 from ..frontend import energies as E
-from ..frontend.attribute import Attribute
+from ..frontend.attribute import Attribute, owner_of
 from ..frontend.errors import SceneError
 from .bodies import position_owner
 
@@ -37,7 +37,7 @@ class WorldInertia:
     #: the masses, a 1x1 constant beside them
     mass: Attribute
     #: the world velocities (N, 3, 1) at the start of the next step
-    velocity: np.ndarray = field(repr=False, default=None)
+    velocity: Optional[np.ndarray] = field(repr=False, default=None)
     _start: Optional[np.ndarray] = field(repr=False, default=None)
 
     def world(self) -> np.ndarray:
@@ -47,7 +47,7 @@ class WorldInertia:
     def set_velocity(self, velocity) -> None:
         """Sets the world velocities: an (N, 3) or (N, 3, 1) array, or None
         for rest."""
-        count = self.positions.owner.numInstances
+        count = owner_of(self.positions).numInstances
         if velocity is None:
             self.velocity = np.zeros((count, 3, 1))
             return
@@ -61,6 +61,8 @@ class WorldInertia:
 
     def predict(self, dt: float, gravity: Optional[np.ndarray]) -> None:
         """At a step's start: ``x_hat = x + dt v + dt^2 g``."""
+        # add_world_inertia sets it (set_velocity), and every step after.
+        assert self.velocity is not None
         self._start = self.world()
         pull = 0.0 if gravity is None else \
             np.asarray(gravity, dtype=float).reshape(1, 3, 1)

@@ -19,7 +19,7 @@ from typing import Dict, List, Optional
 import numpy as np
 
 from .. import config
-from ..frontend.attribute import Attribute
+from ..frontend.attribute import Attribute, owner_of
 from ..frontend.errors import SceneError
 from ..frontend.scene import Mesh, Primitive, PrimitiveUnion, Scene
 from ..frontend.values import from_column_major
@@ -41,7 +41,7 @@ class DofLayout:
         for t in targets:
             self.offset[id(t)] = blocks[-1]
             rc = t.rows * t.cols
-            blocks += list(blocks[-1] + rc * np.arange(1, t.owner.numInstances + 1))
+            blocks += list(blocks[-1] + rc * np.arange(1, owner_of(t).numInstances + 1))
         self.block_offsets = np.asarray(blocks, dtype=np.int64)
         self.size = int(blocks[-1])
 
@@ -50,7 +50,7 @@ class DofLayout:
         out = []
         for t in self.targets:
             start = self.offset[id(t)]
-            n = t.owner.numInstances * t.rows * t.cols
+            n = owner_of(t).numInstances * t.rows * t.cols
             out.append(from_column_major(x[start:start + n].copy(), t.rows, t.cols))
         return out
 
@@ -211,18 +211,19 @@ def assemble(scene: Scene, backend: Backend, threads: Optional[int] = None,
     ir = kernel_ir(scene)
     point = _point_key(scene, ir, backend, threads)
     last = _last_points.get(scene)
-    reused = last is not None and last.key == point
+    if last is not None and last.key != point:
+        last = None  # another point's derivatives: not reused
     # None: every instance projected; a DoF mask: those of the instances
     # reading it (at first none, the exact Hessians where allowed, unless
     # the gradient here is known already).
     chosen: Optional[np.ndarray] = None
     if projection is not None and not projection.projects_all():
         chosen = np.zeros(layout.size, dtype=bool)
-        if reused and last.gradient is not None \
+        if last is not None and last.gradient is not None \
                 and not projection.projects_none():
             chosen = projection.projected_dofs(last.gradient)
     start = clock()
-    if reused:
+    if last is not None:
         entries = last.entries
     else:
         entries = _contributions(scene, backend, threads, ir)
@@ -247,6 +248,7 @@ def assemble(scene: Scene, backend: Backend, threads: Optional[int] = None,
         static_read = read_dofs(layout.size, static_dofs)
         _static_systems[scene] = (key, host_system, static_read)
     else:
+        assert cached is not None  # not rebuilt: there is one
         host_system, static_read = cached[1], cached[2]
     dynamic_dofs = [c.dofs() for _, c in dynamic]
     host_system.set_dynamic(dynamic_dofs)
@@ -256,9 +258,12 @@ def assemble(scene: Scene, backend: Backend, threads: Optional[int] = None,
     start = clock()
     _assemble_inputs(backend, system, inputs, threads)
     spent["assembly"] += clock() - start
-    selective = chosen is not None and not projection.projects_none() and \
+    # chosen is only set with a projection.
+    selective = chosen is not None and projection is not None and \
+        not projection.projects_none() and \
         any(c.selective for c in contributions)
     if selective and last.gradient is None:
+        assert projection is not None  # selective: see above
         # The gradient does not depend on the projection: read it once.
         last.gradient = np.empty(layout.size)
         system.gradient(last.gradient)
@@ -267,6 +272,7 @@ def assemble(scene: Scene, backend: Backend, threads: Optional[int] = None,
             # Assembly adds: only the chosen instances' projected minus
             # exact Hessians are added to what is there (SymX's update),
             # to those instances alone.
+            host = backend.host  # backend itself, as the host backend
             start = clock()
             updates = [(k, c.projection_update(chosen))
                        for k, c in enumerate(contributions)]
@@ -274,8 +280,8 @@ def assemble(scene: Scene, backend: Backend, threads: Optional[int] = None,
             start = clock()
             for k, update in updates:
                 if update is not None:
-                    backend.add_to_instances(system, k, update.instances,
-                                             update.hessians)
+                    host.add_to_instances(system, k, update.instances,
+                                          update.hessians)
             backend.finish_assembly(system)
             spent["assembly"] += clock() - start
         elif chosen.any():

@@ -6,7 +6,7 @@ backend's memory for assembly (:func:`assembly_inputs`)."""
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Callable, Dict, List, Optional, Tuple
+from typing import Callable, Dict, List, Optional, Tuple, cast
 
 import numpy as np
 
@@ -15,7 +15,7 @@ from ..compiler import MissingAttributeError
 from ..compiler.pipelines import differentiation_pipeline
 from ..compiler.specs import (DerivativeKernels, KernelRequest,
                               derivative_kernels, scene_params)
-from ..frontend.attribute import Attribute
+from ..frontend.attribute import Attribute, owner_of
 from ..frontend.errors import SceneError
 from ..frontend.scene import Scene
 from ..ir import kernel_ir, symbol_path
@@ -136,7 +136,7 @@ class _Outputs:
             scene, energy, assembly_only, ir, tables is not None)
         self.scene, self.energy, self.backend = scene, energy, backend
         self.threads, self.reuse = threads, reuse
-        self.count = energy.owner.numInstances
+        self.count = owner_of(energy).numInstances
         self.tables = tables
         try:
             self.kernels = backend.compile(request.ir, request.paths,
@@ -200,6 +200,8 @@ class _Outputs:
         assembly's cache or computed now."""
         if table.jacobian is None:
             return np.eye(table.entries)[None]
+        # Only _slot_inputs asks, and a plan comes only with tables.
+        assert self.tables is not None
         if table.jacobian not in self.tables:
             count = table.source.owner.numInstances
             kernel = self.kernels.kernel(table.jacobian)
@@ -214,6 +216,7 @@ class _Outputs:
     def _slot_inputs(self) -> LocalInputs:
         """The inner gradients and P, with J in shared tables."""
         plan = self.plan
+        assert plan is not None  # inputs() comes here only with a plan
         # No instances read no table: none is evaluated for them.
         tables = [self._table(t) for t in plan.tables] if self.count else []
         slots = SlotInputs(tables, plan.slots, plan.sources(self.count))
@@ -321,8 +324,8 @@ class Contribution:
             self.projected_count = 0
             return np.zeros(self.count, dtype=bool)
         dofs = self.dofs()
-        reads = np.where(dofs >= 0, projected_dofs[np.maximum(dofs, 0)],
-                         False).any(axis=1)
+        reads = cast(np.ndarray, np.where(
+            dofs >= 0, projected_dofs[np.maximum(dofs, 0)], False).any(axis=1))
         self.projected_count = int(reads.sum())
         return reads
 
@@ -342,7 +345,9 @@ class Contribution:
         if self._compressed or (self._projected is None and
                                 rows.sum() <= ROWS_FRACTION * count):
             return self._projected_rows(rows)
-        return self.projected().hessian.reshape(count, n * n)[rows]
+        projected = self.projected().hessian
+        assert projected is not None  # selective: whole projected Hessians
+        return projected.reshape(count, n * n)[rows]
 
     def _projected_rows(self, rows: np.ndarray) -> np.ndarray:
         """The projections of only the instances ``rows``, each of its
@@ -418,7 +423,7 @@ def energy_derivatives(scene: Scene, energy: Attribute, backend: Backend,
     spec = outputs.spec
     resolver = ParamResolver(scene, spec.ir)
     params: List[ParamSlot] = [
-        ParamSlot(p, energy.owner, resolver)
+        ParamSlot(p, owner_of(energy), resolver)
         for p in outputs.kernels.params(spec.path("grad"))]
     results = {path[len(spec.base) + 2:]: outputs.host(path[len(spec.base) + 2:])
                for path in spec.evaluated}

@@ -10,6 +10,7 @@ from typing import List, Optional, Sequence, Tuple
 
 import numpy as np
 
+from ..frontend.attribute import owner_of
 from .assembly import DofLayout
 
 #: The bound on the step's relative error that a converged residual gives,
@@ -99,7 +100,7 @@ def unread_targets(layout: DofLayout, read: np.ndarray,
     out = []
     for target in layout.targets:
         start = layout.offset[id(target)]
-        stop = start + target.owner.numInstances * target.rows * target.cols
+        stop = start + owner_of(target).numInstances * target.rows * target.cols
         wanted = np.ones(stop - start, dtype=bool) if mask is None else \
             mask[start:stop] == 0
         if wanted.any() and not read[start:stop][wanted].any():

@@ -7,11 +7,12 @@ from __future__ import annotations
 
 import time
 import warnings
-from typing import Callable, Dict, List, Optional, Union
+from typing import Any, Callable, Dict, List, Optional, Union
 
 import numpy as np
 
 from .. import config
+from ..frontend.attribute import owner_of
 from ..frontend.errors import SceneError, YaspsError
 from ..runtime import Backend
 from . import preconditioner_choice
@@ -67,7 +68,7 @@ def fixed_dof_mask(layout: DofLayout, fixed) -> Optional[np.ndarray]:
                          f"or None per target, in addMinimizeTarget's order)")
     parts = []
     for target, mask in zip(layout.targets, fixed):
-        n, r, c = target.owner.numInstances, target.rows, target.cols
+        n, r, c = owner_of(target).numInstances, target.rows, target.cols
         if mask is None:
             parts.append(np.zeros(n * r * c, dtype=np.uint8))
             continue
@@ -120,7 +121,7 @@ def minimize_energy(scene, backend: Backend,
                          f"(or None: project every instance), got "
                          f"{projection_threshold}")
     timings: Dict[str, float] = {}
-    report: Dict[str, object] = {}
+    report: Dict[str, Any] = {}
     projection = None
     if projection_threshold is not None:
         early = DofLayout(scene.minimizeTargets)
@@ -159,6 +160,7 @@ def minimize_energy(scene, backend: Backend,
         system.gradient(gradient)
         gradient_max = free_gradient_max(gradient, mask)
     if callable(tolerance):
+        assert gradient_max is not None  # computed above for a callable
         tolerance = tolerance(gradient_max)
         if not (tolerance >= 0):
             raise ArgumentError(f"minimizeEnergy: the tolerance function gave "

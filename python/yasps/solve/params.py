@@ -12,7 +12,7 @@ import numpy as np
 from ..compiler.params import (JoinParam, Param, ReadParam,
                                attribute_params)
 from ..compiler.pipelines import DIFFERENTIATION_PIPELINE
-from ..frontend.attribute import Attribute
+from ..frontend.attribute import Attribute, owner_of
 from ..frontend.scene import Entity, Scene
 from ..ir import resolve, symbol_path
 
@@ -80,7 +80,7 @@ class ParamResolver:
             self.cache[path] = attribute_params(
                 self.ir, DIFFERENTIATION_PIPELINE, [path + "__jac"],
                 self.scene.name)[0]
-        return [ParamSlot(p, attr.owner, self) for p in self.cache[path]]
+        return [ParamSlot(p, owner_of(attr), self) for p in self.cache[path]]
 
     def expand(self, attr: Attribute, instance: int) -> List[Location]:
         if attr.kind in ("data", "constant"):

@@ -142,11 +142,11 @@ class SlotPlan:
         """(table, first instance in the numbering that reaches ``attr``,
         whether every instance reads row 0) of each source behind it."""
         if attr.kind == "union":
-            union = attr.owner
-            assert isinstance(union, PrimitiveUnion)
+            union, name = attr.owner, attr.name
+            assert isinstance(union, PrimitiveUnion) and name is not None
             out: List[_Leaf] = []
             for member, offset in zip(union.members, union.offsets):
-                out += self._leaves(member._attributes[attr.name],
+                out += self._leaves(member._attributes[name],
                                     start + int(offset))
             return out
         if id(attr) not in self._source_of:

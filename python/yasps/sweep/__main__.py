@@ -9,7 +9,9 @@ import argparse
 import importlib.util
 import json
 import sys
+from importlib.machinery import ModuleSpec
 from pathlib import Path
+from typing import cast
 
 from .grid import parameter_sets
 from .runner import run
@@ -19,9 +21,13 @@ def load_simulate(script: Path):
     """``simulate`` of a script, imported as a module named after the file
     (the workers import it the same way, from the script's folder)."""
     sys.path.insert(0, str(script.resolve().parent))
-    spec = importlib.util.spec_from_file_location(script.stem, script)
+    # None for a file without a Python suffix, which module_from_spec then
+    # rejects (AttributeError); a spec it does give has its loader.
+    spec = cast(ModuleSpec,
+                importlib.util.spec_from_file_location(script.stem, script))
     module = importlib.util.module_from_spec(spec)
     sys.modules[script.stem] = module
+    assert spec.loader is not None
     spec.loader.exec_module(module)
     if not callable(getattr(module, "simulate", None)):
         raise SystemExit(f"{script} defines no function simulate(params)")

@@ -147,6 +147,7 @@ def run(simulate: Callable[..., Dict[str, Any]],
         """Why the attempt ``ref`` of ``key`` (submitted at ``since``) is
         stopped now, or None: the time limit counts from the start its
         worker marks, which a worker has STARTUP_SECONDS to reach."""
+        assert timeout is not None  # only called with a time limit
         begun = started_at.get(ref)
         if begun is None and (folder / "runs" / key / STARTED).exists():
             begun = started_at[ref] = now
