@@ -250,3 +250,33 @@ def test_a_trial_far_from_converging_waits_the_longest():
     assert not choice.next_attempt(1000).trial
     choice.record(choice.next_attempt(1000), 400, "converged")
     assert choice.next_attempt(1000).trial
+
+
+ON_THE_GPU = """
+    import sys
+    import yasps
+    sys.path.insert(0, %r)
+    from test_preconditioner_choice import stiff_cloth, solve
+    yasps.config.gpu_derivatives = False
+    for backend in ("cpu", "gpu"):
+        yasps.config.backend = backend
+        s, fixed, _ = stiff_cloth(40, "cloth_" + backend)
+        seen = [solve(s, fixed, "auto")[1] for _ in range(2)]
+        print(backend, *[(i["backend"], i["preconditioner"],
+                          i["trialIterations"] > 0) for i in seen])
+"""
+
+
+def test_auto_is_block_jacobi_on_the_gpu_backend():
+    """The cost model is the CPU's: on the GPU backend (its kernels run by
+    the stand-in driver) "auto" solves with block-Jacobi and tries nothing,
+    where the CPU tries the multilevel preconditioner at its second solve."""
+    from pathlib import Path
+    from test_gpu_runtime import FAKE_DRIVER, HAS_PTXAS, run_python
+    if not FAKE_DRIVER.exists() or not HAS_PTXAS:
+        pytest.skip("needs the stand-in driver and the CUDA toolkit")
+    out = run_python(ON_THE_GPU % str(Path(__file__).resolve().parent),
+                     YASPS_CUDA_LIBRARY=str(FAKE_DRIVER))
+    cpu = "cpu ('cpu', 'block-jacobi', False) ('cpu', 'block-jacobi', True)"
+    gpu = "gpu ('gpu', 'block-jacobi', False) ('gpu', 'block-jacobi', False)"
+    assert out.strip().splitlines()[-2:] == [cpu, gpu], out

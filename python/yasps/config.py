@@ -76,7 +76,8 @@
   iterations (fine meshes, stiff materials). ``"auto"`` chooses per scene
   between them by bounded trials and a fixed cost model (deterministic:
   iteration counts, not clocks; :mod:`yasps.solve.preconditioner_choice`);
-  ``lastSolve["preconditioner"]`` says which one a solve used.
+  ``lastSolve["preconditioner"]`` says which one a solve used. On the
+  GPU backend ``"auto"`` is block-Jacobi (the model is the CPU's).
   ``docs/benchmarks.md`` has the figures.
 - ``gpu_derivatives``: on the GPU backend, ``minimizeEnergy`` computes the
   energies' local derivatives on the device, where assembly reads them

@@ -47,6 +47,10 @@ class Backend(Protocol):
     name: str
     #: whether add() forms J^T P J from shared slot Jacobian tables
     slot_factors: bool
+    #: whether ``config.preconditioner = "auto"`` chooses between the
+    #: preconditioners here (its cost model is the CPU's); else it is
+    #: block-Jacobi
+    chooses_preconditioner: bool
 
     @property
     def host(self) -> "HostBackend":

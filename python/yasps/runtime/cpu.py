@@ -51,6 +51,7 @@ class CpuBackend:
 
     name = "cpu"
     slot_factors = True
+    chooses_preconditioner = True
 
     def __init__(self) -> None:
         # Outputs run with ``reuse`` keep their memory from call to call,

@@ -162,6 +162,10 @@ class GpuBackend:
     #: The device system assembles per-instance factors J and P; shared
     #: slot Jacobian tables are a CPU path so far.
     slot_factors = False
+    #: A multilevel solve on the device took 10x a block-Jacobi one, its
+    #: setup dominating (docs/gpu.md): "auto" is block-Jacobi here until
+    #: that setup moves to the device and the choice has a device model.
+    chooses_preconditioner = False
 
     def __init__(self, host: CpuBackend):
         self._host = host

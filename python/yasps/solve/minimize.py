@@ -167,8 +167,12 @@ def minimize_energy(scene, backend: Backend,
                                 f"{tolerance}, not a number >= 0")
     x = np.zeros(system.size)
     start = time.perf_counter()
+    requested = config.resolve_preconditioner()
+    if requested == preconditioner_choice.AUTO and \
+            not backend.chooses_preconditioner:
+        requested = preconditioner_choice.BLOCK_JACOBI
     pcg, preconditioner, trial_iterations = preconditioner_choice.solve(
-        scene, config.resolve_preconditioner(), int(maxIterations),
+        scene, requested, int(maxIterations),
         lambda chosen, cap: backend.solve(system, x, float(tolerance), cap,
                                           threads, mask, stopping, chosen),
         float(tolerance), stopping)
