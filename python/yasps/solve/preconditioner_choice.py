@@ -22,9 +22,9 @@ converges within it is the solve, and the choice switches; one that does
 not is redone with the current preconditioner (about twice a solve's cost
 once per period) and the period doubles, up to ``MAX_PERIOD`` (at once
 where the trial came less than ``FAR`` of the way to its tolerance), unless
-the current preconditioner's solves grow ``RISE`` times costlier than when
-it last won a trial: then the verdict is stale and the next solve is a
-trial.
+the current preconditioner's solves grow ``RISE`` times costlier than the
+highest cost it won a trial at: then the verdict is stale and the next
+solve is a trial.
 """
 
 from __future__ import annotations
@@ -91,8 +91,8 @@ class PreconditionerChoice:
     costs: Dict[str, float] = field(default_factory=dict)
     period: int = FIRST_PERIOD
     since_trial: int = 0
-    #: The current one's cost when it last won a trial (None: not since the
-    #: last switch).
+    #: The highest cost at which the current one won a trial since the
+    #: last switch (None: none won yet).
     won_at: Optional[float] = None
 
     def next_attempt(self, max_iterations: int) -> Attempt:
