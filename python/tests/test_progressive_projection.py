@@ -229,3 +229,48 @@ def test_a_retry_at_the_same_point_reuses_the_derivatives(monkeypatch):
     np.testing.assert_allclose(solve(scene, threshold), mixed, rtol=1e-12,
                                atol=1e-15)
     assert any(p.endswith("__grad") for p in runs)
+
+
+def test_retries_at_the_same_point_add_only_the_new_projections(
+        monkeypatch):
+    """Progressive projection's retries at one point lower the threshold:
+    each adds the projections of the newly chosen instances to the system
+    assembled there (no re-assembly), and each solve matches a dense one
+    of the system with exactly those instances projected. A threshold that
+    rises again, or projects every instance, assembles anew."""
+    from yasps.solve import assembly
+    scene, x, *_ = squeezed_box(mass=1.0, cells=3)
+    assemblies = []
+    original = assembly._assemble_inputs
+
+    def counting(*args, **kwargs):
+        assemblies.append(1)
+        return original(*args, **kwargs)
+
+    monkeypatch.setattr(assembly, "_assemble_inputs", counting)
+    g, _, _ = dense_system(scene, np.zeros(10**4, bool))
+    largest = np.abs(g).max()
+    projected_counts = []
+    # Between the blocks' largest gradient entries: each retry chooses more.
+    blocks = np.abs(g).reshape(-1, 3).max(axis=1)
+    thresholds = [float("inf")] + list(np.quantile(blocks, (0.9, 0.7, 0.4)))
+    for k, threshold in enumerate(thresholds):
+        chosen = blocks_over(g, threshold)
+        _, H, projected = dense_system(scene, chosen)
+        np.testing.assert_allclose(solve(scene, threshold),
+                                   np.linalg.solve(H, g), rtol=1e-8,
+                                   atol=1e-12)
+        assert scene.lastSolve["projectedInstances"] == projected
+        projected_counts.append(projected)
+        # The first solve assembles the exact system; the retries add.
+        assert len(assemblies) == 1
+    assert 0 == projected_counts[0] < projected_counts[1] < \
+        projected_counts[-1] < scene.lastSolve["instances"]
+    for threshold in (largest * 0.5, 0.0):
+        chosen = None if threshold == 0.0 else blocks_over(g, threshold)
+        _, H, projected = dense_system(scene, chosen)
+        np.testing.assert_allclose(solve(scene, threshold),
+                                   np.linalg.solve(H, g), rtol=1e-8,
+                                   atol=1e-12)
+        assert scene.lastSolve["projectedInstances"] == projected
+    assert len(assemblies) == 3

@@ -104,6 +104,10 @@ class _Point:
     def __init__(self, key: tuple, entries: list):
         self.key, self.entries = key, entries
         self.gradient: Optional[np.ndarray] = None
+        #: the host system last assembled here, and what assemble reported
+        #: of it (None: none, or another backend's)
+        self.system = None
+        self.assembled: Dict[str, object] = {}
 
 
 #: Each scene's last point: an assembly at the same point with another
@@ -192,7 +196,10 @@ def assemble(scene: Scene, backend: Backend, threads: Optional[int] = None,
     allows; where the threshold then picks some DoFs by the assembled
     gradient, the chosen instances' projected minus exact Hessians are
     added (on a GPU system, it is assembled again). At the scene's last
-    point the gradient is known and one assembly does."""
+    point the gradient is known: a retry there with a lower threshold
+    (progressive projection's) adds only the newly chosen instances'
+    projected minus exact Hessians to the host system assembled there, with
+    no re-indexing or re-assembly; otherwise one assembly does."""
     clock = time.perf_counter
     spent = {"derivatives": 0.0, "indices": 0.0, "assembly": 0.0}
     targets = scene.minimizeTargets
@@ -222,6 +229,21 @@ def assemble(scene: Scene, backend: Backend, threads: Optional[int] = None,
         if last is not None and last.gradient is not None \
                 and not projection.projects_none():
             chosen = projection.projected_dofs(last.gradient)
+    if last is not None and chosen is not None and chosen.any() and \
+            (report is None or last.assembled) and \
+            _updatable(scene, backend, last, chosen):
+        # A retry of progressive projection at the point just assembled:
+        # only the instances newly chosen are projected and their change
+        # added (SymX's update), with no re-indexing or re-assembly.
+        _add_projections(backend, last, chosen, spent)
+        if timings is not None:
+            timings.update(spent)
+        if report is not None:
+            report.update(last.assembled)
+            report["staticStructureRebuilt"] = False
+            report["projectedInstances"] = sum(
+                c.projected_count for _, _, c in last.entries)
+        return last.system, layout
     start = clock()
     if last is not None:
         entries = last.entries
@@ -258,39 +280,30 @@ def assemble(scene: Scene, backend: Backend, threads: Optional[int] = None,
     start = clock()
     _assemble_inputs(backend, system, inputs, threads)
     spent["assembly"] += clock() - start
+    last.system = system if backend is backend.host else None
     # chosen is only set with a projection.
     selective = chosen is not None and projection is not None and \
         not projection.projects_none() and \
         any(c.selective for c in contributions)
-    if selective and last.gradient is None:
-        assert projection is not None  # selective: see above
-        # The gradient does not depend on the projection: read it once.
+    if projection is not None and last.gradient is None:
+        # The gradient does not depend on the projection: read it once
+        # (retries at this point choose by it).
         last.gradient = np.empty(layout.size)
         system.gradient(last.gradient)
-        chosen = projection.projected_dofs(last.gradient)
-        if chosen.any() and backend is backend.host:
-            # Assembly adds: only the chosen instances' projected minus
-            # exact Hessians are added to what is there (SymX's update),
-            # to those instances alone.
-            host = backend.host  # backend itself, as the host backend
-            start = clock()
-            updates = [(k, c.projection_update(chosen))
-                       for k, c in enumerate(contributions)]
-            spent["derivatives"] += clock() - start
-            start = clock()
-            for k, update in updates:
-                if update is not None:
-                    host.add_to_instances(system, k, update.instances,
-                                          update.hessians)
-            backend.finish_assembly(system)
-            spent["assembly"] += clock() - start
-        elif chosen.any():
-            start = clock()
-            inputs = [c.inputs(chosen) for c in contributions]
-            spent["derivatives"] += clock() - start
-            start = clock()
-            _assemble_inputs(backend, system, inputs, threads)
-            spent["assembly"] += clock() - start
+        if selective:
+            chosen = projection.projected_dofs(last.gradient)
+            if chosen.any() and backend is backend.host:
+                # Assembly adds: only the chosen instances' projected minus
+                # exact Hessians are added to what is there (SymX's
+                # update), to those instances alone.
+                _add_projections(backend, last, chosen, spent)
+            elif chosen.any():
+                start = clock()
+                inputs = [c.inputs(chosen) for c in contributions]
+                spent["derivatives"] += clock() - start
+                start = clock()
+                _assemble_inputs(backend, system, inputs, threads)
+                spent["assembly"] += clock() - start
     if timings is not None:
         timings.update(spent)
     if report is not None:
@@ -305,4 +318,38 @@ def assemble(scene: Scene, backend: Backend, threads: Optional[int] = None,
         report["readDofs"] = static_read | read_dofs(layout.size, dynamic_dofs)
         report["contributions"] = [
             (energy, x) for (energy, _, _), x in zip(entries, inputs)]
+        last.assembled = {key: report[key] for key in (
+            "energiesDifferentiatedOnGpu", "instances", "readDofs",
+            "contributions")}
     return system, layout
+
+
+def _updatable(scene: Scene, backend: Backend, last: _Point,
+               chosen: np.ndarray) -> bool:
+    """Whether the host system last assembled at ``last`` is still the
+    scene's and becomes the assembly projecting ``chosen`` (a DoF mask)
+    by adding projections alone (every instance projected there reads a
+    chosen DoF)."""
+    cached = _static_systems.get(scene)
+    return (backend is backend.host and last.system is not None
+            and cached is not None and cached[1] is last.system
+            and all(c.updatable_to(chosen) for _, _, c in last.entries))
+
+
+def _add_projections(backend: Backend, last: _Point, chosen: np.ndarray,
+                     spent: Dict[str, float]) -> None:
+    """Adds to the host system the projected minus exact Hessians of the
+    instances that read a ``chosen`` DoF and are not projected there yet
+    (the contributions track which are)."""
+    host = backend.host  # backend itself, as the host backend
+    start = time.perf_counter()
+    updates = [(k, c.projection_update(chosen))
+               for k, (_, _, c) in enumerate(last.entries)]
+    spent["derivatives"] += time.perf_counter() - start
+    start = time.perf_counter()
+    for k, update in updates:
+        if update is not None:
+            host.add_to_instances(last.system, k, update.instances,
+                                  update.hessians)
+    backend.finish_assembly(last.system)
+    spent["assembly"] += time.perf_counter() - start

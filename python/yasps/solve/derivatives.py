@@ -254,6 +254,10 @@ class Contribution:
         #: instances, and how many the last :meth:`inputs` projected
         self.count = outputs.count
         self.projected_count = outputs.count
+        #: per instance, whether what the last :meth:`inputs` and
+        #: :meth:`projection_update` gave since holds its projected Hessian
+        #: (None: every instance's)
+        self._projected_instances: Optional[np.ndarray] = None
         #: the energy's projection method (addEnergy's ``projection``)
         self._method = next(m for e, _, m in outputs.scene._energies
                             if e is outputs.energy)
@@ -278,11 +282,13 @@ class Contribution:
         entry of ``projected_dofs`` (a boolean mask of the global DoFs)
         projected and the others exact; None: all projected."""
         self.projected_count = self.count
+        self._projected_instances = None
         if projected_dofs is None or not self.selective:
             return self.projected()
         reads = self._reads(projected_dofs)
-        if reads.all():
+        if reads.all() and self.count:
             return self.projected()
+        self._projected_instances = reads
         outputs = self._outputs
         count, n, _ = outputs.shape("hess")
         exact = self._exact_hessians().reshape(count, n * n)
@@ -300,20 +306,46 @@ class Contribution:
 
     def projection_update(self, projected_dofs: np.ndarray
                           ) -> Optional[InstanceUpdate]:
-        """What turns this energy's exact contribution into that of
+        """What turns this energy's contribution as last given (by
+        :meth:`inputs` and the updates since) into that of
         ``inputs(projected_dofs)`` when added to it: for the instances that
-        read a True entry, their projected minus their exact Hessians (no
-        gradient); None where that is nothing."""
+        read a True entry and were not projected yet, their projected minus
+        their exact Hessians (no gradient); None where that is nothing.
+        Progressive projection's retries at one point only add instances
+        (the threshold falls), so each instance is projected once there.
+        Raises ValueError if the instances to project do not include those
+        projected already (:meth:`updatable_to` says)."""
         if not self.selective:
             return None
+        if not self.updatable_to(projected_dofs):
+            raise ValueError("projection_update: an instance projected "
+                             "already would have to be made exact again")
         reads = self._reads(projected_dofs)
-        if not reads.any() or self._method == "none":
+        before = self._projected_instances
+        assert before is not None  # updatable_to: an exact or partial one
+        self._projected_instances = reads
+        new = reads & ~before
+        if not new.any() or self._method == "none":
             return None
         count, n, _ = self._outputs.shape("hess")
         exact = self._exact_hessians().reshape(count, n * n)
-        rows = np.flatnonzero(reads)
+        rows = np.flatnonzero(new)
         return InstanceUpdate(rows.astype(np.int64),
-                              self._projected_of(reads) - exact[rows])
+                              self._projected_of(new) - exact[rows])
+
+    def updatable_to(self, projected_dofs: np.ndarray) -> bool:
+        """Whether :meth:`projection_update` can reach
+        ``inputs(projected_dofs)`` from what was last given: every instance
+        projected now reads a True entry (a non-selective energy: always,
+        it stays projected)."""
+        if not self.selective:
+            return True
+        before = self._projected_instances
+        if before is None:
+            return False
+        if not before.any():
+            return True
+        return not (before & ~self._reads(projected_dofs)).any()
 
     def _reads(self, projected_dofs: np.ndarray) -> np.ndarray:
         """Per instance, whether it reads a True entry of
