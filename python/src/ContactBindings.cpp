@@ -162,25 +162,13 @@ void yasps::python::bindContact(nb::module_ &m) {
         if (a.count != mesh.numVertices() || b.count != mesh.numVertices())
           throw std::invalid_argument("contact_step_bound: positions do not "
                                       "match the mesh's vertices");
-        return additiveStepBound(mesh, candidates, a, b, minDistance,
-                                 kAdditiveCcdRescaling,
-                                 &yasps::python::poolFor(threads));
+        StepBound bound = additiveStepBound(mesh, candidates, a, b, minDistance,
+                                            kAdditiveCcdRescaling,
+                                            &yasps::python::poolFor(threads));
+        return std::make_tuple(bound.fraction, bound.minDistance2);
       },
       nb::arg("mesh"), nb::arg("candidates"), nb::arg("v0"), nb::arg("v1"),
       nb::arg("min_distance"), nb::arg("threads") = 0,
-      "The largest fraction of v0 -> v1 keeping the candidates min_distance "
-      "apart, by the additive CCD");
-
-  m.def(
-      "contact_min_distance2",
-      [](const SurfaceMesh &mesh, const Candidates &candidates,
-         const PositionArray &v) {
-        Positions at = positions(v, "contact_min_distance2");
-        if (at.count != mesh.numVertices())
-          throw std::invalid_argument("contact_min_distance2: positions do "
-                                      "not match the mesh's vertices");
-        return candidateMinDistance2(mesh, candidates, at);
-      },
-      nb::arg("mesh"), nb::arg("candidates"), nb::arg("v"),
-      "The smallest squared distance among the candidate pairs at v");
+      "(the largest fraction of v0 -> v1 keeping the candidates min_distance "
+      "apart, by the additive CCD; their smallest squared distance at v0)");
 }

@@ -59,8 +59,8 @@ def step_bounds(detection: RuntimeDetection, V0: np.ndarray,
     """The runtime's additive-CCD bound of V0 -> V1 over its own broad
     phase, and ipctk's over its own: (runtime's, ipctk's)."""
     candidates = detection.candidates(V0, V1, 0.0)
-    bound = native().contact_step_bound(detection.native, candidates, V0, V1,
-                                        MIN_SEPARATION)
+    bound, _ = native().contact_step_bound(detection.native, candidates, V0,
+                                           V1, MIN_SEPARATION)
     return bound, ipctk.compute_collision_free_stepsize(
         detection.mesh, V0, V1, min_distance=MIN_SEPARATION,
         narrow_phase_ccd=ipctk.AdditiveCCD())
@@ -163,8 +163,10 @@ def test_points_and_rods_equal_ipctks():
         V[first_rod - 1] = near + [0.0, 0.0, 3e-7]
         candidates = detection.candidates(V, V, 0.5 * dhat)
         reference.build(mesh, V, dhat)
-        closest2 = native().contact_min_distance2(detection.native,
-                                                  candidates, V)
+        # The bound's second value: the candidates' closest at the start.
+        _, closest2 = native().contact_step_bound(detection.native,
+                                                  candidates, V, V,
+                                                  MIN_SEPARATION)
         assert closest2 == pytest.approx(
             reference.compute_minimum_distance(mesh, V), rel=1e-9)
         assert closest2 < 1e-12

@@ -321,10 +321,14 @@ TEST(ContactCcd, StopsBeforeEveryPairComesCloserThanTheSeparation) {
   Candidates c = sweptCandidates(mesh, v0, v1, 0.0);
   ASSERT_GT(c.size(), 2 * 1024u); // several blocks on the pool
   const double separation = 1e-4;
-  double bound = additiveStepBound(mesh, c, v0, v1, separation);
-  double threaded = additiveStepBound(
+  StepBound serial = additiveStepBound(mesh, c, v0, v1, separation);
+  StepBound threaded = additiveStepBound(
       mesh, c, v0, v1, separation, kAdditiveCcdRescaling, &defaultThreadPool());
-  EXPECT_EQ(bound, threaded);
+  double bound = serial.fraction;
+  EXPECT_EQ(bound, threaded.fraction);
+  // The closest distance at the start comes with the bound.
+  EXPECT_EQ(serial.minDistance2, candidateMinDistance2(mesh, c, v0));
+  EXPECT_EQ(threaded.minDistance2, serial.minDistance2);
   ASSERT_GT(bound, 0.0);
   ASSERT_LT(bound, 1.0);
   // Along the bounded step every candidate keeps the separation; the

@@ -89,17 +89,19 @@ class RuntimeDetection:
         or half the closest distance where some pair is closer than twice
         that already (then by Tight Inclusion)."""
         V0, V1 = _contiguous(V0), _contiguous(V1)
-        closest2 = native().contact_min_distance2(self.native,
-                                                  sweep.candidates, V0)
+        # The additive CCD measures every pair's distance at V0 first: the
+        # closest comes with the bound, which is dropped in the rare case
+        # that it is too close for the additive CCD.
+        bound, closest2 = native().contact_step_bound(
+            self.native, sweep.candidates, V0, V1, MIN_SEPARATION,
+            threads=config.num_threads)
         if closest2 < (2 * MIN_SEPARATION) ** 2:
             candidates = ipctk.Candidates()
             candidates.build(self.mesh, V0, V1,
                              inflation_radius=0.5 * self.dhat)
             return _close_range_bound(self.mesh, candidates, V0, V1,
                                       0.5 * float(np.sqrt(closest2)))
-        return float(native().contact_step_bound(
-            self.native, sweep.candidates, V0, V1, MIN_SEPARATION,
-            threads=config.num_threads))
+        return float(bound)
 
 
 class IpctkDetection:

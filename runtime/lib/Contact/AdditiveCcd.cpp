@@ -9,6 +9,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <vector>
 
 namespace yasps::runtime::contact {
 
@@ -40,41 +41,52 @@ struct Motion {
 /// reached so far is returned, which is conservative.
 constexpr long kMaxIterations = 10'000'000L;
 
+/// A pair's time of impact (the fraction of the step, +inf for none
+/// before the bound asked for) and its squared distance at the start.
+struct Impact {
+  double toi, distance2;
+};
+
 /// Algorithm 1 of the additive CCD. `maxDisplacement` bounds how fast the
 /// distance can close per unit of the step. Returns the fraction at which
 /// the pair's distance has closed to the gap, or +inf if it does not
-/// before `tmax`.
+/// before `tmax`, and the distance at the start.
 template <typename Distance2>
-double additiveImpact(Motion motion, double maxDisplacement, double minDistance,
+Impact additiveImpact(Motion motion, double maxDisplacement, double minDistance,
                       double tmax, double rescaling, Distance2 &&distance2) {
   const double inf = std::numeric_limits<double>::infinity();
   const double min2 = minDistance * minDistance;
-  double d2 = distance2(motion.x);
+  const double start2 = distance2(motion.x);
+  double d2 = start2;
   if (d2 <= min2)
-    return 0.0;
+    return {0.0, start2};
   if (maxDisplacement == 0)
-    return inf;
+    return {inf, start2};
   double d = std::sqrt(d2), excess = d2 - min2;
   // (d - min) as (d^2 - min^2) / (d + min): no cancellation near min.
   const double gap = (1 - rescaling) * excess / (d + minDistance);
   double toi = 0;
   for (long i = 0; i < kMaxIterations; ++i) {
     double advance = rescaling * excess / ((d + minDistance) * maxDisplacement);
+    // The first advance past tmax ends the pair without another distance:
+    // the test below needs toi > 0. Most candidates end here.
+    if (toi == 0 && advance > tmax)
+      return {inf, start2};
     for (int k = 0; k < 4; ++k) // unused points move by zero
       motion.x[k] = motion.x[k] + advance * motion.dx[k];
     d2 = distance2(motion.x);
     d = std::sqrt(d2);
     excess = d2 - min2;
     if (toi > 0 && (excess <= 0 || excess / (d + minDistance) < gap))
-      return toi;
+      return {toi, start2};
     toi += advance;
     if (toi > tmax)
-      return inf;
+      return {inf, start2};
   }
-  return toi;
+  return {toi, start2};
 }
 
-double vertexVertexImpact(Positions v0, Positions v1, int32_t a, int32_t b,
+Impact vertexVertexImpact(Positions v0, Positions v1, int32_t a, int32_t b,
                           double minDistance, double tmax, double rescaling) {
   Motion motion(v0, v1, {a, b});
   return additiveImpact(
@@ -82,7 +94,7 @@ double vertexVertexImpact(Positions v0, Positions v1, int32_t a, int32_t b,
       [](const std::array<Vec3, 4> &x) { return squaredNorm(x[0] - x[1]); });
 }
 
-double edgeVertexImpact(const SurfaceMesh &mesh, Positions v0, Positions v1,
+Impact edgeVertexImpact(const SurfaceMesh &mesh, Positions v0, Positions v1,
                         int32_t e, int32_t p, double minDistance, double tmax,
                         double rescaling) {
   const auto &ends = mesh.edges()[e];
@@ -95,7 +107,7 @@ double edgeVertexImpact(const SurfaceMesh &mesh, Positions v0, Positions v1,
                         });
 }
 
-double faceVertexImpact(const SurfaceMesh &mesh, Positions v0, Positions v1,
+Impact faceVertexImpact(const SurfaceMesh &mesh, Positions v0, Positions v1,
                         int32_t f, int32_t p, double minDistance, double tmax,
                         double rescaling) {
   const auto &face = mesh.faces()[f];
@@ -109,7 +121,7 @@ double faceVertexImpact(const SurfaceMesh &mesh, Positions v0, Positions v1,
                         });
 }
 
-double edgeEdgeImpact(const SurfaceMesh &mesh, Positions v0, Positions v1,
+Impact edgeEdgeImpact(const SurfaceMesh &mesh, Positions v0, Positions v1,
                       int32_t ea, int32_t eb, double minDistance, double tmax,
                       double rescaling) {
   const auto &a = mesh.edges()[ea], &b = mesh.edges()[eb];
@@ -124,9 +136,10 @@ double edgeEdgeImpact(const SurfaceMesh &mesh, Positions v0, Positions v1,
 
 } // namespace
 
-double additiveStepBound(const SurfaceMesh &mesh, const Candidates &candidates,
-                         Positions v0, Positions v1, double minDistance,
-                         double rescaling, ThreadPool *pool) {
+StepBound additiveStepBound(const SurfaceMesh &mesh,
+                            const Candidates &candidates, Positions v0,
+                            Positions v1, double minDistance, double rescaling,
+                            ThreadPool *pool) {
   checkFinite(v0, "additiveStepBound");
   checkFinite(v1, "additiveStepBound");
   // Each pair runs only up to the earliest impact found so far: the
@@ -146,31 +159,40 @@ double additiveStepBound(const SurfaceMesh &mesh, const Candidates &candidates,
       numEdgeEdge + static_cast<int64_t>(candidates.vertexVertex.size());
   const int64_t count =
       numVertexVertex + static_cast<int64_t>(candidates.edgeVertex.size());
-  forBlocks(pool, count, blockCount(pool, count, 1024),
-            [&](int64_t, int64_t begin, int64_t end) {
-              for (int64_t i = begin; i < end; ++i) {
-                double tmax = earliest.load(std::memory_order_relaxed);
-                if (i < numFaceVertex) {
-                  const auto &[f, p] = candidates.faceVertex[i];
-                  lower(faceVertexImpact(mesh, v0, v1, f, p, minDistance, tmax,
-                                         rescaling));
-                } else if (i < numEdgeEdge) {
-                  const auto &[ea, eb] = candidates.edgeEdge[i - numFaceVertex];
-                  lower(edgeEdgeImpact(mesh, v0, v1, ea, eb, minDistance, tmax,
-                                       rescaling));
-                } else if (i < numVertexVertex) {
-                  const auto &[a, b] = candidates.vertexVertex[i - numEdgeEdge];
-                  lower(vertexVertexImpact(v0, v1, a, b, minDistance, tmax,
-                                           rescaling));
-                } else {
-                  const auto &[e, p] =
-                      candidates.edgeVertex[i - numVertexVertex];
-                  lower(edgeVertexImpact(mesh, v0, v1, e, p, minDistance, tmax,
-                                         rescaling));
-                }
-              }
-            });
-  return earliest.load();
+  const int64_t blocks = blockCount(pool, count, 1024);
+  // The closest distance per block, then over the blocks: a minimum, the
+  // same in any order.
+  std::vector<double> closest(static_cast<size_t>(blocks),
+                              std::numeric_limits<double>::infinity());
+  forBlocks(
+      pool, count, blocks, [&](int64_t block, int64_t begin, int64_t end) {
+        double least = std::numeric_limits<double>::infinity();
+        for (int64_t i = begin; i < end; ++i) {
+          double tmax = earliest.load(std::memory_order_relaxed);
+          Impact impact;
+          if (i < numFaceVertex) {
+            const auto &[f, p] = candidates.faceVertex[i];
+            impact = faceVertexImpact(mesh, v0, v1, f, p, minDistance, tmax,
+                                      rescaling);
+          } else if (i < numEdgeEdge) {
+            const auto &[ea, eb] = candidates.edgeEdge[i - numFaceVertex];
+            impact = edgeEdgeImpact(mesh, v0, v1, ea, eb, minDistance, tmax,
+                                    rescaling);
+          } else if (i < numVertexVertex) {
+            const auto &[a, b] = candidates.vertexVertex[i - numEdgeEdge];
+            impact =
+                vertexVertexImpact(v0, v1, a, b, minDistance, tmax, rescaling);
+          } else {
+            const auto &[e, p] = candidates.edgeVertex[i - numVertexVertex];
+            impact = edgeVertexImpact(mesh, v0, v1, e, p, minDistance, tmax,
+                                      rescaling);
+          }
+          lower(impact.toi);
+          least = std::min(least, impact.distance2);
+        }
+        closest[static_cast<size_t>(block)] = least;
+      });
+  return {earliest.load(), *std::min_element(closest.begin(), closest.end())};
 }
 
 double candidateMinDistance2(const SurfaceMesh &mesh,

@@ -22,14 +22,24 @@ namespace yasps::runtime::contact {
 /// ipctk's default: a pair stops where its distance has closed by 90%.
 constexpr double kAdditiveCcdRescaling = 0.9;
 
+/// What additiveStepBound finds: the largest safe fraction of the motion,
+/// and the smallest squared distance among the candidates at its start
+/// (every pair's CCD measures it first; inf without candidates).
+struct StepBound {
+  double fraction;
+  double minDistance2;
+};
+
 /// The largest fraction in [0, 1] of the straight motion v0 -> v1 along
 /// which no candidate pair comes closer than `minDistance` (0 where a pair
-/// is that close already), the same whatever `pool` (nullptr: this thread
-/// alone) runs the pairs.
-double additiveStepBound(const SurfaceMesh &mesh, const Candidates &candidates,
-                         Positions v0, Positions v1, double minDistance,
-                         double rescaling = kAdditiveCcdRescaling,
-                         ThreadPool *pool = nullptr);
+/// is that close already), and the candidates' closest squared distance at
+/// v0, the same whatever `pool` (nullptr: this thread alone) runs the
+/// pairs.
+StepBound additiveStepBound(const SurfaceMesh &mesh,
+                            const Candidates &candidates, Positions v0,
+                            Positions v1, double minDistance,
+                            double rescaling = kAdditiveCcdRescaling,
+                            ThreadPool *pool = nullptr);
 
 /// The smallest squared distance among the candidate pairs at `v` (by
 /// their closest features), inf without candidates.
