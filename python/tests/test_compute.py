@@ -337,22 +337,62 @@ def test_projection_matches_numpy_eigh(n, lanes, monkeypatch):
             np.testing.assert_array_equal(got[2], 0.0)
 
 
-def test_evaluate_energy_sums_the_energies_from_one_emission(monkeypatch):
+def test_evaluate_energy_is_one_native_call_over_a_plan(monkeypatch):
     """evaluateEnergy (the line search's call) is the sum of each energy's
-    compute(), from one emission of the scene for all energies: emitting
-    it once per energy took 67 of 73 ms per call on the README demo."""
-    import yasps.runtime.evaluate as evaluate
+    compute(), through one native call over a plan made once per scene
+    structure: new values, or new instance counts, emit and compile
+    nothing; a new energy makes a new plan that includes it."""
+    import yasps.runtime.energy_plan as energy_plan
+    from yasps.runtime.native import native
     from yasps.sim import add_elastic_tets, add_free_vertices
     verts, tets = box_mesh(1)
     s = yasps.scene("summed")
     b = add_free_vertices(s.addMesh("soft"), verts, 1.0)
     add_elastic_tets(s.soft, b.x, verts * 1.1, tets, 1e4, 4e4, scale=1e-4)
     b.x_hat.updateValue(verts + 0.01)
-    expected = sum(float(e.compute().value.sum()) for e in s.energies)
-    emitted = []
-    original = evaluate.kernel_ir
-    monkeypatch.setattr(evaluate, "kernel_ir",
+    emitted, sums = [], []
+    original = energy_plan.kernel_ir
+    monkeypatch.setattr(energy_plan, "kernel_ir",
                         lambda *a, **k: emitted.append(1) or original(*a, **k))
+    module = native()
+    summing = module.sum_cpu_kernels
+    monkeypatch.setattr(module, "sum_cpu_kernels",
+                        lambda *a, **k: sums.append(1) or summing(*a, **k),
+                        raising=False)
     assert len(s.energies) > 1
+    for shift in (0.0, 0.003):
+        b.x.updateValue(verts + shift)
+        expected = sum(float(e.compute().value.sum()) for e in s.energies)
+        assert s.evaluateEnergy() == pytest.approx(expected, rel=1e-14, abs=0)
+    assert len(emitted) == 1 and len(sums) == 2
+    # Another energy: a new plan, which sums it too.
+    pull = b.x.owner.addAttribute(
+        "pull", computed_attribute=(b.x - b.x_hat).squaredNorm())
+    s.addEnergy(pull)
+    expected = sum(float(e.compute().value.sum()) for e in s.energies)
     assert s.evaluateEnergy() == pytest.approx(expected, rel=1e-14, abs=0)
-    assert len(emitted) == 1
+    assert len(emitted) == 2 and len(sums) == 3
+
+
+def test_evaluate_energy_sums_without_cancellation():
+    """The total is summed with compensation (Neumaier): terms that cancel
+    (1e16, 1, -1e16, 1, ...) leave the exact sum, which math.fsum gives,
+    where a plain running sum in f64 loses every 1."""
+    import math
+    count = 400
+    weights = np.where(np.arange(count) % 2 == 0,
+                       np.where(np.arange(count) % 4 == 0, 1e16, -1e16), 1.0)
+    s = yasps.scene("cancelling")
+    v = s.addMesh("m").addPrimitive("v", numInstances=count)
+    x = v.addAttribute("x", rows=1)
+    x.updateValue(np.ones((count, 1, 1)))
+    w = v.addConstant("w", rows=1)
+    w.updateValue(weights.reshape(count, 1, 1))
+    s.addMinimizeTarget(x)
+    s.addEnergy(v.addAttribute("e", computed_attribute=w * x * x))
+    exact = math.fsum(weights)
+    running = 0.0
+    for term in weights:
+        running += term
+    assert exact == count / 2 and running != exact
+    assert s.evaluateEnergy() == exact

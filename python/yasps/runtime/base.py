@@ -80,6 +80,11 @@ class Backend(Protocol):
         is kept under that key and handed out again by the next call with
         it (for outputs consumed before then)."""
 
+    def sum_energies(self, plan: Any, scene: Any,
+                     threads: Optional[int]) -> float:
+        """The sum over every energy of ``plan`` (runtime.energy_plan's
+        EnergyPlan) and its instances, in f64."""
+
     def to_host(self, array: Any, shape: Shape) -> np.ndarray:
         """An output as an (N, rows, cols) NumPy array."""
 

@@ -114,6 +114,16 @@ class CpuBackend:
         launch(kernels, path, count, buffers, _threads(threads))
         return out
 
+    def sum_energies(self, plan, scene, threads: Optional[int]) -> float:
+        # One native call runs every energy's kernel and sums.
+        energies = plan.energies
+        entries = [e.kernels.entry(e.path) for e in energies]
+        return float(native().sum_cpu_kernels(
+            [entry for entry, _ in entries], [codes for _, codes in entries],
+            [e.owner.numInstances for e in energies],
+            [e.inputs(scene) for e in energies],
+            [e.output for e in energies], _threads(threads)))
+
     def to_host(self, array: np.ndarray, shape: Shape) -> np.ndarray:
         # A view of the output buffer: no copy.
         return from_column_major(array, shape[1], shape[2], copy=False)

@@ -19,6 +19,7 @@ from ..frontend.scene import Entity
 from ..compiler.specs import KernelRequest
 from ..ir import kernel_ir, symbol_path
 from .base import Backend, Shape
+from .energy_plan import energy_plan
 
 #: Name under which an unnamed expression is evaluated.
 _TEMPORARY = "__yasps_compute"
@@ -110,18 +111,10 @@ def compute(attr: Attribute, backend: Backend,
 def total_energy(scene, backend: Backend,
                  threads: Optional[int] = None) -> float:
     """The sum of every registered energy over its instances, in f64
-    (``Scene.evaluateEnergy``): the scene is emitted once for all of its
-    energies, whose kernels share that IR, instead of once per energy (the
+    (``Scene.evaluateEnergy``): one call into the backend over the scene's
+    energy plan (runtime.energy_plan), made once per scene structure (the
     line search calls this at every candidate)."""
-    energies = scene.energies
-    if not energies:
+    if not scene.energies:
         return 0.0
-    ir = kernel_ir(scene, precision="f64")
-    total = 0.0
-    for energy in energies:
-        path = symbol_path(energy)
-        count = energy.owner.numInstances
-        kernels = backend.compile(ir, (path,), scene.name)
-        output = backend.run(kernels, scene, path, count, threads)
-        total += float(backend.to_host(output, (count, 1, 1)).sum())
-    return total
+    return backend.sum_energies(energy_plan(scene, backend, threads), scene,
+                                threads)

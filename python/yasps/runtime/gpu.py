@@ -231,6 +231,15 @@ class GpuBackend:
         self.last_uploads = gpu.uploads[before:]
         return out
 
+    def sum_energies(self, plan, scene, threads: Optional[int]) -> float:
+        # Each energy's kernel on the device, its outputs summed here.
+        total = 0.0
+        for e in plan.energies:
+            count = e.owner.numInstances
+            output = self.run(e.kernels, scene, e.path, count, threads)
+            total += float(self.to_host(output, (count, 1, 1)).sum())
+        return total
+
     def to_host(self, array, shape: Shape) -> np.ndarray:
         count, rows, cols = shape
         host = np.empty(count * rows * cols, dtype=np.float64)

@@ -35,10 +35,19 @@ def source_of(scene: Scene, argument: KernelArgument) -> Optional[Any]:
 
 def host_input(scene: Scene, argument: KernelArgument) -> np.ndarray:
     """The host array of an input argument (not ``out``)."""
+    source = None if argument.kind == "dof_offsets" else \
+        resolve(scene, argument.path)
+    return input_array(scene, argument, source)
+
+
+def input_array(scene: Scene, argument: KernelArgument,
+                target: Any) -> np.ndarray:
+    """The host array of an input argument read from ``target``, the
+    entity its path resolves to (None for the DoF offsets): a plan resolves
+    paths once per scene structure (runtime.energy_plan)."""
     kind = argument.kind
     if kind == "dof_offsets":
         return target_dof_offsets(scene)
-    target = resolve(scene, argument.path)
     if kind == "attr":
         if target._values is None:
             raise ValueUpdateError(

@@ -313,13 +313,12 @@ class Contribution:
         their exact Hessians (no gradient); None where that is nothing.
         Progressive projection's retries at one point only add instances
         (the threshold falls), so each instance is projected once there.
-        Raises ValueError if the instances to project do not include those
-        projected already (:meth:`updatable_to` says)."""
+        The instances to project must include those projected already
+        (:meth:`updatable_to` says)."""
         if not self.selective:
             return None
-        if not self.updatable_to(projected_dofs):
-            raise ValueError("projection_update: an instance projected "
-                             "already would have to be made exact again")
+        assert self.updatable_to(projected_dofs), \
+            "an instance projected already would have to be made exact again"
         reads = self._reads(projected_dofs)
         before = self._projected_instances
         assert before is not None  # updatable_to: an exact or partial one
