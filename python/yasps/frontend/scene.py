@@ -25,6 +25,7 @@ from .. import config
 from . import values as _values
 from .values import MAX_MATRIX_ENTRIES, as_count
 from .attribute import PROJECTION_METHODS, Attribute, owner_of
+from .state import SceneState, StateKey
 from .errors import (ArgumentError, LineageError, NameLookupError,
                      SceneError, ShapeError)
 from .services import services
@@ -230,6 +231,10 @@ class Entity:
                                         name=name))
 
 
+#: The report of a scene's last minimizeEnergy (``Scene.lastSolve``).
+LAST_SOLVE: StateKey[Dict[str, Any]] = StateKey("the last solve's report")
+
+
 class Scene(Entity):
     """The global scope of a simulation: meshes, scene attributes, energies."""
 
@@ -249,6 +254,23 @@ class Scene(Entity):
         self._energy_counter = 0
         #: Counts the changes of what the scene's IR says (Entity._changed).
         self._structure = 0
+        self._state = SceneState()
+
+    @property
+    def lastSolve(self) -> Dict[str, Any]:
+        """The report of the last ``minimizeEnergy`` (see there); raises
+        SceneError before the first."""
+        report = self._state.get(LAST_SOLVE)
+        if report is None:
+            raise SceneError(f"scene '{self._name}' has solved nothing yet: "
+                             "lastSolve is the report of minimizeEnergy")
+        return report
+
+    @property
+    def state(self) -> SceneState:
+        """What the layers above keep for this scene (frontend.state):
+        kernel IR, plans, the Newton system, the preconditioner's choice."""
+        return self._state
 
     @property
     def meshes(self) -> Dict[str, "Mesh"]:

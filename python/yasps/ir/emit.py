@@ -7,11 +7,11 @@ anonymous sub-expressions inlined and shared sub-expressions emitted once.
 
 from __future__ import annotations
 
-import weakref
 from typing import Dict, List, Optional, Tuple
 
 import numpy as np
 
+from ..frontend.state import StateKey
 from .. import config
 from ..frontend.attribute import Attribute
 from ..frontend.scene import (Connectivity, Entity, Mesh, Primitive,
@@ -296,8 +296,8 @@ def emit_scene(scene: Scene, locations: bool = False,
 #: the structure count it was emitted at: evaluating the same scene again
 #: (the line search, collision detection, assembly: many times a Newton
 #: iteration) emits nothing until the scene changes.
-_kernel_irs: "weakref.WeakKeyDictionary[Scene, Dict[str, Tuple[int, KernelIR]]]" \
-    = weakref.WeakKeyDictionary()
+_KERNEL_IRS: StateKey[Dict[str, Tuple[int, KernelIR]]] = StateKey(
+    "the kernel IR per precision, and the structure it is of")
 
 
 def kernel_ir(scene: Scene,
@@ -313,12 +313,13 @@ def kernel_ir(scene: Scene,
     element = config.resolve_precision(
         precision if precision is not None else scene.precision)
     if not extra:
-        cached = _kernel_irs.get(scene, {}).get(element)
+        cached = scene.state.setdefault(_KERNEL_IRS, dict).get(element)
         if cached is not None and cached[0] == scene._structure:
             return cached[1]
     located = _Locations(True)
     ir = KernelIR(_emit(scene, located, extra, False, element),
                   located.table())
     if not extra:
-        _kernel_irs.setdefault(scene, {})[element] = (scene._structure, ir)
+        scene.state.setdefault(_KERNEL_IRS, dict)[element] = \
+            (scene._structure, ir)
     return ir

@@ -11,12 +11,12 @@ the CPU one native call runs them all and sums their outputs.
 
 from __future__ import annotations
 
-import weakref
 from dataclasses import dataclass
 from typing import Any, List, Optional, Tuple
 
 import numpy as np
 
+from ..frontend.state import StateKey
 from .. import config
 from ..compiler.params import KernelArgument
 from ..frontend.attribute import Attribute
@@ -60,8 +60,7 @@ class EnergyPlan:
     energies: Tuple[PlannedEnergy, ...]
 
 
-_plans: "weakref.WeakKeyDictionary[Scene, EnergyPlan]" = \
-    weakref.WeakKeyDictionary()
+_PLAN: StateKey[EnergyPlan] = StateKey("the total energy's plan")
 
 
 def _key(scene: Scene, backend: Backend, threads: Optional[int]) -> tuple:
@@ -81,7 +80,7 @@ def energy_plan(scene: Scene, backend: Backend,
     """The scene's plan for ``backend`` (made now if its structure, the
     backend, the threads or a setting changed since the last)."""
     key = _key(scene, backend, threads)
-    plan = _plans.get(scene)
+    plan = scene.state.get(_PLAN)
     if plan is not None and plan.key == key:
         return plan
     # Energies are evaluated in f64 whatever the scene's precision: see
@@ -99,5 +98,4 @@ def energy_plan(scene: Scene, backend: Backend,
         assert isinstance(energy, Attribute) and owner is not None
         planned.append(PlannedEnergy(path, owner, arguments, sources,
                                      kernels))
-    plan = _plans[scene] = EnergyPlan(key, tuple(planned))
-    return plan
+    return scene.state.set(_PLAN, EnergyPlan(key, tuple(planned)))

@@ -19,9 +19,10 @@ whose targets include their positions bounds its steps by them
 from __future__ import annotations
 
 from typing import Callable, List, Optional, Sequence, Tuple, Union, cast
-from weakref import WeakKeyDictionary
 
 import numpy as np
+
+from ..frontend.state import StateKey
 
 #: The fraction of its volume a tet keeps over one step (IPC's CCD keeps a
 #: tenth of a distance likewise).
@@ -115,8 +116,8 @@ def combined_bound(*bounds: Callable) -> Callable:
 
 
 #: Per scene, the (positions, tets) whose steps must not invert a tet.
-_GUARDS: "WeakKeyDictionary[object, List[Tuple[object, np.ndarray]]]" = \
-    WeakKeyDictionary()
+_GUARDS: StateKey[List[Tuple[object, np.ndarray]]] = StateKey(
+    "the tets whose steps must not invert, and their positions")
 
 
 def guard_inversion(positions, tets: np.ndarray) -> None:
@@ -125,7 +126,7 @@ def guard_inversion(positions, tets: np.ndarray) -> None:
     whose targets include ``positions`` bound every step by
     :func:`inversion_bound` of them."""
     scene = positions.owner.scene
-    _GUARDS.setdefault(scene, []).append(
+    scene.state.setdefault(_GUARDS, list).append(
         (positions, np.asarray(tets, dtype=np.int64).reshape(-1, 4)))
 
 
@@ -136,7 +137,7 @@ def guarded_step_bound(scene, targets: Sequence,
     that :func:`guard_inversion` registered on ``scene`` for any of
     ``targets``; None when there is neither."""
     bounds = [] if step_bound is None else [step_bound]
-    for positions, tets in _GUARDS.get(scene, ()):
+    for positions, tets in scene.state.get(_GUARDS) or ():
         for index, target in enumerate(targets):
             if target is positions:
                 bounds.append(inversion_bound(tets, target=index))

@@ -13,11 +13,11 @@ into a device mirror of the system, from derivatives computed there).
 from __future__ import annotations
 
 import time
-import weakref
 from typing import Dict, List, Optional
 
 import numpy as np
 
+from ..frontend.state import StateKey
 from .. import config
 from ..frontend.attribute import Attribute, owner_of
 from ..frontend.errors import SceneError
@@ -92,8 +92,8 @@ def _static_structure_key(scene, ir: str, layout: DofLayout,
 # (DoF + 1) f32 kernels compute.
 _F32_EXACT_INTEGERS = 2 ** 24
 
-_static_systems: "weakref.WeakKeyDictionary[Scene, tuple]" = \
-    weakref.WeakKeyDictionary()
+_STATIC_SYSTEM: StateKey[tuple] = StateKey(
+    "the Newton system's static part and the key it was built for")
 
 
 class _Point:
@@ -113,8 +113,8 @@ class _Point:
 #: Each scene's last point: an assembly at the same point with another
 #: projection (progressive projection's retries) reuses its derivatives
 #: instead of running every kernel again.
-_last_points: "weakref.WeakKeyDictionary[Scene, _Point]" = \
-    weakref.WeakKeyDictionary()
+_LAST_POINT: StateKey[_Point] = StateKey(
+    "the local derivatives at the last point assembled")
 
 
 def _config_values() -> tuple:
@@ -217,7 +217,7 @@ def assemble(scene: Scene, backend: Backend, threads: Optional[int] = None,
     # change with the counts of dynamic primitives.
     ir = kernel_ir(scene)
     point = _point_key(scene, ir, backend, threads)
-    last = _last_points.get(scene)
+    last = scene.state.get(_LAST_POINT)
     if last is not None and last.key != point:
         last = None  # another point's derivatives: not reused
     # None: every instance projected; a DoF mask: those of the instances
@@ -249,7 +249,7 @@ def assemble(scene: Scene, backend: Backend, threads: Optional[int] = None,
         entries = last.entries
     else:
         entries = _contributions(scene, backend, threads, ir)
-        _last_points[scene] = last = _Point(point, entries)
+        last = scene.state.set(_LAST_POINT, _Point(point, entries))
     inputs = [c.inputs(chosen) for _, _, c in entries]
     spent["derivatives"] += clock() - start
     # Launches may return at once: time the derivatives, not their launch.
@@ -262,13 +262,13 @@ def assemble(scene: Scene, backend: Backend, threads: Optional[int] = None,
 
     start = clock()
     key = _static_structure_key(scene, ir, layout, [e for e, _ in static])
-    cached = _static_systems.get(scene)
+    cached = scene.state.get(_STATIC_SYSTEM)
     rebuilt = cached is None or cached[0] != key
     if rebuilt:
         static_dofs = [c.dofs() for _, c in static]
         host_system = native().GlobalSystem(layout.block_offsets, static_dofs)
         static_read = read_dofs(layout.size, static_dofs)
-        _static_systems[scene] = (key, host_system, static_read)
+        scene.state.set(_STATIC_SYSTEM, (key, host_system, static_read))
     else:
         assert cached is not None  # not rebuilt: there is one
         host_system, static_read = cached[1], cached[2]
@@ -330,7 +330,7 @@ def _updatable(scene: Scene, backend: Backend, last: _Point,
     scene's and becomes the assembly projecting ``chosen`` (a DoF mask)
     by adding projections alone (every instance projected there reads a
     chosen DoF)."""
-    cached = _static_systems.get(scene)
+    cached = scene.state.get(_STATIC_SYSTEM)
     return (backend is backend.host and last.system is not None
             and cached is not None and cached[1] is last.system
             and all(c.updatable_to(chosen) for _, _, c in last.entries))

@@ -5,11 +5,11 @@ too far from the origin for f32 kernels."""
 
 from __future__ import annotations
 
-import weakref
 from typing import List, Optional, Sequence, Tuple
 
 import numpy as np
 
+from ..frontend.state import StateKey
 from ..frontend.attribute import owner_of
 from .assembly import DofLayout
 
@@ -21,14 +21,14 @@ ERROR_BOUND_WARNING = 1.0
 
 #: The scenes warned about their conditioning already: a Newton loop of a
 #: thousand solves warns once, not a thousand times.
-_warned: "weakref.WeakSet" = weakref.WeakSet()
+_WARNED: StateKey[bool] = StateKey("warned of an ill-conditioned solve")
 
 
 def first_warning_for(scene) -> bool:
     """True the first time it is asked for ``scene``."""
-    if scene in _warned:
+    if _WARNED in scene.state:
         return False
-    _warned.add(scene)
+    scene.state.set(_WARNED, True)
     return True
 
 
@@ -38,7 +38,7 @@ def first_warning_for(scene) -> bool:
 #: digits of an element a hundredth of the scene).
 F32_ROUNDING_WARNING = 1e-5
 _EPS32 = float(np.finfo(np.float32).eps)
-_warned_rounding: "weakref.WeakSet" = weakref.WeakSet()
+_WARNED_ROUNDING: StateKey[bool] = StateKey("warned of f32 rounding")
 
 
 class PrecisionWarning(UserWarning):
@@ -67,9 +67,9 @@ def f32_rounding_losses(layout: DofLayout) -> List[Tuple[str, float]]:
 
 def first_rounding_warning_for(scene) -> bool:
     """True the first time it is asked for ``scene``."""
-    if scene in _warned_rounding:
+    if _WARNED_ROUNDING in scene.state:
         return False
-    _warned_rounding.add(scene)
+    scene.state.set(_WARNED_ROUNDING, True)
     return True
 
 

@@ -11,6 +11,7 @@ from typing import Any, Callable, Dict, List, Optional, Union
 
 import numpy as np
 
+from ..frontend.scene import LAST_SOLVE
 from .. import config
 from ..frontend.attribute import owner_of
 from ..frontend.errors import SceneError, YaspsError
@@ -199,7 +200,7 @@ def minimize_energy(scene, backend: Backend,
     if projection is not None:
         # Whether the direction descends (H may be indefinite).
         info["descends"] = bool(float(gradient @ x) > 0.0)
-    scene.lastSolve = info
+    scene.state.set(LAST_SOLVE, info)
     solution = layout.split(x)
     if stop == "non_finite":
         raise SolverError(

@@ -30,11 +30,12 @@ solve is a trial.
 from __future__ import annotations
 
 import math
-import weakref
 from dataclasses import dataclass, field
 from typing import Any, Callable, Dict, Optional, Tuple
 
 import numpy as np
+
+from ..frontend.state import StateKey
 
 BLOCK_JACOBI = "block-jacobi"
 MULTILEVEL = "multilevel"
@@ -169,30 +170,27 @@ class PreconditionerChoice:
                    None if math.isnan(won_at) else won_at)
 
 
-_choices: "weakref.WeakKeyDictionary[object, PreconditionerChoice]" = \
-    weakref.WeakKeyDictionary()
+_CHOICE: StateKey[PreconditionerChoice] = StateKey(
+    "the preconditioner's choice")
 
 
 def choice_for(scene) -> PreconditionerChoice:
     """The scene's choice (made on its first auto solve)."""
-    choice = _choices.get(scene)
-    if choice is None:
-        choice = _choices[scene] = PreconditionerChoice()
-    return choice
+    return scene.state.setdefault(_CHOICE, PreconditionerChoice)
 
 
 def state(scene) -> Optional[np.ndarray]:
     """The scene's choice as numbers, None before its first auto solve."""
-    choice = _choices.get(scene)
+    choice = scene.state.get(_CHOICE)
     return None if choice is None else choice.as_array()
 
 
 def restore(scene, values: Optional[np.ndarray]) -> None:
     """Sets the scene's choice from :func:`state` (None: not made yet)."""
     if values is None:
-        _choices.pop(scene, None)
+        scene.state.pop(_CHOICE)
     else:
-        _choices[scene] = PreconditionerChoice.from_array(values)
+        scene.state.set(_CHOICE, PreconditionerChoice.from_array(values))
 
 
 #: ``config.preconditioner``'s value that asks for this choice.

@@ -22,12 +22,12 @@ instances (JOIN indices, UNION offsets) on every call.
 
 from __future__ import annotations
 
-import weakref
 from dataclasses import dataclass
 from typing import Dict, List, Optional, Sequence, Tuple
 
 import numpy as np
 
+from ..frontend.state import StateKey
 from ..compiler.params import JoinParam, Param, ReadParam, UnionParam
 from ..compiler.specs import scene_params
 from ..frontend.attribute import Attribute
@@ -214,15 +214,15 @@ class SlotPlan:
 
 #: Each scene's plans by (IR, pipeline, energy path): built once per scene
 #: structure, as the tables and placements do not change with counts.
-_plans: "weakref.WeakKeyDictionary[Scene, Dict[tuple, Optional[SlotPlan]]]" \
-    = weakref.WeakKeyDictionary()
+_SLOT_PLANS: StateKey[Dict[tuple, Optional[SlotPlan]]] = StateKey(
+    "the slot plans of factored energies")
 
 
 def slot_plan(scene: Scene, energy: Attribute, ir: str,
               pipeline: str) -> Optional[SlotPlan]:
     """The plan of a factored energy, or None for an energy without
     parameter slots."""
-    plans = _plans.setdefault(scene, {})
+    plans = scene.state.setdefault(_SLOT_PLANS, dict)
     key = (ir, pipeline, symbol_path(energy))
     if key not in plans:
         known = scene_params(scene, ir, pipeline)
