@@ -41,3 +41,14 @@ def test_settings_lists_every_setting_of_the_module():
                 and name != "annotations" and not callable(value)
                 and not isinstance(value, (tuple, types.ModuleType))}
     assert settings == set(yasps.config.SETTINGS)
+
+
+def test_snapshot_holds_every_setting_and_follows_changes():
+    """Caches are keyed by config.snapshot(): every setting is in it, and
+    a changed setting changes it."""
+    before = yasps.config.snapshot()
+    assert [name for name, _ in before] == list(yasps.config.SETTINGS)
+    with yasps.config.override(opt_level=1 if yasps.config.opt_level != 1
+                               else 2):
+        assert yasps.config.snapshot() != before
+    assert yasps.config.snapshot() == before

@@ -90,6 +90,9 @@ and restores them after it, also when the block raises::
 
     with yasps.config.override(precision="f32", num_threads=1):
         ...
+
+``snapshot()`` gives every setting's value in ``SETTINGS``' order: the
+caches of derivatives and plans are keyed by it.
 """
 
 from __future__ import annotations
@@ -99,7 +102,7 @@ import sys
 import types
 from contextlib import contextmanager
 from pathlib import Path
-from typing import Iterator, Optional
+from typing import Iterator, Optional, Tuple
 
 from .errors import ArgumentError
 
@@ -203,6 +206,13 @@ SETTINGS = ("cache_dir", "num_threads", "opt_level", "backend", "simd_lanes",
             "separate_reduced_hessians", "linear_map_projection",
             "slot_jacobians", "compress_local_hessians", "gpu_derivatives",
             "precision", "hessian_storage", "preconditioner")
+
+
+def snapshot() -> Tuple[Tuple[str, object], ...]:
+    """Every setting's current value, as (name, value) pairs in SETTINGS'
+    order: what caches of kernels, plans and derivatives are keyed by."""
+    module = sys.modules[__name__]
+    return tuple((name, getattr(module, name)) for name in SETTINGS)
 
 
 @contextmanager

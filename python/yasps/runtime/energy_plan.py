@@ -67,12 +67,7 @@ def _key(scene: Scene, backend: Backend, threads: Optional[int]) -> tuple:
     """What a plan depends on: the scene's structure (its energies and
     every entity's arguments), the backend, the threads and the kernels'
     settings."""
-    settings = tuple((name, value) for name, value
-                     in sorted(vars(config).items())
-                     if not name.startswith("_")
-                     and isinstance(value, (bool, int, float, str,
-                                            type(None))))
-    return (scene._structure, id(backend), threads, settings)
+    return (scene._structure, id(backend), threads, config.snapshot())
 
 
 def energy_plan(scene: Scene, backend: Backend,

@@ -117,14 +117,6 @@ _LAST_POINT: StateKey[_Point] = StateKey(
     "the local derivatives at the last point assembled")
 
 
-def _config_values() -> tuple:
-    """The settings, as (name, value) pairs: kernels and assembly read
-    them."""
-    return tuple((name, value) for name, value in sorted(vars(config).items())
-                 if not name.startswith("_") and
-                 isinstance(value, (bool, int, float, str, type(None))))
-
-
 def _point_key(scene: Scene, ir: str, backend: Backend,
                threads: Optional[int]) -> tuple:
     """What an assembly's local derivatives depend on besides the scene's
@@ -142,7 +134,7 @@ def _point_key(scene: Scene, ir: str, backend: Backend,
                          for c in entity._connectivities.values()]
         if hasattr(entity, "_symbols"):
             pending += list(entity._symbols.values())
-    return (ir, id(backend), threads, _config_values(), tuple(versions))
+    return (ir, id(backend), threads, config.snapshot(), tuple(versions))
 
 
 def _contributions(scene: Scene, backend: Backend, threads: Optional[int],
