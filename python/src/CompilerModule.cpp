@@ -379,8 +379,9 @@ attributeParams(const std::string &ir, const std::string &pipeline,
               path && !scenes.empty()
                   ? mlir::yasps::lookupInScene(*scenes.begin(), path)
                   : nullptr;
-          auto params = decl ? decl->getAttrOfType<ArrayAttr>("yasps.params")
-                             : ArrayAttr();
+          auto params =
+              decl ? decl->getAttrOfType<ArrayAttr>(::mlir::yasps::kParamsAttr)
+                   : ArrayAttr();
           result.push_back(mlir::yasps::describeParams(params));
         }
         return result;

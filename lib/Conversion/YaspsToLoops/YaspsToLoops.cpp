@@ -94,7 +94,7 @@ LogicalResult LowerToLoopsPass::lowerAttribute(SceneOp scene,
 
   // Derivative attributes (from yasps-differentiate) get symbolic zeros.
   KernelEmitter emitter(scene, tables, func,
-                        /*symbolicZeros=*/decl->hasAttr("yasps.params"),
+                        /*symbolicZeros=*/decl->hasAttr(kParamsAttr),
                         attrStorage, outStorage);
   Value out = emitter.buffer(KernelArgKind::out, decl, type.getElementType());
   Value one = arith::ConstantIndexOp::create(b, loc, 1);
@@ -137,18 +137,18 @@ LogicalResult LowerToLoopsPass::lowerAttribute(SceneOp scene,
   }
 
   func.setType(builder.getFunctionType(entry->getArgumentTypes(), {}));
-  func->setAttr("yasps.kernel_of", path);
-  func->setAttr("yasps.kernel_args", emitter.getRoles());
+  func->setAttr(kKernelOfAttr, path);
+  func->setAttr(kKernelArgsAttr, emitter.getRoles());
   // Rows and columns of each instance's value in `out`.
-  func->setAttr("yasps.kernel_shape",
+  func->setAttr(kKernelShapeAttr,
                 builder.getDenseI64ArrayAttr({type.getRows(), type.getCols()}));
   // Derivative attributes describe their local parameters; keep that with
   // the kernel for the runtime.
-  if (Attribute params = decl->getAttr("yasps.params"))
-    func->setAttr("yasps.params", params);
+  if (Attribute params = decl->getAttr(kParamsAttr))
+    func->setAttr(kParamsAttr, params);
   // And projected Hessians how they are projected (full, reduced, ...).
-  if (Attribute projection = decl->getAttr("yasps.projection"))
-    func->setAttr("yasps.projection", projection);
+  if (Attribute projection = decl->getAttr(kProjectionAttr))
+    func->setAttr(kProjectionAttr, projection);
   return success();
 }
 

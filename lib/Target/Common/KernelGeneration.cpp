@@ -117,8 +117,9 @@ llvm::Expected<OwningOpRef<ModuleOp>> mlir::yasps::generateLoopKernels(
       return std::move(err);
   if (llvm::Error err = checkAttributesExist(*kernels, attributes))
     return std::move(err);
-  if (llvm::Error err =
-          runPasses(*kernels, "kernel generation failed", [&](PassManager &pm) {
+  if (llvm::Error err = runPasses(
+          *kernels, "kernel generation failed",
+          [&](PassManager &pm) {
             YaspsLowerToLoopsOptions lowerOptions;
             lowerOptions.attributes.assign(attributes.begin(),
                                            attributes.end());
@@ -157,8 +158,8 @@ unsigned mlir::yasps::computeFloatBits(ModuleOp module) {
 std::vector<KernelDescription> mlir::yasps::describeKernels(ModuleOp kernels) {
   std::vector<KernelDescription> result;
   for (auto func : kernels.getOps<func::FuncOp>()) {
-    auto of = func->getAttrOfType<SymbolRefAttr>("yasps.kernel_of");
-    auto args = func->getAttrOfType<ArrayAttr>("yasps.kernel_args");
+    auto of = func->getAttrOfType<SymbolRefAttr>(kKernelOfAttr);
+    auto args = func->getAttrOfType<ArrayAttr>(kKernelArgsAttr);
     if (!of || !args)
       continue;
     KernelDescription kernel;
@@ -167,20 +168,18 @@ std::vector<KernelDescription> mlir::yasps::describeKernels(ModuleOp kernels) {
     for (auto arg : args.getAsRange<KernelArgAttr>())
       kernel.arguments.push_back(
           {stringifyKernelArgKind(arg.getKind()).str(), print(arg.getPath())});
-    if (auto shape =
-            func->getAttrOfType<DenseI64ArrayAttr>("yasps.kernel_shape")) {
+    if (auto shape = func->getAttrOfType<DenseI64ArrayAttr>(kKernelShapeAttr)) {
       kernel.rows = shape[0];
       kernel.cols = shape[1];
     }
     if (auto projection =
-            func->getAttrOfType<ProjectionKindAttr>("yasps.projection"))
+            func->getAttrOfType<ProjectionKindAttr>(kProjectionAttr))
       kernel.projection = stringifyProjectionKind(projection.getValue()).str();
-    if (auto counts = func->getAttrOfType<DictionaryAttr>("yasps.op_counts"))
+    if (auto counts = func->getAttrOfType<DictionaryAttr>(kOpCountsAttr))
       for (NamedAttribute entry : counts)
         kernel.opCounts[entry.getName().str()] =
             cast<IntegerAttr>(entry.getValue()).getInt();
-    kernel.params =
-        describeParams(func->getAttrOfType<ArrayAttr>("yasps.params"));
+    kernel.params = describeParams(func->getAttrOfType<ArrayAttr>(kParamsAttr));
     // The output is the first buffer argument (after begin and end).
     for (auto [arg, role] : llvm::zip(func.getArguments().drop_front(2), args))
       if (cast<KernelArgAttr>(role).getKind() == KernelArgKind::out &&

@@ -148,8 +148,7 @@ AttrOp mlir::yasps::lookupDerivative(Operation *entity, DerivativeRole role,
                                      Operation *of) {
   SymbolRefAttr path = getScenePath(of);
   for (auto attr : entity->getRegion(0).front().getOps<AttrOp>())
-    if (auto derivative =
-            attr->getAttrOfType<DerivativeAttr>("yasps.derivative");
+    if (auto derivative = attr->getAttrOfType<DerivativeAttr>(kDerivativeAttr);
         derivative && derivative.getRole() == role &&
         derivative.getOf() == path)
       return attr;

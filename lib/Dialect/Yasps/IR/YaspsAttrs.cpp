@@ -112,13 +112,13 @@ LogicalResult YaspsDialect::verifyOperationAttribute(Operation *op,
   StringRef name = attr.getName().getValue();
   Attribute value = attr.getValue();
   StringRef expected;
-  if (name == "yasps.params" && !isArrayOf<ParamAttr>(value))
+  if (name == kParamsAttr && !isArrayOf<ParamAttr>(value))
     expected = "an array of #yasps.param";
-  else if (name == "yasps.kernel_args" && !isArrayOf<KernelArgAttr>(value))
+  else if (name == kKernelArgsAttr && !isArrayOf<KernelArgAttr>(value))
     expected = "an array of #yasps.kernel_arg";
-  else if (name == "yasps.derivative" && !isa<DerivativeAttr>(value))
+  else if (name == kDerivativeAttr && !isa<DerivativeAttr>(value))
     expected = "a #yasps.derivative";
-  else if (name == "yasps.projection" && !isa<ProjectionKindAttr>(value))
+  else if (name == kProjectionAttr && !isa<ProjectionKindAttr>(value))
     expected = "a #yasps.projection";
   if (expected.empty())
     return success();

@@ -18,7 +18,7 @@ struct CountOpsPass
     : public mlir::yasps::impl::YaspsCountOpsBase<CountOpsPass> {
   void runOnOperation() override {
     for (auto func : getOperation().getOps<func::FuncOp>()) {
-      if (!func->hasAttr("yasps.kernel_of"))
+      if (!func->hasAttr(yasps::kKernelOfAttr))
         continue;
       int64_t mul = 0, add = 0, div = 0, math = 0;
       func.walk([&](Operation *op) {
@@ -32,7 +32,7 @@ struct CountOpsPass
           ++math;
       });
       Builder b(func.getContext());
-      func->setAttr("yasps.op_counts",
+      func->setAttr(yasps::kOpCountsAttr,
                     b.getDictionaryAttr({
                         b.getNamedAttr("add", b.getI64IntegerAttr(add)),
                         b.getNamedAttr("div", b.getI64IntegerAttr(div)),

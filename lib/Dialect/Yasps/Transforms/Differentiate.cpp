@@ -29,15 +29,7 @@ struct DifferentiatePass
 } // namespace
 
 void DifferentiatePass::runOnOperation() {
-  std::optional<HessianFactors> factors = parseHessianFactors(hessianFactors);
-  if (!factors) {
-    getOperation().emitError()
-        << "yasps-differentiate: hessian-factors must be never, always or "
-           "auto, not '"
-        << hessianFactors << "'";
-    return signalPassFailure();
-  }
-  ProjectionOptions options{*factors, linearMaps};
+  ProjectionOptions options{hessianFactors, linearMaps};
   SymbolTableCollection tables;
   for (auto scene : getOperation().getOps<SceneOp>()) {
     auto minimize = scene.getBodyBlock().getOps<MinimizeOp>();

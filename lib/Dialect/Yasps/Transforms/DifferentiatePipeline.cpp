@@ -7,9 +7,10 @@
 #include "mlir/Transforms/Passes.h"
 
 using namespace mlir;
+using namespace mlir::yasps;
 
 void mlir::yasps::buildDifferentiatePipeline(OpPassManager &pm,
-                                             StringRef hessianFactors,
+                                             HessianFactors hessianFactors,
                                              bool linearMaps) {
   // yasps-differentiate needs one expression per energy; canonicalize and
   // cse shrink it (and merge the inlined copies) before it is
@@ -18,7 +19,7 @@ void mlir::yasps::buildDifferentiatePipeline(OpPassManager &pm,
   pm.addPass(createCanonicalizerPass());
   pm.addPass(createCSEPass());
   YaspsDifferentiateOptions differentiate;
-  differentiate.hessianFactors = hessianFactors.str();
+  differentiate.hessianFactors = hessianFactors;
   differentiate.linearMaps = linearMaps;
   pm.addPass(createYaspsDifferentiate(differentiate));
   pm.addPass(createYaspsGenerateIndices());
@@ -27,12 +28,12 @@ void mlir::yasps::buildDifferentiatePipeline(OpPassManager &pm,
 namespace {
 struct DifferentiatePipelineOptions
     : public PassPipelineOptions<DifferentiatePipelineOptions> {
-  Option<std::string> hessianFactors{
+  Option<HessianFactors> hessianFactors{
       *this, "hessian-factors",
       llvm::cl::desc("Keep the reduced-space factors @E__ij, "
                      "@E__hess_inner_proj and @E__hess_inner apart: never, "
                      "always or auto (see yasps-differentiate)"),
-      llvm::cl::init("never")};
+      llvm::cl::init(HessianFactors::never), hessianFactorsValues()};
   Option<bool> linearMaps{
       *this, "linear-maps",
       llvm::cl::desc("Project Hessians in the entries of a smaller linear "

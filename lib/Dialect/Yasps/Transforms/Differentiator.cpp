@@ -225,9 +225,9 @@ Differentiator::createAttr(AttrOp next, StringRef name, MatrixType type,
   attr.getBody().push_back(new Block());
   table.insert(attr, std::next(Block::iterator(next)));
   if (params)
-    attr->setAttr("yasps.params", params);
+    attr->setAttr(kParamsAttr, params);
   if (role)
-    attr->setAttr("yasps.derivative",
+    attr->setAttr(kDerivativeAttr,
                   DerivativeAttr::get(b.getContext(), *role,
                                       getScenePath(of ? of : next)));
   if (derivedFromOp)

@@ -10,6 +10,7 @@
 #define YASPS_LIB_DIALECT_YASPS_TRANSFORMS_DIFFERENTIATOR_H
 
 #include "yasps/Dialect/Yasps/IR/Yasps.h"
+#include "yasps/Dialect/Yasps/Transforms/HessianFactors.h"
 
 #include <map>
 #include <optional>
@@ -129,13 +130,6 @@ LogicalResult checkSize(Operation *at, StringRef name, MatrixType type);
 
 /// The zero matrix of `type`.
 Value zeros(OpBuilder &b, Location loc, MatrixType type);
-
-/// Whether the reduced-space factors of a projected Hessian stay apart
-/// (yasps-differentiate's hessian-factors option).
-enum class HessianFactors { never, always, automatic };
-
-/// The option's value from its spelling (never, always, auto).
-std::optional<HessianFactors> parseHessianFactors(StringRef spelling);
 
 /// How yasps-differentiate projects local Hessians.
 struct ProjectionOptions {

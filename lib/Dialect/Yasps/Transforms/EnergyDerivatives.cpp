@@ -30,7 +30,7 @@ differentiation::differentiateEnergy(Differentiator &diff, EnergyOp energy,
     return failure();
   MatrixType row = (*jac).getMatrixType();
   int64_t d = row.getCols();
-  auto params = (*jac)->getAttrOfType<ArrayAttr>("yasps.params");
+  auto params = (*jac)->getAttrOfType<ArrayAttr>(kParamsAttr);
   auto alias = [&](StringRef suffix, DerivativeRole role, AttrOp of,
                    MatrixType type, bool transpose) -> FailureOr<AttrOp> {
     FailureOr<AttrOp> a =

@@ -108,7 +108,7 @@ FailureOr<AttrOp> IndexGenerator::dofsOf(Operation *decl) {
     // Its parameters are those of its Jacobian.
     AttrOp jac = lookupDerivative(entity, DerivativeRole::jac, decl);
     ArrayAttr params =
-        jac ? jac->getAttrOfType<ArrayAttr>("yasps.params") : ArrayAttr();
+        jac ? jac->getAttrOfType<ArrayAttr>(kParamsAttr) : ArrayAttr();
     if (!params)
       return decl->emitError()
              << "yasps-generate-indices: " << getScenePath(decl)
@@ -120,7 +120,7 @@ FailureOr<AttrOp> IndexGenerator::dofsOf(Operation *decl) {
       return failure();
     result = *built;
   }
-  result->setAttr("yasps.derivative",
+  result->setAttr(kDerivativeAttr,
                   DerivativeAttr::get(decl->getContext(), DerivativeRole::dofs,
                                       getScenePath(decl)));
   made[decl] = result;
@@ -213,7 +213,7 @@ FailureOr<AttrOp> IndexGenerator::paddedMemberDofs(Operation *member,
   bool hasParams = isTarget(decl);
   if (!hasParams) {
     AttrOp jac = lookupDerivative(member, DerivativeRole::jac, decl);
-    hasParams = jac && jac->getAttrOfType<ArrayAttr>("yasps.params");
+    hasParams = jac && jac->getAttrOfType<ArrayAttr>(kParamsAttr);
   }
   Value value = zeros(b, loc, scalar.withShape(width, 1));
   if (hasParams) {
@@ -229,12 +229,12 @@ FailureOr<AttrOp> IndexGenerator::paddedMemberDofs(Operation *member,
 }
 
 FailureOr<AttrOp> IndexGenerator::energyDofs(AttrOp energy, AttrOp grad) {
-  auto params = grad->getAttrOfType<ArrayAttr>("yasps.params");
+  auto params = grad->getAttrOfType<ArrayAttr>(kParamsAttr);
   FailureOr<AttrOp> dofs =
       build(getOwningEntity(energy), (energy.getSymName() + "__dofs").str(),
             energy.getMatrixType().getScalarType(), params);
   if (succeeded(dofs))
-    (*dofs)->setAttr("yasps.derivative",
+    (*dofs)->setAttr(kDerivativeAttr,
                      DerivativeAttr::get(energy.getContext(),
                                          DerivativeRole::dofs,
                                          getScenePath(energy)));
@@ -255,7 +255,7 @@ struct GenerateIndicesPass
         AttrOp grad =
             lookupDerivative(getOwningEntity(attr), DerivativeRole::grad, attr);
         // Energies of no target have no derivatives and no indices.
-        if (!grad || !grad->getAttrOfType<ArrayAttr>("yasps.params"))
+        if (!grad || !grad->getAttrOfType<ArrayAttr>(kParamsAttr))
           continue;
         if (failed(generator.energyDofs(attr, grad)))
           return signalPassFailure();

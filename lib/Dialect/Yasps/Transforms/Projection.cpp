@@ -116,15 +116,6 @@ FailureOr<AttrOp> Differentiator::innerMap(AttrOp energy) {
   return map;
 }
 
-std::optional<HessianFactors>
-differentiation::parseHessianFactors(StringRef spelling) {
-  return llvm::StringSwitch<std::optional<HessianFactors>>(spelling)
-      .Case("never", HessianFactors::never)
-      .Case("always", HessianFactors::always)
-      .Case("auto", HessianFactors::automatic)
-      .Default(std::nullopt);
-}
-
 /// Whether reduced factors of m inner variables and d parameters stay
 /// apart: the factors J (m x d) and P (m x m) are cheaper to compute, store
 /// and assemble than the d x d product when they hold at most half its
@@ -149,7 +140,7 @@ differentiation::addProjectedHessian(Differentiator &diff, EnergyOp energy,
   MatrixType row = jac.getMatrixType();
   int64_t d = row.getCols();
   MatrixType square = row.withShape(d, d);
-  auto params = jac->getAttrOfType<ArrayAttr>("yasps.params");
+  auto params = jac->getAttrOfType<ArrayAttr>(kParamsAttr);
   // In reduced space (paper 5.4) when the parameterisations behind the
   // leaves are linear and the leaves have fewer entries than there are
   // parameters: J^T Project(H_inner) J, with H_inner the Hessian in the
@@ -187,7 +178,7 @@ differentiation::addProjectedHessian(Differentiator &diff, EnergyOp energy,
   if (failed(created))
     return failure();
   AttrOp projected = *created;
-  projected->setAttr("yasps.projection",
+  projected->setAttr(kProjectionAttr,
                      ProjectionKindAttr::get(attr.getContext(),
                                              separate ? ProjectionKind::separate
                                              : reduced ? ProjectionKind::reduced
@@ -225,7 +216,7 @@ differentiation::addProjectedHessian(Differentiator &diff, EnergyOp energy,
     // J^T P J while it assembles. The unprojected H_inner is kept too:
     // with linear parameterisations J^T H_inner J is the local Hessian,
     // without a d x d forward-mode Jacobian.
-    (*map)->setAttr("yasps.params", params);
+    (*map)->setAttr(kParamsAttr, params);
     YieldOp::create(pb, loc, pi);
     FailureOr<AttrOp> inner = diff.createAttr(
         jac, (attr.getSymName() + "__hess_inner").str(), innerType, nullptr,

@@ -20,7 +20,6 @@
 #include "mlir/Interfaces/InferTypeOpInterface.h"
 #include "mlir/Interfaces/SideEffectInterfaces.h"
 
-#include "yasps/Dialect/Yasps/IR/YaspsDialect.h.inc"
 #include "yasps/Dialect/Yasps/IR/YaspsEnums.h.inc"
 #include "yasps/Dialect/Yasps/IR/YaspsInterfaces.h.inc"
 
@@ -30,10 +29,31 @@
 #define GET_ATTRDEF_CLASSES
 #include "yasps/Dialect/Yasps/IR/YaspsAttrs.h.inc"
 
+// After the attributes: the helpers of its discardable attributes read
+// them by type.
+#include "yasps/Dialect/Yasps/IR/YaspsDialect.h.inc"
+
 #define GET_OP_CLASSES
 #include "yasps/Dialect/Yasps/IR/YaspsOps.h.inc"
 
 namespace mlir::yasps {
+
+/// The names of the discardable attributes, as the dialect declares them
+/// (YaspsDialect.td, discardableAttrs).
+constexpr llvm::StringLiteral kParamsAttr =
+    YaspsDialect::ParamsAttrHelper::getNameStr();
+constexpr llvm::StringLiteral kDerivativeAttr =
+    YaspsDialect::DerivativeAttrHelper::getNameStr();
+constexpr llvm::StringLiteral kProjectionAttr =
+    YaspsDialect::ProjectionAttrHelper::getNameStr();
+constexpr llvm::StringLiteral kKernelOfAttr =
+    YaspsDialect::KernelOfAttrHelper::getNameStr();
+constexpr llvm::StringLiteral kKernelArgsAttr =
+    YaspsDialect::KernelArgsAttrHelper::getNameStr();
+constexpr llvm::StringLiteral kKernelShapeAttr =
+    YaspsDialect::KernelShapeAttrHelper::getNameStr();
+constexpr llvm::StringLiteral kOpCountsAttr =
+    YaspsDialect::OpCountsAttrHelper::getNameStr();
 
 /// True for the ops that own attributes: scene, mesh, primitive, union.
 bool isEntity(Operation *op);

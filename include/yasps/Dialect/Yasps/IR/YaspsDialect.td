@@ -33,8 +33,21 @@ def Yasps_Dialect : Dialect {
   }];
   let useDefaultTypePrinterParser = 1;
   let useDefaultAttributePrinterParser = 1;
-  // The discardable attributes that passes agree on (yasps.params, ...)
-  // must hold the dialect's typed attributes.
+  // The discardable attributes that passes agree on, declared once here:
+  // their names are the helpers' getNameStr() (Yasps.h names them), and
+  // the verifier checks that they hold the dialect's typed attributes.
+  let discardableAttrs = (ins
+    // The local parameter groups of a derivative (#yasps.param, ...).
+    "::mlir::ArrayAttr":$params,
+    "::mlir::yasps::DerivativeAttr":$derivative,
+    "::mlir::yasps::ProjectionKindAttr":$projection,
+    // Set on lowered kernels: the attribute they evaluate, their buffer
+    // arguments (#yasps.kernel_arg, ...), output shape and op counts.
+    "::mlir::SymbolRefAttr":$kernel_of,
+    "::mlir::ArrayAttr":$kernel_args,
+    "::mlir::DenseI64ArrayAttr":$kernel_shape,
+    "::mlir::DictionaryAttr":$op_counts
+  );
   let hasOperationAttrVerify = 1;
   let extraClassDeclaration = [{
     void registerAttributes();

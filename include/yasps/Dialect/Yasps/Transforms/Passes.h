@@ -5,6 +5,7 @@
 
 #include "mlir/Pass/Pass.h"
 #include "yasps/Dialect/Yasps/IR/Yasps.h"
+#include "yasps/Dialect/Yasps/Transforms/HessianFactors.h"
 
 namespace mlir::yasps {
 

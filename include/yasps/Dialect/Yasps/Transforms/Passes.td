@@ -84,8 +84,9 @@ def YaspsDifferentiate : Pass<"yasps-differentiate", "::mlir::ModuleOp"> {
     inlined first (`yasps-inline-reads`).
   }];
   let options = [
-    Option<"hessianFactors", "hessian-factors", "std::string",
-           /*default=*/"\"never\"",
+    Option<"hessianFactors", "hessian-factors",
+           "::mlir::yasps::HessianFactors",
+           /*default=*/"::mlir::yasps::HessianFactors::never",
            "Where the reduced-space projection applies, whether to keep the "
            "inner map J (@E__ij, m x n), the projected inner Hessian "
            "(@E__hess_inner_proj, m x m) and the unprojected one "
@@ -93,7 +94,8 @@ def YaspsDifferentiate : Pass<"yasps-differentiate", "::mlir::ModuleOp"> {
            "@E__hess_proj = J^T P(H_inner) J, so that the runtime forms the "
            "product while it assembles (paper 7.2, 10.9): never, always, or "
            "auto (when the factors hold at most half the values of the "
-           "n x n Hessian: 2 m (n + m) <= n^2)">,
+           "n x n Hessian: 2 m (n + m) <= n^2)",
+           [{::mlir::yasps::hessianFactorsValues()}]>,
     Option<"linearMaps", "linear-maps", "bool", /*default=*/"true",
            "Where the leaves reach the energy through a linear cut with "
            "fewer entries (the deformation gradient F of a tet: 9 against "

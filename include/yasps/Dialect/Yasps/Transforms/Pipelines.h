@@ -9,6 +9,7 @@
 #define YASPS_DIALECT_YASPS_TRANSFORMS_PIPELINES_H
 
 #include "mlir/Pass/PassManager.h"
+#include "yasps/Dialect/Yasps/Transforms/HessianFactors.h"
 
 namespace mlir::yasps {
 
@@ -16,9 +17,9 @@ namespace mlir::yasps {
 /// placement indices: yasps-inline-reads, canonicalize, cse,
 /// yasps-differentiate (with its `hessian-factors` option: never, always
 /// or auto, and `linear-maps`) and yasps-generate-indices.
-void buildDifferentiatePipeline(OpPassManager &pm,
-                                StringRef hessianFactors = "never",
-                                bool linearMaps = true);
+void buildDifferentiatePipeline(
+    OpPassManager &pm, HessianFactors hessianFactors = HessianFactors::never,
+    bool linearMaps = true);
 
 /// Registers the `yasps-differentiate-pipeline` pass pipeline, so that it
 /// can be named in textual pipelines.
