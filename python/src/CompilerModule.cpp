@@ -351,11 +351,22 @@ std::pair<std::uintptr_t, std::string> cpuEntry(const CpuLibrary &self,
   const mlir::yasps::CpuKernel &kernel = self.kernel(attribute);
   std::string codes;
   for (const auto &argument : kernel.arguments) {
-    const std::string &kind = argument.kind;
-    codes += kind == "conn"                               ? 'i'
-             : kind == "offsets" || kind == "dof_offsets" ? 'q'
-             : kind == "out" && kernel.outType == "f32"   ? 'f'
-                                                          : 'd';
+    using mlir::yasps::KernelArgKind;
+    switch (argument.kind) {
+    case KernelArgKind::conn:
+      codes += 'i';
+      break;
+    case KernelArgKind::offsets:
+    case KernelArgKind::dof_offsets:
+      codes += 'q';
+      break;
+    case KernelArgKind::out:
+      codes += kernel.outType == "f32" ? 'f' : 'd';
+      break;
+    case KernelArgKind::attr:
+      codes += 'd';
+      break;
+    }
   }
   return {reinterpret_cast<std::uintptr_t>(kernel.packed), codes};
 }
@@ -394,6 +405,16 @@ NB_MODULE(_yasps_compiler, m) {
   m.doc() = "Bindings over the yasps MLIR compiler: parsing, verification, "
             "passes, CPU kernels (compiled and launched) and GPU binaries.";
 
+  // The dialect's kinds of kernel buffer arguments: kernels' argument lists
+  // carry them as this enum, not as strings.
+  nb::enum_<mlir::yasps::KernelArgKind>(
+      m, "KernelArgKind", "What a buffer argument of a generated kernel holds")
+      .value("out", mlir::yasps::KernelArgKind::out)
+      .value("attr", mlir::yasps::KernelArgKind::attr)
+      .value("conn", mlir::yasps::KernelArgKind::conn)
+      .value("offsets", mlir::yasps::KernelArgKind::offsets)
+      .value("dof_offsets", mlir::yasps::KernelArgKind::dof_offsets);
+
   nb::exception<IRError> irError(m, "IRError", PyExc_ValueError);
   nb::exception<MissingAttribute> missingAttribute(m, "MissingAttributeError",
                                                    irError);
@@ -425,10 +446,12 @@ NB_MODULE(_yasps_compiler, m) {
           "kernels",
           [](const CpuLibrary &self) {
             std::vector<std::pair<
-                std::string, std::vector<std::pair<std::string, std::string>>>>
+                std::string, std::vector<std::pair<mlir::yasps::KernelArgKind,
+                                                   std::string>>>>
                 out;
             for (const auto &kernel : self.library->kernels()) {
-              std::vector<std::pair<std::string, std::string>> args;
+              std::vector<std::pair<mlir::yasps::KernelArgKind, std::string>>
+                  args;
               for (const auto &arg : kernel.arguments)
                 args.emplace_back(arg.kind, arg.path);
               out.emplace_back(kernel.attribute, args);

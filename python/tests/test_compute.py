@@ -396,3 +396,30 @@ def test_evaluate_energy_sums_without_cancellation():
         running += term
     assert exact == count / 2 and running != exact
     assert s.evaluateEnergy() == exact
+
+
+def test_kernel_argument_kinds_are_the_dialects_enum(tmp_path, monkeypatch):
+    """Kernels' argument kinds cross the bindings as the dialect's
+    KernelArgKind, also for kernels loaded from the disk cache (which
+    records their spelling)."""
+    import yasps.compiler.cpu as cpu
+    from yasps.compiler.params import ArgumentKind
+    from yasps.ir import kernel_ir, symbol_path
+    s = yasps.scene("kinds")
+    v = s.addMesh("m").addPrimitive("v", numInstances=3)
+    x = v.addAttribute("x", rows=3)
+    x.updateValue(np.ones((3, 3, 1)))
+    energy = s.addEnergy(v.addAttribute("e",
+                                        computed_attribute=x.squaredNorm()))
+    path = symbol_path(energy)
+    kinds, kept = [], []  # kept alive: infos are cached by id(library)
+    with yasps.config.override(cache_dir=str(tmp_path)):
+        for fresh in (True, False):
+            monkeypatch.setattr(cpu, "_libraries", {})
+            kernels = cpu.compile_cpu(kernel_ir(s, precision="f64"), (path,),
+                                      s.name)
+            kept.append(kernels)
+            assert kernels.stats.get("from_source", False) is not fresh
+            kinds.append([a.kind for a in kernels.kernel(path).arguments])
+    assert kinds[0] == kinds[1] == [ArgumentKind.out, ArgumentKind.attr]
+    assert all(isinstance(k, ArgumentKind) for k in kinds[0])

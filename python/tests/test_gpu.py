@@ -78,7 +78,7 @@ def test_running_example_compiles_for_gpus():
         buffers = [i for kind, i in k.launch_params if kind == "buffer"]
         assert len(set(buffers)) == len(buffers), k.attribute
         assert all(2 <= i < 2 + len(k.arguments) for i in buffers), k.attribute
-        out = 2 + [a.kind for a in k.arguments].index("out")
+        out = 2 + [a.kind.name for a in k.arguments].index("out")
         assert out in buffers, k.attribute
         assert ("index", 0) in k.launch_params and ("index", 1) in k.launch_params
 

@@ -13,6 +13,7 @@
 #include "mlir/IR/BuiltinOps.h"
 #include "mlir/IR/OwningOpRef.h"
 #include "mlir/Pass/PassManager.h"
+#include "yasps/Dialect/Yasps/IR/Yasps.h"
 #include "llvm/Support/Error.h"
 
 #include <map>
@@ -45,7 +46,9 @@ private:
 
 /// What one buffer argument of a kernel holds.
 struct KernelArgument {
-  std::string kind; ///< "out", "attr", "conn", "offsets" or "dof_offsets"
+  /// out, attr, conn, offsets or dof_offsets (the dialect's enum, as the
+  /// kernel's #yasps.kernel_arg says).
+  mlir::yasps::KernelArgKind kind;
   std::string path; ///< scene-relative symbol path, e.g. "@m::@v::@x"
 };
 
@@ -82,10 +85,9 @@ enum class Verification { EachPass, AtEnd, Deferred };
 /// `what` and the diagnostics. Verifying large scenes after every pass
 /// took 1.5 s of an 11 s cold compile (the README demo's kernels), so the
 /// compile paths verify where the IR leaves them for LLVM.
-llvm::Error
-runPasses(ModuleOp module, const std::string &what,
-          llvm::function_ref<LogicalResult(PassManager &)> populate,
-          Verification verification = Verification::EachPass);
+llvm::Error runPasses(ModuleOp module, const std::string &what,
+                      llvm::function_ref<LogicalResult(PassManager &)> populate,
+                      Verification verification = Verification::EachPass);
 
 /// A copy of `module` with loop kernels for `attributes` (scene-relative
 /// paths; empty: every energy). `prePipeline` (a yasps-opt pipeline string,

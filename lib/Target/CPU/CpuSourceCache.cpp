@@ -31,10 +31,10 @@ const std::string &buildIdentity() {
       llvm::sys::fs::file_status status;
       text = info.dli_fname;
       if (!llvm::sys::fs::status(info.dli_fname, status))
-        text += ":" + std::to_string(status.getSize()) + ":" +
-                std::to_string(status.getLastModificationTime()
-                                   .time_since_epoch()
-                                   .count());
+        text +=
+            ":" + std::to_string(status.getSize()) + ":" +
+            std::to_string(
+                status.getLastModificationTime().time_since_epoch().count());
     }
     return text;
   }();
@@ -48,10 +48,11 @@ std::string recordPath(const std::string &key,
   return path.str().str();
 }
 
-json::Value describe(const CpuKernel &kernel) {
+json::Value kernelRecord(const CpuKernel &kernel) {
   json::Array arguments, params;
   for (const KernelArgument &arg : kernel.arguments)
-    arguments.push_back(json::Array{arg.kind, arg.path});
+    arguments.push_back(
+        json::Array{mlir::yasps::stringifyKernelArgKind(arg.kind), arg.path});
   for (const auto &fields : kernel.params)
     params.push_back(json::Array(fields));
   json::Object counts;
@@ -110,8 +111,11 @@ std::optional<CpuKernel> kernelOf(const json::Value &value) {
     const json::Array *pair = arg.getAsArray();
     if (!pair || pair->size() != 2)
       return std::nullopt;
-    auto kind = text(&(*pair)[0]);
+    auto spelling = text(&(*pair)[0]);
     auto path = text(&(*pair)[1]);
+    std::optional<mlir::yasps::KernelArgKind> kind =
+        spelling ? mlir::yasps::symbolizeKernelArgKind(*spelling)
+                 : std::nullopt;
     if (!kind || !path)
       return std::nullopt;
     kernel.arguments.push_back({*kind, *path});
@@ -140,10 +144,9 @@ std::optional<CpuKernel> kernelOf(const json::Value &value) {
 
 } // namespace
 
-std::string mlir::yasps::cpuSourceKey(llvm::StringRef ir,
-                                      const std::vector<std::string> &attributes,
-                                      llvm::StringRef prePipeline,
-                                      const CpuCompileOptions &options) {
+std::string mlir::yasps::cpuSourceKey(
+    llvm::StringRef ir, const std::vector<std::string> &attributes,
+    llvm::StringRef prePipeline, const CpuCompileOptions &options) {
   llvm::SHA256 hash;
   auto add = [&](llvm::StringRef part) {
     hash.update(part);
@@ -199,7 +202,7 @@ void mlir::yasps::recordCpuSource(const std::string &sourceKey,
     return;
   json::Array kernels;
   for (const CpuKernel &kernel : library.kernels())
-    kernels.push_back(describe(kernel));
+    kernels.push_back(kernelRecord(kernel));
   json::Value record = json::Object{{"kernels", std::move(kernels)}};
   llvm::sys::fs::create_directories(options.cacheDir);
   storeAtomically(recordPath(sourceKey, options), [&](llvm::StringRef tmp) {

@@ -166,8 +166,7 @@ std::vector<KernelDescription> mlir::yasps::describeKernels(ModuleOp kernels) {
     llvm::raw_string_ostream(kernel.attribute) << of;
     kernel.symbol = func.getSymName().str();
     for (auto arg : args.getAsRange<KernelArgAttr>())
-      kernel.arguments.push_back(
-          {stringifyKernelArgKind(arg.getKind()).str(), print(arg.getPath())});
+      kernel.arguments.push_back({arg.getKind(), print(arg.getPath())});
     if (auto shape = func->getAttrOfType<DenseI64ArrayAttr>(kKernelShapeAttr)) {
       kernel.rows = shape[0];
       kernel.cols = shape[1];

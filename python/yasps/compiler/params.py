@@ -9,30 +9,33 @@ import json
 import os
 from dataclasses import dataclass
 from pathlib import Path
-from typing import List, Optional, Sequence, Tuple, Union
+from typing import Any, List, Optional, Sequence, Tuple, Union
 
 from .. import config
 from ..ir import text_and_locations
 from .errors import native, translated
 from ..frontend.errors import ArgumentError
 
-#: Kinds of kernel arguments: a stored attribute's values, a connectivity's
-#: indices, a union's member offsets, the targets' first DoFs, the output.
-ARGUMENT_KINDS = ("attr", "conn", "offsets", "dof_offsets", "out")
+#: Kinds of kernel arguments, the dialect's enum as the bindings give it
+#: (``KernelArgKind``): ``attr`` (a stored attribute's values), ``conn``
+#: (a connectivity's indices), ``offsets`` (a union's member offsets),
+#: ``dof_offsets`` (the targets' first DoFs) and ``out`` (the output).
+ArgumentKind: Any = native().KernelArgKind
 
 
 @dataclass(frozen=True)
 class KernelArgument:
     """One buffer a kernel reads or writes, in launch order."""
-    kind: str  #: one of ARGUMENT_KINDS
+    kind: Any  #: an ArgumentKind
     path: str  #: scene-relative symbol it comes from ("" for dof_offsets/out)
 
 
-def kernel_arguments(record: Sequence[Tuple[str, str]]) -> List[KernelArgument]:
-    """The typed arguments of a kernel from the bindings' (kind, path) pairs."""
+def kernel_arguments(record: Sequence[Tuple[Any, str]]) -> List[KernelArgument]:
+    """The typed arguments of a kernel from the bindings' (kind, path)
+    pairs, their kinds ArgumentKind values."""
     out = []
     for kind, path in record:
-        if kind not in ARGUMENT_KINDS:
+        if not isinstance(kind, ArgumentKind):
             raise ArgumentError(f"unknown kernel argument kind {kind!r}")
         out.append(KernelArgument(kind, path))
     return out

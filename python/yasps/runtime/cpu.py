@@ -10,6 +10,7 @@ import numpy as np
 
 from .. import config
 from ..compiler.cpu import CpuKernels, compile_cpu, compile_cpu_together
+from ..compiler.params import ArgumentKind
 from ..compiler.specs import KernelRequest, grouped_requests
 from ..frontend.errors import SceneError
 from ..frontend.values import from_column_major
@@ -95,7 +96,7 @@ class CpuBackend:
         kernel = kernels.kernel(path)
         # The inputs are checked (values present, indices in bounds) before
         # the output is allocated.
-        inputs = [None if a.kind == "out" else host_input(scene, a)
+        inputs = [None if a.kind is ArgumentKind.out else host_input(scene, a)
                   for a in kernel.arguments]
         size = count * kernel.rows * kernel.cols
         out = None
@@ -109,7 +110,7 @@ class CpuBackend:
         else:
             out = allocate_output(path, count, kernel.rows, kernel.cols,
                                   kernel.out_dtype)
-        buffers = [out if a.kind == "out" else given
+        buffers = [out if a.kind is ArgumentKind.out else given
                    for a, given in zip(kernel.arguments, inputs)]
         launch(kernels, path, count, buffers, _threads(threads))
         return out

@@ -18,7 +18,7 @@ import numpy as np
 
 from ..frontend.state import StateKey
 from .. import config
-from ..compiler.params import KernelArgument
+from ..compiler.params import ArgumentKind, KernelArgument
 from ..frontend.attribute import Attribute
 from ..frontend.scene import Entity, Scene
 from ..ir import kernel_ir, resolve, symbol_path
@@ -43,13 +43,14 @@ class PlannedEnergy:
     def output(self) -> int:
         """The position of the output among the arguments."""
         return next(k for k, a in enumerate(self.arguments)
-                    if a.kind == "out")
+                    if a.kind is ArgumentKind.out)
 
     def inputs(self, scene: Scene) -> List[np.ndarray]:
         """The current host arrays of the inputs, in argument order without
         the output (checked as ``host_input`` checks them)."""
         return [input_array(scene, a, source) for a, source
-                in zip(self.arguments, self.sources) if a.kind != "out"]
+                in zip(self.arguments, self.sources)
+                if a.kind is not ArgumentKind.out]
 
 
 @dataclass(frozen=True)
@@ -87,7 +88,8 @@ def energy_plan(scene: Scene, backend: Backend,
         kernels = backend.compile(ir, (path,), scene.name)
         arguments = tuple(kernels.kernel(path).arguments)
         sources = tuple(resolve(scene, a.path)
-                        if a.kind in ("attr", "conn", "offsets") else None
+                        if a.kind in (ArgumentKind.attr, ArgumentKind.conn,
+                                      ArgumentKind.offsets) else None
                         for a in arguments)
         owner = energy.owner
         assert isinstance(energy, Attribute) and owner is not None

@@ -20,6 +20,7 @@ import numpy as np
 
 from .. import config
 from ..compiler.gpu import GpuKernels, compile_ir
+from ..compiler.params import ArgumentKind
 from ..compiler.specs import KernelRequest, grouped_requests
 from ..frontend.errors import SceneError
 from ..frontend.values import from_column_major
@@ -96,7 +97,7 @@ class GpuSession:
                 self.device, kernels.binaries[(chip, fmt)])
         return self._modules[key]
 
-    def copy_of(self, kind: str, path: str, source: object,
+    def copy_of(self, kind: Any, path: str, source: object,
                 host: np.ndarray):
         """A device copy of ``host``, the value of ``source`` (an attribute,
         a connectivity, or None for small arrays compared by value)."""
@@ -173,7 +174,7 @@ class GpuBackend:
         # static structure: scene -> (host system, GpuSystem).
         self._systems: "weakref.WeakKeyDictionary" = weakref.WeakKeyDictionary()
         #: (kind, path) of the uploads of the last run()
-        self.last_uploads: List[Tuple[str, str]] = []
+        self.last_uploads: List[Tuple[Any, str]] = []
         self._warned_storage = False
 
     @property
@@ -212,7 +213,7 @@ class GpuBackend:
         size = count * kernel.rows * kernel.cols
         # Inputs first: a primitive without values is reported as such, not
         # as the output it would have filled.
-        inputs = [None if a.kind == "out" else host_input(scene, a)
+        inputs = [None if a.kind is ArgumentKind.out else host_input(scene, a)
                   for a in kernel.arguments]
         try:
             out = gpu.output(reuse, size) if reuse is not None else \
@@ -223,7 +224,7 @@ class GpuBackend:
                 f"doubles need {8 * size:,} bytes on the GPU: {err}") from None
         before = len(gpu.uploads)
         # host_input gave every argument but the output its array.
-        buffers = [out if a.kind == "out" else
+        buffers = [out if a.kind is ArgumentKind.out else
                    gpu.copy_of(a.kind, a.path, source_of(scene, a),
                                cast(np.ndarray, host))
                    for a, host in zip(kernel.arguments, inputs)]
@@ -253,7 +254,9 @@ class GpuBackend:
 
     def stats(self, kernels: GpuKernels) -> dict:
         return dict(kernels.stats, backend="gpu", device=session().chip,
-                    uploaded=list(self.last_uploads))
+                    # (kind name, path): what a user reads.
+                    uploaded=[(kind.name, path)
+                              for kind, path in self.last_uploads])
 
     def system(self, scene, host_system):
         cached = self._systems.get(scene)

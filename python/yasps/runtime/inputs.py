@@ -8,7 +8,7 @@ from typing import Any, Optional
 
 import numpy as np
 
-from ..compiler.params import KernelArgument
+from ..compiler.params import ArgumentKind, KernelArgument
 from ..frontend.attribute import owner_of
 from ..frontend.errors import SceneError, ValueUpdateError
 from ..frontend.scene import Connectivity, PrimitiveUnion, Scene
@@ -28,14 +28,14 @@ def source_of(scene: Scene, argument: KernelArgument) -> Optional[Any]:
     """The attribute or connectivity an argument reads (whose version tells
     whether a device copy is current); None for the small arrays that are
     compared by value."""
-    if argument.kind in ("attr", "conn"):
+    if argument.kind in (ArgumentKind.attr, ArgumentKind.conn):
         return resolve(scene, argument.path)
     return None
 
 
 def host_input(scene: Scene, argument: KernelArgument) -> np.ndarray:
     """The host array of an input argument (not ``out``)."""
-    source = None if argument.kind == "dof_offsets" else \
+    source = None if argument.kind is ArgumentKind.dof_offsets else \
         resolve(scene, argument.path)
     return input_array(scene, argument, source)
 
@@ -46,15 +46,15 @@ def input_array(scene: Scene, argument: KernelArgument,
     entity its path resolves to (None for the DoF offsets): a plan resolves
     paths once per scene structure (runtime.energy_plan)."""
     kind = argument.kind
-    if kind == "dof_offsets":
+    if kind is ArgumentKind.dof_offsets:
         return target_dof_offsets(scene)
-    if kind == "attr":
+    if kind is ArgumentKind.attr:
         if target._values is None:
             raise ValueUpdateError(
                 f"{target.describe()} has no values for the current "
                 f"{target.owner.numInstances} instances; call updateValue")
         return target._values
-    if kind == "conn":
+    if kind is ArgumentKind.conn:
         assert isinstance(target, Connectivity)
         if target._indices is None:
             raise SceneError(f"{target.describe()} has no indices for the "
@@ -69,7 +69,7 @@ def input_array(scene: Scene, argument: KernelArgument,
                              f"{target.target.describe()}, which now has "
                              f"{bound}; call updateConnectivity")
         return target._indices
-    if kind == "offsets":
+    if kind is ArgumentKind.offsets:
         assert isinstance(target, PrimitiveUnion)
         return np.ascontiguousarray(target.offsets, dtype=np.int64)
     raise AssertionError(f"kernel argument {argument} is not an input")

@@ -10,6 +10,7 @@ from typing import Dict, Tuple
 
 import numpy as np
 
+from ..compiler.params import ArgumentKind
 from ..frontend.scene import Scene
 from ..ir import emit_scene
 from ..runtime import cpu_backend
@@ -60,8 +61,8 @@ def project_compressed(dofs: np.ndarray, hess: np.ndarray, method: str,
         projected = np.empty(matrices.size,
                              dtype=kernels.kernel(path).out_dtype)
         # Symmetric matrices: row- and column-major storage agree.
-        given = {"out": projected,
-                 "attr": np.ascontiguousarray(matrices).reshape(-1)}
+        given = {ArgumentKind.out: projected,
+                 ArgumentKind.attr: np.ascontiguousarray(matrices).reshape(-1)}
         launch(kernels, path, len(instances),
                [given[a.kind] for a in kernels.kernel(path).arguments],
                threads)
