@@ -87,7 +87,7 @@ def derivatives(cells: int, repeat: int) -> None:
     V = contact.world()
     potential = ipctk.BarrierPotential(DHAT, 1.0)
     clamp = ipctk.PSDProjectionMethod.CLAMP
-    system, _ = assemble(s, cpu_backend(), threads=1)
+    system = assemble(s, cpu_backend(), threads=1).system
     g = np.empty(system.size)
     H = np.empty((system.size, system.size))
     system.gradient(g)

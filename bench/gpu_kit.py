@@ -149,7 +149,7 @@ def newton_kit(kit: Path) -> None:
                         f"{energy.name}.hess_proj {energy.name}.dofs")
     kit.mkdir(parents=True, exist_ok=True)
     np.save(kit / "layout.npy", DofLayout(scene.minimizeTargets).block_offsets)
-    system, _ = assemble(scene, cpu_backend())
+    system = assemble(scene, cpu_backend()).system
     solution = np.zeros(system.size)
     report = system.solve(solution, NEWTON_TOLERANCE, 10000, 0, None)
     assert report.converged, "the CPU's Newton direction did not converge"

@@ -86,7 +86,7 @@ def main() -> None:
     print(f"  PCG: {info['iterations']} iterations to relative residual "
           f"{info['relativeResidual']:.2e}")
 
-    system, _ = assemble(s, cpu_backend(), threads=1)
+    system = assemble(s, cpu_backend(), threads=1).system
     nnz = system.non_zeros
     rows, cols = np.empty(nnz, np.int64), np.empty(nnz, np.int64)
     values = np.empty(nnz)

@@ -29,7 +29,7 @@ def rotation(angle: float, axis) -> np.ndarray:
 
 def system_arrays(scene):
     """The assembled gradient and dense Hessian."""
-    system, _ = assemble(scene, cpu_backend())
+    system = assemble(scene, cpu_backend()).system
     g = np.empty(system.size)
     H = np.empty((system.size, system.size))
     system.gradient(g)

@@ -17,8 +17,10 @@ from yasps.solve import assemble as assemble_on
 
 
 def assemble(s, **kw):
-    """The system assembled on the CPU, whose dense() the checks read."""
-    return assemble_on(s, cpu_backend(), **kw)
+    """The system assembled on the CPU (whose dense() the checks read) and
+    its layout."""
+    assembly = assemble_on(s, cpu_backend(), **kw)
+    return assembly.system, assembly.layout
 
 from conftest import box_mesh
 
@@ -152,9 +154,9 @@ def test_mixed_soft_affine_system_and_changing_pairs():
             pairs = [[1, 3]]
         pp.updateNumInstances(len(pairs))
         p2v.updateConnectivity(np.array(pairs, dtype=np.int64).reshape(-1, 2))
-        report = {}
-        system, layout = assemble(s, report=report)
-        rebuilt.append(report["staticStructureRebuilt"])
+        assembly = assemble_on(s, cpu_backend())
+        system, layout = assembly.system, assembly.layout
+        rebuilt.append(assembly.static_structure_rebuilt)
         g_ref, H_ref = dense_reference(s)
         _, H = system_arrays(system)
         np.testing.assert_allclose(H, H_ref, rtol=1e-11,

@@ -32,7 +32,7 @@ def system_under(scene, monkeypatch, path):
     separate, tables = PATHS[path]
     monkeypatch.setattr(yasps.config, "separate_reduced_hessians", separate)
     monkeypatch.setattr(yasps.config, "slot_jacobians", tables)
-    system, _ = assemble(scene, cpu_backend())
+    system = assemble(scene, cpu_backend()).system
     n = system.size
     g, H = np.zeros(n), np.zeros(n * n)
     system.gradient(g)
@@ -204,7 +204,7 @@ def test_a_slot_outside_its_table_is_an_error():
     scene, *_ = build(pairs=2)
     pe = next(e for e in scene.energies if e.owner.name == "pe")
     inputs, _ = assembly_inputs(scene, pe, cpu_backend())
-    system, _ = assemble(scene, cpu_backend())
+    system = assemble(scene, cpu_backend()).system
     factors = inputs.slot_factors
     factors.sources[0, 0, 1] = 10 ** 6
     # Static energies come first in the system, then the dynamic ones.

@@ -53,14 +53,14 @@ def stiff_load(n: int, ratio: float) -> np.ndarray:
 
 
 def exact_step(scene):
-    g, H = system_arrays(assemble(scene, cpu_backend())[0])
+    g, H = system_arrays(assemble(scene, cpu_backend()).system)
     return np.linalg.solve(H, g), H
 
 
 def test_the_reported_residual_is_recomputed_from_the_step():
     s = soft_box()
     (dx,) = s.minimizeEnergy(tolerance=1e-8)
-    g, H = system_arrays(assemble(s, cpu_backend())[0])
+    g, H = system_arrays(assemble(s, cpu_backend()).system)
     step = dx.reshape(-1)   # one 3x1 target: the DoF order
     want = np.linalg.norm(g - H @ step) / np.linalg.norm(g)
     assert s.lastSolve["relativeResidual"] == pytest.approx(want, rel=1e-6)
@@ -141,7 +141,7 @@ def test_the_preconditioned_rule_stops_at_the_first_iterate_that_meets_it():
     here with NumPy on the assembled system: the solve stops at the first
     iterate that meets it; one iteration earlier it is not met."""
     s = soft_box()
-    g, H = system_arrays(assemble(s, cpu_backend())[0])
+    g, H = system_arrays(assemble(s, cpu_backend()).system)
     tolerance = 1e-2
     (dx,) = s.minimizeEnergy(tolerance=tolerance, stopping="preconditioned")
     info = s.lastSolve

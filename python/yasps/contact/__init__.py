@@ -393,7 +393,7 @@ class Contact:
     def _gradient(self, kappa: float) -> np.ndarray:
         """The scene's assembled gradient with the stiffness set to kappa."""
         self._set_kappa(kappa)
-        system, _ = assemble(self.scene, current())
+        system = assemble(self.scene, current()).system
         out = np.empty(system.size)
         system.gradient(out)
         return out

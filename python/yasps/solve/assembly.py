@@ -13,7 +13,8 @@ into a device mirror of the system, from derivatives computed there).
 from __future__ import annotations
 
 import time
-from typing import Dict, List, Optional
+from dataclasses import dataclass, replace
+from typing import Any, Dict, List, Optional, Tuple
 
 import numpy as np
 
@@ -104,10 +105,10 @@ class _Point:
     def __init__(self, key: tuple, entries: list):
         self.key, self.entries = key, entries
         self.gradient: Optional[np.ndarray] = None
-        #: the host system last assembled here, and what assemble reported
-        #: of it (None: none, or another backend's)
+        #: the host system last assembled here (None: none, or another
+        #: backend's), and the last assembly there
         self.system = None
-        self.assembled: Dict[str, object] = {}
+        self.assembly: Optional[Assembly] = None
 
 
 #: Each scene's last point: an assembly at the same point with another
@@ -166,15 +167,39 @@ def _assemble_inputs(backend: Backend, system, inputs: list,
     backend.synchronize(system)
 
 
+@dataclass(frozen=True)
+class Assembly:
+    """An assembled Newton system (``system``: the runtime's GlobalSystem on
+    the CPU, its device mirror, a ``GpuSystem``, on the GPU), its DoF
+    layout, and what ``minimizeEnergy`` reports and checks of it."""
+
+    system: Any
+    layout: DofLayout
+    #: seconds spent on "derivatives", "indices" and "assembly"
+    seconds: Dict[str, float]
+    #: whether the static energies' structure was built anew
+    static_structure_rebuilt: bool
+    #: how many energies were differentiated off the host
+    energies_on_gpu: int
+    #: instances in all, and how many of them entered projected
+    instances: int
+    projected_instances: int
+    #: per DoF, whether some energy instance reads it
+    read_dofs: np.ndarray
+    #: (energy, local inputs) per energy: where a NaN would come from
+    contributions: List[Tuple[Attribute, Any]]
+
+    def report(self) -> Dict[str, Any]:
+        """What ``lastSolve`` says of the assembly."""
+        return {"staticStructureRebuilt": self.static_structure_rebuilt,
+                "energiesDifferentiatedOnGpu": self.energies_on_gpu,
+                "projectedInstances": self.projected_instances,
+                "instances": self.instances}
+
+
 def assemble(scene: Scene, backend: Backend, threads: Optional[int] = None,
-             timings: Optional[Dict[str, float]] = None,
-             report: Optional[Dict[str, object]] = None,
-             projection: Optional[GradientThreshold] = None):
-    """The system assembled on ``backend`` and its DoF layout: the runtime's
-    GlobalSystem on the CPU, its device mirror (a ``GpuSystem``) on the GPU.
-    ``timings``, if given, receives the seconds spent on derivatives,
-    indices and assembly; ``report`` whether the static structure was
-    rebuilt and how many energies were differentiated off the host.
+             projection: Optional[GradientThreshold] = None) -> Assembly:
+    """The system assembled on ``backend`` (:class:`Assembly`).
 
     The system keeps static energies (instances fixed from step to step) and
     dynamic ones (``dynamic_instances``, e.g. collision pairs) apart: the
@@ -221,21 +246,18 @@ def assemble(scene: Scene, backend: Backend, threads: Optional[int] = None,
         if last is not None and last.gradient is not None \
                 and not projection.projects_none():
             chosen = projection.projected_dofs(last.gradient)
-    if last is not None and chosen is not None and chosen.any() and \
-            (report is None or last.assembled) and \
+    if last is not None and last.assembly is not None and \
+            chosen is not None and chosen.any() and \
             _updatable(scene, backend, last, chosen):
         # A retry of progressive projection at the point just assembled:
         # only the instances newly chosen are projected and their change
         # added (SymX's update), with no re-indexing or re-assembly.
         _add_projections(backend, last, chosen, spent)
-        if timings is not None:
-            timings.update(spent)
-        if report is not None:
-            report.update(last.assembled)
-            report["staticStructureRebuilt"] = False
-            report["projectedInstances"] = sum(
-                c.projected_count for _, _, c in last.entries)
-        return last.system, layout
+        last.assembly = replace(
+            last.assembly, seconds=spent, static_structure_rebuilt=False,
+            projected_instances=sum(c.projected_count
+                                    for _, _, c in last.entries))
+        return last.assembly
     start = clock()
     if last is not None:
         entries = last.entries
@@ -296,24 +318,15 @@ def assemble(scene: Scene, backend: Backend, threads: Optional[int] = None,
                 start = clock()
                 _assemble_inputs(backend, system, inputs, threads)
                 spent["assembly"] += clock() - start
-    if timings is not None:
-        timings.update(spent)
-    if report is not None:
-        report["staticStructureRebuilt"] = rebuilt
-        report["energiesDifferentiatedOnGpu"] = sum(
-            x.backend is not backend.host for x in inputs)
-        report["projectedInstances"] = sum(c.projected_count
-                                           for c in contributions)
-        report["instances"] = sum(c.count for c in contributions)
-        # What minimizeEnergy checks: the DoFs some energy instance reads,
-        # and the local derivatives behind a NaN.
-        report["readDofs"] = static_read | read_dofs(layout.size, dynamic_dofs)
-        report["contributions"] = [
-            (energy, x) for (energy, _, _), x in zip(entries, inputs)]
-        last.assembled = {key: report[key] for key in (
-            "energiesDifferentiatedOnGpu", "instances", "readDofs",
-            "contributions")}
-    return system, layout
+    last.assembly = Assembly(
+        system, layout, spent, rebuilt,
+        energies_on_gpu=sum(x.backend is not backend.host for x in inputs),
+        instances=sum(c.count for c in contributions),
+        projected_instances=sum(c.projected_count for c in contributions),
+        read_dofs=static_read | read_dofs(layout.size, dynamic_dofs),
+        contributions=[(energy, x)
+                       for (energy, _, _), x in zip(entries, inputs)])
+    return last.assembly
 
 
 def _updatable(scene: Scene, backend: Backend, last: _Point,

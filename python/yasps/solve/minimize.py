@@ -7,7 +7,7 @@ from __future__ import annotations
 
 import time
 import warnings
-from typing import Any, Callable, Dict, List, Optional, Union
+from typing import Callable, List, Optional, Union
 
 import numpy as np
 
@@ -121,19 +121,18 @@ def minimize_energy(scene, backend: Backend,
         raise SceneError(f"minimizeEnergy: projectionThreshold must be >= 0 "
                          f"(or None: project every instance), got "
                          f"{projection_threshold}")
-    timings: Dict[str, float] = {}
-    report: Dict[str, Any] = {}
     projection = None
     if projection_threshold is not None:
         early = DofLayout(scene.minimizeTargets)
         projection = GradientThreshold(float(projection_threshold),
                                        early.block_offsets,
                                        fixed_dof_mask(early, fixed))
-    system, layout = assemble(scene, backend, threads, timings, report,
-                              projection)
-    contributions = report.pop("contributions")
+    assembly = assemble(scene, backend, threads, projection)
+    system, layout = assembly.system, assembly.layout
+    timings = dict(assembly.seconds)
+    contributions = assembly.contributions
     mask = fixed_dof_mask(layout, fixed)
-    unread = unread_targets(layout, report.pop("readDofs"), mask)
+    unread = unread_targets(layout, assembly.read_dofs, mask)
     if unread:
         raise SceneError(
             f"minimizeEnergy: no energy reads {', '.join(unread)}: its Newton "
@@ -194,7 +193,8 @@ def minimize_energy(scene, backend: Backend,
             "preconditioner": preconditioner,
             "trialIterations": trial_iterations,
             "tolerance": float(tolerance),
-            "seconds": timings, "backend": backend.name, **report}
+            "seconds": timings, "backend": backend.name,
+            **assembly.report()}
     if gradient_max is not None:
         info["gradientMax"] = gradient_max
     if projection is not None:
