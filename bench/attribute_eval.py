@@ -100,10 +100,11 @@ def main() -> None:
         from yasps.compiler.cpu import compile_cpu
         from yasps.ir import emit_scene
         from yasps.runtime.inputs import host_input
+        from yasps.compiler.params import ArgumentKind
         path = "@bunny::@tets::@F"
         library = compile_cpu(emit_scene(s), [path], s.name)
         out = np.empty(len(tets) * 9)
-        buffers = [out if a.kind == "out" else host_input(s, a)
+        buffers = [out if a.kind is ArgumentKind.out else host_input(s, a)
                    for a in library.kernel(path).arguments]
         kernel = median(lambda: library.launch(path, len(tets), buffers, 1),
                              args.repeat)

@@ -66,6 +66,7 @@ from yasps.compiler.cpu import compile_cpu  # noqa: E402
 from yasps.compiler.pipelines import differentiation_pipeline  # noqa: E402
 from yasps.ir import emit_scene  # noqa: E402
 from yasps.runtime.inputs import host_input  # noqa: E402
+from yasps.compiler.params import ArgumentKind  # noqa: E402
 
 #: bench/newton_system.py's constants.
 DT2, MU, LAM, MASS, NOISE, SEED = 1e-4, 1e4, 4e4, 1e-3, 1e-3, 0
@@ -199,7 +200,7 @@ def yasps_results(work: Work, repeat: int) -> Results:
     for path in paths:
         kernel = kernels.kernel(path)
         out = np.empty(count * kernel.rows * kernel.cols, dtype=kernel.out_dtype)
-        buffers = [out if a.kind == "out" else host_input(s, a) for a in kernel.arguments]
+        buffers = [out if a.kind is ArgumentKind.out else host_input(s, a) for a in kernel.arguments]
         launches.append(lambda p=path, b=buffers: kernels.launch(p, count, b, 1))
     grad_k, hess_k, proj_k = launches
     for launch in launches:

@@ -32,6 +32,7 @@ from yasps.compiler.cpu import compile_cpu
 from yasps.compiler.pipelines import DIFFERENTIATION_PIPELINE
 from yasps.ir import emit_scene
 from yasps.runtime.inputs import host_input
+from yasps.compiler.params import ArgumentKind
 
 MU, LAM = 1.0, 10.0             # stable Neo-Hookean
 MASS = 2.0                      # inertia and gravity
@@ -505,7 +506,7 @@ class YaspsEnergy:
             kernel = kernels.kernel(path)
             out = np.empty(self.count * kernel.rows * kernel.cols,
                            dtype=kernel.out_dtype)
-            buffers = [out if a.kind == "out" else host_input(self.scene, a)
+            buffers = [out if a.kind is ArgumentKind.out else host_input(self.scene, a)
                        for a in kernel.arguments]
             launches.append(partial(kernels.launch, path, self.count, buffers, 1))
         return seconds, kernels.library, launches

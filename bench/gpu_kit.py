@@ -90,7 +90,7 @@ def write_kit(kit: Path, scene, kernels: List[Tuple[str, str, int, np.ndarray]],
                      f"{count} {count * kernel.rows * kernel.cols} {reference}")
         lines += [f"param {kind} {value}" for kind, value in kernel.launch_params]
         for argument in kernel.arguments:
-            kind, p = argument.kind, argument.path
+            kind, p = argument.kind.name, argument.path
             if kind == "out":
                 lines.append("buffer out")
                 continue

@@ -35,6 +35,7 @@ from timing import median  # noqa: E402
 from yasps.compiler.cpu import compile_cpu  # noqa: E402
 from yasps.ir import emit_scene  # noqa: E402
 from yasps.runtime.inputs import host_input  # noqa: E402
+from yasps.compiler.params import ArgumentKind  # noqa: E402
 
 
 def pipeline(linear_maps: bool) -> str:
@@ -54,7 +55,7 @@ def run(energy: cases.YaspsEnergy, linear_maps: bool, repeat: int):
         kernel = kernels.kernel(path)
         out = np.empty(energy.count * kernel.rows * kernel.cols,
                        dtype=kernel.out_dtype)
-        buffers = [out if a.kind == "out" else host_input(energy.scene, a)
+        buffers = [out if a.kind is ArgumentKind.out else host_input(energy.scene, a)
                    for a in kernel.arguments]
         launch = partial(kernels.launch, path, energy.count, buffers, 1)
         launch()
