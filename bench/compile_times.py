@@ -46,7 +46,8 @@ def worker(task: str, energy: str) -> dict:
     environment): builds the scene and times ``task``."""
     import yasps
     from contact_scene import build
-    from yasps.runtime import cpu_backend
+    from yasps.runtime import (FactoredInputs, SlotFactoredInputs,
+                               cpu_backend)
     from yasps.solve import assembly_inputs
 
     yasps.config.backend = "cpu"
@@ -60,19 +61,21 @@ def worker(task: str, energy: str) -> dict:
         start = time.perf_counter()
         d = s.energyDerivatives(attr)
         extra = time.perf_counter() - start
-        n, m = d.gradient.shape[1], inputs.inner_size
-        if inputs.slot_factors is not None:
+        n = d.gradient.shape[1]
+        m = inputs.inner_size if isinstance(
+            inputs, (SlotFactoredInputs, FactoredInputs)) else 0
+        if isinstance(inputs, SlotFactoredInputs):
             how = "tables"
             stored = inputs.slot_factors.stored_per_instance(m)
             tables = sum(t.size for t in inputs.slot_factors.tables)
-        elif inputs.inner_map is not None:
+        elif isinstance(inputs, FactoredInputs):
             how, stored, tables = "padded J", n + m * (n + m), 0
         else:
             how, stored, tables = "dense", n + n * n, 0
         # The padded factors of the same energy, for comparison.
         yasps.config.slot_jacobians = False
         padded, _ = assembly_inputs(s, attr, cpu_backend())
-        padded_stored = (n + m * (n + m) if padded.inner_map is not None
+        padded_stored = (n + m * (n + m) if isinstance(padded, FactoredInputs)
                          else n + n * n)
         return {"assembly": assembly, "derivatives": extra, "n": n,
                 "stored": stored, "how": how, "tables": tables,

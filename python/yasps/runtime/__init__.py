@@ -5,7 +5,8 @@ that picks), and attribute evaluation (``compute``)."""
 from __future__ import annotations
 
 from .backend import BackendError, GpuStatus, backend, devices, gpu_status
-from .base import Backend, LocalInputs
+from .base import (Backend, DenseInputs, FactoredInputs, LocalInputs,
+                   SlotFactoredInputs)
 from .cpu import CpuBackend
 from .evaluate import ComputedValue, compute, total_energy
 from .gpu import GpuBackend
@@ -31,6 +32,7 @@ def current() -> Backend:
 
 
 __all__ = ["Backend", "BackendError", "ComputedValue", "CpuBackend",
-           "GpuBackend", "GpuStatus", "LocalInputs", "backend", "compute",
+           "DenseInputs", "FactoredInputs", "GpuBackend", "GpuStatus",
+           "LocalInputs", "SlotFactoredInputs", "backend", "compute",
            "total_energy",
            "cpu_backend", "current", "devices", "gpu_backend", "gpu_status"]

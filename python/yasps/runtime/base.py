@@ -23,21 +23,56 @@ Shape = Tuple[int, int, int]
 @dataclass
 class LocalInputs:
     """One energy's contribution to the Newton system, in the memory of the
-    backend that computed it: local gradients (count x n) and either the
-    projected local Hessians (count x n x n) or their factors: J (count x m
-    x n) and P (count x m x m), each instance column-major, or P with J
-    taken slot by slot from shared Jacobian tables (``slot_factors``, a
-    ``yasps.solve.slots.SlotInputs``; the gradient is then the inner one,
-    count x m)."""
+    backend that computed it: ``count`` instances of ``n`` local parameters
+    and their gradients. One of three kinds (:class:`DenseInputs`,
+    :class:`FactoredInputs`, :class:`SlotFactoredInputs`), which assembly
+    tells apart by type."""
     backend: "Backend"
     count: int
     n: int
     gradient: Any
-    hessian: Optional[Any] = None
-    inner_map: Optional[Any] = None
-    inner_hessian: Optional[Any] = None
-    inner_size: int = 0
-    slot_factors: Optional[Any] = None
+
+    def arrays(self) -> Tuple[Tuple[str, Any], ...]:
+        """The arrays, by what they hold (where a NaN is looked for)."""
+        return (("gradient", self.gradient),)
+
+
+@dataclass
+class DenseInputs(LocalInputs):
+    """Local gradients (count x n) and Hessians (count x n x n, projected or
+    exact as assembly chose), each instance column-major."""
+    hessian: Any
+
+    def arrays(self) -> Tuple[Tuple[str, Any], ...]:
+        return super().arrays() + (("Hessian", self.hessian),)
+
+
+@dataclass
+class FactoredInputs(LocalInputs):
+    """Local gradients (count x n) and the Hessians as their factors, J
+    (``inner_map``, count x m x n) and P (``inner_hessian``, count x m x m),
+    each instance column-major: J^T P J is formed while assembling."""
+    inner_map: Any
+    inner_hessian: Any
+    inner_size: int
+
+    def arrays(self) -> Tuple[Tuple[str, Any], ...]:
+        return super().arrays() + (("inner Jacobian", self.inner_map),
+                                   ("inner Hessian", self.inner_hessian))
+
+
+@dataclass
+class SlotFactoredInputs(LocalInputs):
+    """The inner gradients (count x m, in ``gradient``) and P
+    (``inner_hessian``, count x m x m), with J taken slot by slot from
+    shared Jacobian tables (``slot_factors``, a
+    ``yasps.solve.slots.SlotInputs``)."""
+    inner_hessian: Any
+    inner_size: int
+    slot_factors: Any
+
+    def arrays(self) -> Tuple[Tuple[str, Any], ...]:
+        return super().arrays() + (("inner Hessian", self.inner_hessian),)
 
 
 class Backend(Protocol):

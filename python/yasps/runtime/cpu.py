@@ -14,7 +14,8 @@ from ..compiler.params import ArgumentKind
 from ..compiler.specs import KernelRequest, grouped_requests
 from ..frontend.errors import SceneError
 from ..frontend.values import from_column_major
-from .base import LocalInputs, Shape
+from .base import (DenseInputs, FactoredInputs, LocalInputs, Shape,
+                   SlotFactoredInputs)
 from .inputs import host_input
 from .native import native
 
@@ -190,26 +191,25 @@ def add_host_arrays(system, energy_index: int, inputs: LocalInputs,
     CPU's GlobalSystem), f32 gradients and Hessians of an f32 scene are
     assembled as they are; the factored paths, and other systems, take f64
     (f32 ones are widened)."""
-    count, n, m = inputs.count, inputs.n, inputs.inner_size
-    slots = inputs.slot_factors
-    if slots is not None:
-        assert inputs.inner_hessian is not None  # slots come with their P
+    count, n = inputs.count, inputs.n
+    if isinstance(inputs, SlotFactoredInputs):
+        m, slots = inputs.inner_size, inputs.slot_factors
         # P is symmetric: row- and column-major storage agree.
         system.add_slot_factored(
             energy_index, _f64(inputs.gradient).reshape(count, m),
             _f64(inputs.inner_hessian).reshape(count, m, m),
             m, slots.tables, slots.slots, slots.sources, *options)
         return
-    if inputs.inner_map is not None:
-        assert inputs.inner_hessian is not None  # J comes with its P
+    if isinstance(inputs, FactoredInputs):
+        m = inputs.inner_size
         # Hessians kept as factors: J^T P J is formed while assembling.
         maps = _f64(from_column_major(inputs.inner_map, m, n, copy=False))
         inner = _f64(inputs.inner_hessian).reshape(count, m, m)
         system.add_factored(energy_index, _f64(inputs.gradient).reshape(
             count, n), maps, inner, m, *options)
         return
+    assert isinstance(inputs, DenseInputs)  # the three kinds
     gradient, hessian = inputs.gradient, inputs.hessian
-    assert hessian is not None  # no factors: the Hessians themselves
     if not (f32 and gradient.dtype == hessian.dtype == np.float32):
         gradient, hessian = _f64(gradient), _f64(hessian)
     # Symmetric: row- and column-major storage agree.

@@ -25,7 +25,7 @@ from ..compiler.specs import KernelRequest, grouped_requests
 from ..frontend.errors import SceneError
 from ..frontend.values import from_column_major
 from .backend import gpu_status
-from .base import LocalInputs, Shape
+from .base import DenseInputs, FactoredInputs, LocalInputs, Shape
 from .cpu import CpuBackend, add_host_arrays
 from .inputs import host_input, source_of
 from .native import native
@@ -282,11 +282,13 @@ class GpuBackend:
         if inputs.backend is not self:
             # Computed on the host (compressed, or gpu_derivatives off).
             add_host_arrays(system, energy_index, inputs)
-        elif inputs.inner_map is not None:
+        elif isinstance(inputs, FactoredInputs):
             system.add_factored_device(energy_index, inputs.gradient,
                                        inputs.inner_map, inputs.inner_hessian,
                                        inputs.inner_size, column_major=True)
         else:
+            # The device computes no slot factors (Backend.slot_factors).
+            assert isinstance(inputs, DenseInputs)
             system.add_device(energy_index, inputs.gradient, inputs.hessian)
 
     def synchronize(self, system=None) -> None:

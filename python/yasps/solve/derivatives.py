@@ -19,7 +19,8 @@ from ..frontend.attribute import Attribute, owner_of
 from ..frontend.errors import SceneError
 from ..frontend.scene import Scene
 from ..ir import kernel_ir, symbol_path
-from ..runtime import Backend, LocalInputs, compute
+from ..runtime import (Backend, DenseInputs, FactoredInputs, LocalInputs,
+                       SlotFactoredInputs, compute)
 from .compression import compressed_sizes, project_compressed
 from .params import ParamResolver, ParamSlot
 from .slots import SlotInputs, SlotPlan, slot_plan
@@ -188,11 +189,11 @@ class _Outputs:
         gradient = self.run("grad")
         if self.spec.separate:
             m = self.shape("hess_inner_proj")[1]
-            return LocalInputs(self.backend, self.count, n, gradient,
-                               inner_map=self.run("ij"),
-                               inner_hessian=self.run("hess_inner_proj"),
-                               inner_size=m)
-        return LocalInputs(self.backend, self.count, n, gradient,
+            return FactoredInputs(self.backend, self.count, n, gradient,
+                                  inner_map=self.run("ij"),
+                                  inner_hessian=self.run("hess_inner_proj"),
+                                  inner_size=m)
+        return DenseInputs(self.backend, self.count, n, gradient,
                            self.run("hess_proj"))
 
     def _table(self, table) -> np.ndarray:
@@ -220,10 +221,11 @@ class _Outputs:
         # No instances read no table: none is evaluated for them.
         tables = [self._table(t) for t in plan.tables] if self.count else []
         slots = SlotInputs(tables, plan.slots, plan.sources(self.count))
-        return LocalInputs(self.backend, self.count, plan.num_params,
-                           self.run("ijac"),
-                           inner_hessian=self.run("hess_inner_proj"),
-                           inner_size=plan.inner_size, slot_factors=slots)
+        return SlotFactoredInputs(self.backend, self.count, plan.num_params,
+                                  self.run("ijac"),
+                                  inner_hessian=self.run("hess_inner_proj"),
+                                  inner_size=plan.inner_size,
+                                  slot_factors=slots)
 
 
 @dataclass(frozen=True)
@@ -272,7 +274,7 @@ class Contribution:
                 count, n, _ = outputs.shape("hess")
                 hessians = self._projected_rows(np.ones(count, dtype=bool)) \
                     if self._compressed else outputs.run("hess_proj")
-                self._projected = LocalInputs(outputs.backend, count, n,
+                self._projected = DenseInputs(outputs.backend, count, n,
                                               self._gradient(), hessians)
         return self._projected
 
@@ -296,7 +298,7 @@ class Contribution:
             # A copy: the exact Hessians' buffer is the kernel's, reused.
             exact = exact.copy()
             exact[reads] = self._projected_of(reads)
-        return LocalInputs(outputs.backend, count, n, self._gradient(), exact)
+        return DenseInputs(outputs.backend, count, n, self._gradient(), exact)
 
     def _gradient(self):
         """The local gradients (computed once)."""
@@ -376,9 +378,10 @@ class Contribution:
         if self._compressed or (self._projected is None and
                                 rows.sum() <= ROWS_FRACTION * count):
             return self._projected_rows(rows)
-        projected = self.projected().hessian
-        assert projected is not None  # selective: whole projected Hessians
-        return projected.reshape(count, n * n)[rows]
+        projected = self.projected()
+        # selective: whole projected Hessians
+        assert isinstance(projected, DenseInputs)
+        return projected.hessian.reshape(count, n * n)[rows]
 
     def _projected_rows(self, rows: np.ndarray) -> np.ndarray:
         """The projections of only the instances ``rows``, each of its

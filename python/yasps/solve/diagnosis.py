@@ -122,10 +122,7 @@ def non_finite_sources(contributions) -> List[Tuple[str, str, int]]:
     host memory; ("", "", -1) stands for those on a device."""
     out = []
     for energy, inputs in contributions:
-        parts: Sequence[Tuple[str, object]] = [
-            ("gradient", inputs.gradient), ("Hessian", inputs.hessian),
-            ("inner Jacobian", inputs.inner_map),
-            ("inner Hessian", inputs.inner_hessian)]
+        parts: Sequence[Tuple[str, object]] = inputs.arrays()
         for what, array in parts:
             if array is None or inputs.count == 0:
                 continue
