@@ -89,7 +89,7 @@ import drop  # noqa: E402
 import soft_boxes  # noqa: E402
 import yasps  # noqa: E402
 from yasps.compiler.cpu import kernels_compiled  # noqa: E402
-from yasps.sim import ImplicitEuler, NewtonReport  # noqa: E402
+from yasps.sim import ImplicitEuler, NewtonReport, NewtonSettings  # noqa: E402
 
 DT = 0.01
 #: The soft box of the drop scene has DROP_CELLS^3 cells (6 tets each).
@@ -228,9 +228,10 @@ class Sim:
 
 def _stepper_options(setting: Setting, velocity_tolerance: float) -> dict:
     return dict(velocity_tolerance=velocity_tolerance * setting.newton_factor,
-                cg_tolerance=setting.cg_tolerance,
-                max_iterations=setting.max_iterations,
-                cg_max_iterations=setting.cg_max_iterations)
+                settings=NewtonSettings(
+                    cg_tolerance=setting.cg_tolerance,
+                    max_iterations=setting.max_iterations,
+                    cg_max_iterations=setting.cg_max_iterations))
 
 
 def build_drop(setting: Setting, kappa_base: Optional[float]) -> Sim:
@@ -371,8 +372,8 @@ def simulate(sim: Sim, frames: int, query: float) -> Trajectory:
             report: NewtonReport = sim.stepper.step()
             out.seconds += clock() - start
             out.newton += report.iterations
-            out.cg += int(sum(report.cgIterations))
-            out.inexact += report.inexactDirections
+            out.cg += int(sum(report.cg_iterations))
+            out.inexact += report.inexact_directions
             out.unconverged += not report.converged
             positions = sim.positions().copy()
             if not np.isfinite(positions).all():

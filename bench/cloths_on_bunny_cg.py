@@ -61,15 +61,15 @@ def main() -> None:
         start = time.perf_counter()
         report = stepper.step(warn=False)
         seconds = time.perf_counter() - start
-        directions, iterations = len(report.cgIterations), \
-            sum(report.cgIterations)
+        directions, iterations = len(report.cg_iterations), \
+            sum(report.cg_iterations)
         newton, cg = newton + directions, cg + iterations
         print(f"frame {frame}: {seconds:.1f} s, {directions} Newton, "
               f"{iterations / max(directions, 1):.0f} CG/Newton, running "
               f"{cg / max(newton, 1):.0f} CG/Newton, "
-              f"{report.projectionRetries} retries, converged "
+              f"{report.projection_retries} retries, converged "
               f"{report.converged}, intersecting "
-              f"{contact.hasIntersections()}", flush=True)
+              f"{contact.has_intersections()}", flush=True)
 
 
 if __name__ == "__main__":

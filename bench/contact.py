@@ -130,7 +130,7 @@ def newton_iteration(cells: int) -> None:
     steps = [-dx for dx in s.minimizeEnergy(tolerance=1e-4)]
     stages = s.lastSolve["seconds"]
     start = time.perf_counter()
-    bound = contact.stepBound(steps)
+    bound = contact.step_bound(steps)
     ccd = time.perf_counter() - start
     total = detection + sum(stages.values()) + ccd
     print(f"\none Newton iteration, {sum(counts.values())} pairs, "

@@ -50,7 +50,7 @@ def captured_steps(frames: int, measure: int):
     mat_twist.DT["small"] = 0.01
     stepper, contact, _, _ = mat_twist.build("small")
     steps = []
-    original = contact.stepBoundAndLength
+    original = contact.step_bound_and_length
 
     def recording(directions, *args):
         V0 = contact.world()
@@ -66,7 +66,7 @@ def captured_steps(frames: int, measure: int):
         return result
 
     recording.on = False
-    contact.stepBoundAndLength = recording
+    contact.step_bound_and_length = recording
     warnings.simplefilter("ignore")
     for frame in range(1, frames + 1):
         recording.on = frame > frames - measure
@@ -85,10 +85,10 @@ def whole_run(frames: int) -> None:
     print(f"twisting cloth, 625 vertices, dt = 0.01 s, {frames} frames: "
           f"{seconds / frames:.3f} s/frame (compiling excluded), "
           f"{total.iterations / frames:.2f} Newton/frame, "
-          f"{np.mean(total.cgIterations):.0f} CG/Newton, "
+          f"{np.mean(total.cg_iterations):.0f} CG/Newton, "
           f"{len(total.unconverged)} unconverged, kappa {contact.kappa:.3g}, "
-          f"closest {contact.minDistance():.3g} m, intersections: "
-          f"{contact.hasIntersections()}")
+          f"closest {contact.min_distance():.3g} m, intersections: "
+          f"{contact.has_intersections()}")
     for stage, value in total.seconds.items():
         if stage != "compile":
             print(f"  {stage:<12}{value:8.2f} s {100 * value / seconds:6.1f}%")

@@ -75,7 +75,7 @@ def demo_costs(frames: int, tolerances, lags_options) -> None:
         total = run.run(frames, progress=False)
         seconds = time.perf_counter() - start
         print(f"{'':>29} {tol:9.0e} {lags:4d} {total.iterations:6d} "
-              f"{sum(total.cgIterations):7d} {seconds:6.1f}", flush=True)
+              f"{sum(total.cg_iterations):7d} {seconds:6.1f}", flush=True)
 
 
 def main() -> None:

@@ -178,6 +178,8 @@ def run_yasps(name: str, frames: int, threads: int,
     reports and of the edges' motion (``timer_names``,
     ``timer_seconds``), and the Newton cap and projection the stepper had
     (``newton_cap``: ImplicitEuler's default unless given)."""
+    import dataclasses
+
     import yasps
     from yasps.sim.newton import compile_kernels
 
@@ -186,7 +188,8 @@ def run_yasps(name: str, frames: int, threads: int,
     scene = SCENES[name]()
     stepper, contact = scene.stepper, scene.contact
     if newton_cap is not None:
-        stepper.max_iterations = newton_cap
+        stepper.settings = dataclasses.replace(stepper.settings,
+                                               max_iterations=newton_cap)
     # Warm kernels: compiled or loaded before the first frame, untimed.
     compile_kernels(stepper.scene, contact, False)
     warnings.simplefilter("ignore")
@@ -205,12 +208,12 @@ def run_yasps(name: str, frames: int, threads: int,
         stages["prescribed motion"] += moved - start
         for stage, seconds in report.seconds.items():
             stages[stage] = stages.get(stage, 0.0) + seconds
-        rows["directions"].append(len(report.cgIterations))
-        rows["cg"].append(sum(report.cgIterations))
+        rows["directions"].append(len(report.cg_iterations))
+        rows["cg"].append(sum(report.cg_iterations))
         # Directions taken from a PCG stopped at its cap.
-        rows["capped"].append(report.inexactDirections)
+        rows["capped"].append(report.inexact_directions)
         # Solves repeated with more projection (progressive projection).
-        rows["retries"].append(getattr(report, "projectionRetries", 0))
+        rows["retries"].append(getattr(report, "projection_retries", 0))
         rows["converged"].append(report.converged)
         rows["stiffness"].append(contact.kappa)
         rows["residual"].append(report.residual)
@@ -220,8 +223,8 @@ def run_yasps(name: str, frames: int, threads: int,
               f"converged {report.converged}", flush=True)
     out = {k: np.asarray(v, dtype=float) for k, v in rows.items()}
     out["solves"] = out["directions"] + out["retries"]
-    out["newton_cap"] = np.array(stepper.max_iterations)
-    out["projection"] = np.array(getattr(stepper, "projection", "full"))
+    out["newton_cap"] = np.array(stepper.settings.max_iterations)
+    out["projection"] = np.array(stepper.settings.projection)
     out["failed"] = np.zeros(frames)
     out["positions"] = np.asarray(positions)
     out["timer_names"] = np.array(list(stages))

@@ -97,7 +97,7 @@ def simulate(frames: int, cells: int, verbose: bool = True,
     start = time.perf_counter()
     for frame in range(frames):
         report = stepper.step()
-        v = stepper.velocity
+        v = stepper.velocities[0]
         lowest = float(x.value[:, 2, 0].min())
         history.append({"lowest": lowest, "speed": float(np.abs(v).max()),
                         "energies": report.energies,

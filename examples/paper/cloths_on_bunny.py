@@ -27,8 +27,9 @@ from common import (CLOTH_CELLS, DT, GRAVITY, arguments, bunny, lame,  # noqa: E
 
 import yasps  # noqa: E402
 from yasps.contact import Contact  # noqa: E402
-from yasps.sim import (Body, ImplicitEuler, add_cloth, add_elastic_tets,  # noqa: E402
-                       add_free_vertices, cloth_grid, lumped_masses)
+from yasps.sim import (Body, ImplicitEuler, NewtonSettings,  # noqa: E402
+                       add_cloth, add_elastic_tets, add_free_vertices,
+                       cloth_grid, lumped_masses)
 
 # The paper's script: stiffness times thickness, its energy without the
 # 1/2 of add_cloth's (hence the factor 2).
@@ -99,7 +100,9 @@ def build(scale: str, layers: int):
     stepper = ImplicitEuler(s, targets, hats, dt=DT,
                             gravity=[GRAVITY] * len(targets), fixed=fixed,
                             contact=contact, velocity_tolerance=1e-2,
-                            cg_tolerance=1e-2, cg_stopping="preconditioned")
+                            settings=NewtonSettings(
+                                cg_tolerance=1e-2,
+                                cg_stopping="preconditioned"))
     return stepper, contact, bodies
 
 

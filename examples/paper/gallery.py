@@ -209,7 +209,7 @@ def table_row(scene: Scene, summary, vertices: int) -> str:
     r = summary.report
     diff = r.seconds["derivatives"] + r.seconds["assembly"]
     cg = r.seconds["pcg"]
-    cg_its = sum(r.cgIterations)
+    cg_its = sum(r.cg_iterations)
     return (f"| {scene.name} | {vertices:,} | {summary.frames} | "
             f"{diff:.2f} | {1e3 * diff / max(r.iterations, 1):.1f} | "
             f"{cg:.2f} | {1e3 * cg / max(cg_its, 1):.3f} | {r.iterations} | "

@@ -165,7 +165,7 @@ def main() -> None:
     if not args.no_video:
         write_video(output / "pendulum.mp4", images)
     print(f"pendulum: {args.frames} frames, {total.iterations} Newton "
-          f"iterations, {sum(total.cgIterations)} CG iterations")
+          f"iterations, {sum(total.cg_iterations)} CG iterations")
     seconds = sum(total.seconds.values()) or 1.0
     for stage, spent in total.seconds.items():
         print(f"  {stage:12} {spent:8.2f} s  {100 * spent / seconds:5.1f}%")

@@ -36,9 +36,9 @@ from common import REPO, arguments, bunny  # noqa: E402
 import yasps  # noqa: E402
 from yasps import energies as E  # noqa: E402
 from yasps.contact import Contact  # noqa: E402
-from yasps.sim import (NewtonReport, SurfaceRecorder, add_cloth,  # noqa: E402
-                       newton, render_surfaces, render_surfaces_array,
-                       tube_mesh, write_video)
+from yasps.sim import (NewtonReport, NewtonSettings,  # noqa: E402
+                       SurfaceRecorder, add_cloth, newton, render_surfaces,
+                       render_surfaces_array, tube_mesh, write_video)
 from yasps.sim.sphere import (SphereMap, smooth_to_sphere,  # noqa: E402
                               triangle_areas, triangle_orientations)
 
@@ -106,7 +106,8 @@ def relax_sphere(verts: np.ndarray, faces: np.ndarray, start: np.ndarray,
     s.evaluateEnergy()
     s.minimizeEnergy()
     report.add(newton(s, u, tolerance=1e-6, step_bound=keep_orientation,
-                      max_iterations=RELAX_ITERATIONS, cg_tolerance=1e-6))
+                      settings=NewtonSettings(max_iterations=RELAX_ITERATIONS,
+                                              cg_tolerance=1e-6)))
     out = u.value[:, :, 0]
     return out / np.linalg.norm(out, axis=1, keepdims=True)
 
@@ -187,8 +188,8 @@ class Curve:
         point, then Newton from here."""
         self.prepare()
         report = newton(self.scene, self.u, tolerance=1e-5,
-                        contact=self.contact, max_iterations=20,
-                        cg_tolerance=1e-6)
+                        contact=self.contact, settings=NewtonSettings(
+                            max_iterations=20, cg_tolerance=1e-6))
         value = self.u.value[:, :, 0]
         self.u.updateValue(value / np.linalg.norm(value, axis=1,
                                                   keepdims=True))
@@ -242,7 +243,7 @@ def simulate_curve(args) -> SimpleNamespace:
         P = curve.points()
         history.append(P)
         lengths.append(curve.length())
-        closest = min(closest, curve.contact.minDistance())
+        closest = min(closest, curve.contact.min_distance())
         meshes, on_bunny = drawn(P)
         recorder.record(float(frame), {"curve": P, "on_bunny": on_bunny})
         if not args.no_video:
@@ -267,7 +268,7 @@ def main() -> None:
     summary = simulate_curve(args)
     r = summary.report
     print(f"repulsive_curve: {summary.frames} frames in {summary.seconds:.1f} "
-          f"s, {r.iterations} Newton iterations, {sum(r.cgIterations)} CG "
+          f"s, {r.iterations} Newton iterations, {sum(r.cg_iterations)} CG "
           f"iterations, min distance {summary.min_distance:.3g}, length "
           f"{summary.lengths[0]:.2f} -> {summary.lengths[-1]:.2f}")
     seconds = sum(r.seconds.values()) or 1.0

@@ -18,9 +18,9 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "python"))
 
 import yasps  # noqa: E402
 from yasps.contact import Contact  # noqa: E402
-from yasps.sim import (Body, ImplicitEuler, add_elastic_tets,  # noqa: E402
-                       add_free_vertices, add_loads, add_obstacle,
-                       contact_union, lame, lumped_masses,
+from yasps.sim import (Body, ImplicitEuler, NewtonSettings,  # noqa: E402
+                       add_elastic_tets, add_free_vertices, add_loads,
+                       add_obstacle, contact_union, lame, lumped_masses,
                        ring_surface, simulate, sphere_surface, tetrahedralize)
 
 DT, RADIUS = 0.01, 0.05
@@ -47,7 +47,8 @@ def build(subdivisions: int = 2):
     # IPC's Neo-Hookean: the stepper keeps every tet above a tenth of its
     # volume by itself.
     stepper = ImplicitEuler(s, ball.x, ball.x_hat, dt=DT, contact=contact,
-                            max_iterations=400)  # the snap through the hole
+                            # the snap through the hole
+                            settings=NewtonSettings(max_iterations=400))
     bodies = {"plate": Body(plate["position"], rf, (0.6, 0.62, 0.65)),
               "ball": Body(ball.x, sf, (0.35, 0.6, 0.9))}
     return stepper, contact, bodies, tt

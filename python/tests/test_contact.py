@@ -230,9 +230,9 @@ def test_soft_box_falls_on_an_affine_box():
         V = contact.world()
         assert np.isfinite(V).all()
         assert no_intersections(checker, V)
-        assert all(after <= before for before, after in report.stepEnergies)
+        assert all(after <= before for before, after in report.step_energies)
         assert report.iterations > 0
-        closest = min(closest, contact.minDistance())
+        closest = min(closest, contact.min_distance())
     assert closest < 0.05
     # The affine box was pushed down by the contact.
     assert t.value[0, 2, 0] < 0.25
@@ -257,7 +257,7 @@ def test_adaptive_stiffness_is_ipctks():
                       dhat=0.05, average_mass=0.3)
     s.addMinimizeTarget([xa, xb])
     assert sum(contact.update().values()) > 0
-    kappa = contact.adaptStiffness()
+    kappa = contact.adapt_stiffness()
     V = contact.world()
     inertia = 0.3 * (V - np.concatenate([h.value[:, :, 0] for h in hats]))
     barrier = ipctk.BarrierPotential(0.05, 1.0).gradient(
@@ -269,7 +269,7 @@ def test_adaptive_stiffness_is_ipctks():
     assert kappa > 0 and abs(kappa - want) <= 1e-12 * want
     assert contact.kappa == kappa
     before = yasps.compiler.invocations()
-    contact.adaptStiffness()
+    contact.adapt_stiffness()
     s.minimizeEnergy()
     assert yasps.compiler.invocations() == before
     with pytest.raises(ValueError, match="average vertex mass"):

@@ -104,14 +104,14 @@ def test_surface_only_pairs_are_ipctks_on_the_full_mesh():
         # box's top is ipctk's on the same surface mesh.
         step = np.zeros_like(V)
         step[len(V) - 20:, 2] = -0.05
-        bound = contact.stepBound([step])
+        bound = contact.step_bound([step])
         want = ipctk.compute_collision_free_stepsize(
             reference, reference.vertices(V), reference.vertices(V + step),
             min_distance=1e-9, narrow_phase_ccd=ipctk.AdditiveCCD())
         if points is particles_only:
             assert 0.0 < bound < 1.0
         assert bound == pytest.approx(want, rel=1e-9)
-        assert not contact.hasIntersections()
+        assert not contact.has_intersections()
 
 
 def test_inner_vertex_near_its_surface_is_left_alone():

@@ -104,7 +104,7 @@ def test_line_search_collision_sets_use_the_step_candidates():
     step[half:, 2, 0] = -0.006
     step[half:, :2, 0] = 0.02 * rng.standard_normal((half, 2))
     start = x.value.copy()
-    bound, _ = contact.stepBoundAndLength([step])
+    bound, _ = contact.step_bound_and_length([step])
     assert 0.0 < bound < 1.0
     assert recorded.calls == 1
     for alpha in (0.0, 0.3, 0.5 * bound, bound):
@@ -132,7 +132,7 @@ def test_additive_ccd_bound_is_collision_free(seed):
     step = 0.01 * rng.standard_normal(x.value.shape)
     step[len(step) // 2:, 2, 0] -= 0.01
     V0 = contact.world()
-    bound = contact.stepBound([step])
+    bound = contact.step_bound([step])
     V1 = V0 + step[:, :, 0]
     assert ipctk.is_step_collision_free(contact.mesh, V0, V1) is False
     assert 0.0 < bound < 1.0
@@ -140,7 +140,7 @@ def test_additive_ccd_bound_is_collision_free(seed):
     assert ipctk.is_step_collision_free(contact.mesh, V0, V)
     assert not ipctk.has_intersections(contact.mesh, V)
     x.updateValue(x.value + bound * step)
-    assert contact.minDistance() > 0.0
+    assert contact.min_distance() > 0.0
 
 
 def reference_pair(collision, mesh):
@@ -209,7 +209,7 @@ def test_ccd_keeps_surfaces_apart(gap, floor):
     scene, x, contact = two_sheets(gap=gap, angle=0.3)
     step = np.zeros_like(x.value)
     step[len(step) // 2:, 2, 0] = -0.01
-    bound = contact.stepBound([step])
+    bound = contact.step_bound([step])
     assert 0.0 < bound < 1.0
     x.updateValue(x.value + bound * step)
     V = contact.world()

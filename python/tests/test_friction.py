@@ -110,7 +110,7 @@ def test_halfspace_barrier_matches_ipctk_point_plane():
     g, H = system_arrays(s)
     assert relative(g, grad) < 1e-12
     assert relative(H, hess) < 1e-12
-    assert contact.minDistance() == pytest.approx(heights[0], rel=1e-12)
+    assert contact.min_distance() == pytest.approx(heights[0], rel=1e-12)
 
 
 def test_halfspace_step_bound_matches_ipctk_ccd():
@@ -132,11 +132,11 @@ def test_halfspace_step_bound_matches_ipctk_ccd():
                                                 np.linalg.norm(normal))
         impacts.append(toi if hit else 1.0)
     assert min(impacts) < 1.0
-    assert contact.stepBound([step]) == pytest.approx(min(impacts), rel=1e-12)
-    assert contact.stepBound([np.abs(step)]) == 1.0
-    assert not contact.hasIntersections()
+    assert contact.step_bound([step]) == pytest.approx(min(impacts), rel=1e-12)
+    assert contact.step_bound([np.abs(step)]) == 1.0
+    assert not contact.has_intersections()
     x.updateValue(points + step[:, :, 0])
-    assert contact.hasIntersections()
+    assert contact.has_intersections()
 
 
 def test_halfspace_friction_equals_a_static_triangle():
@@ -220,7 +220,7 @@ def block_on_slope(angle_degrees: float, mu: float, steps: int,
         report = stepper.step()
         if on_report is not None:
             on_report(report)
-        assert all(after <= before for before, after in report.stepEnergies)
+        assert all(after <= before for before, after in report.step_energies)
         assert np.isfinite(x.value).all()
         lowest = min(lowest, min(
             ipctk.point_plane_signed_distance(p, np.zeros(3), t0, t1)
@@ -319,7 +319,7 @@ def test_lagged_friction_iterations_follow_the_sliding_law():
     assert abs(slid / law - 1) < 5e-3
     assert lowest > 0.0
     assert len(reports) == steps
-    assert all(2 <= r.frictionLags <= 4 for r in reports)
+    assert all(2 <= r.friction_lags <= 4 for r in reports)
 
 
 def test_contact_update_measures_friction_from_the_step_start():
@@ -378,7 +378,7 @@ def test_newton_stops_on_the_whole_direction_not_the_step_taken():
                       halfspaces=[((0, 0, 0), (0, 0, 1))])
     report = sim.newton(s, x, tolerance=1e-4, contact=contact)
     assert report.converged and report.iterations > 1
-    assert report.stepBounds[0] < 1e-3
+    assert report.step_bounds[0] < 1e-3
     height = float(x.value[0, 2, 0])
     assert 0.0 < height < 0.9 * dhat
     assert 0.3 < kappa * barrier_force(height) / (pull + height) < 3.0
@@ -410,7 +410,7 @@ def test_step_bound_follows_a_curved_motion():
     V1[0] = [np.cos(0.5), np.sin(0.5), 0.0]
     assert ipctk.compute_collision_free_stepsize(contact.mesh, V0, V1) == 1.0
     crossing = (0.5 - np.arccos(0.95)) / 1.0
-    bound = contact.stepBound([step])
+    bound = contact.step_bound([step])
     assert 0.5 * crossing < bound < crossing
     # A step that stops short of the wall keeps its whole length.
-    assert contact.stepBound([0.1 * step]) == 1.0
+    assert contact.step_bound([0.1 * step]) == 1.0

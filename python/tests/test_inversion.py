@@ -64,7 +64,7 @@ def crushed_box(material: str, guard=None):
         report = stepper.step()
         assert report.converged
         ratio = signed_tet_volumes(soft.x.value[:, :, 0], tets) / rest
-        smallest, lag = min(smallest, ratio.min()), report.prescribedLag
+        smallest, lag = min(smallest, ratio.min()), report.prescribed_lag
     return smallest, lag
 
 

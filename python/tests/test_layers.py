@@ -8,10 +8,11 @@ from pathlib import Path
 
 PACKAGE = Path(__file__).resolve().parents[1] / "yasps"
 
-#: Layers in order; the package root's errors, shared settings and loader
+#: Layers in order; the package root's errors, deprecated spellings, shared
+#: settings and loader
 #: come before every layer (they import no layer), the root's __init__
 #: (which wires the layers together) after all of them.
-LAYERS = ["errors", "config", "_native", "frontend", "ir", "compiler", "runtime",
+LAYERS = ["errors", "deprecation", "config", "_native", "frontend", "ir", "compiler", "runtime",
           "solve", "contact", "sim", "sweep"]
 
 

@@ -13,6 +13,7 @@ import numpy as np
 import pytest
 
 import yasps
+from yasps.sim import NewtonSettings
 from yasps.sim.forcing import LOOSEST, Forcing
 
 # The module (yasps.sim's `newton` attribute is the function).
@@ -77,7 +78,8 @@ def drape_run(monkeypatch, frames: int, **options):
 
 def test_loose_directions_far_away_and_a_tight_one_at_the_end(monkeypatch):
     forced, x_forced = drape_run(monkeypatch, 12)
-    exact, x_exact = drape_run(monkeypatch, 12, cg_forcing=False)
+    exact, x_exact = drape_run(monkeypatch, 12, settings=NewtonSettings(
+        cg_forcing=False))
     loose = 0
     for report, tolerances in forced:
         assert report.converged
@@ -86,12 +88,12 @@ def test_loose_directions_far_away_and_a_tight_one_at_the_end(monkeypatch):
         assert all(1e-4 <= t <= LOOSEST for t in tolerances)
         loose += sum(t > 1e-4 for t in tolerances)
     assert loose > 12
-    assert sum(r.tightenedSolves for r, _ in forced) > 0
+    assert sum(r.tightened_solves for r, _ in forced) > 0
     for report, tolerances in exact:
         assert report.converged and set(tolerances) == {1e-4}
     # Fewer CG iterations, the same cloth (each step converged to a
     # direction below 1e-2 m/s x dt = 1e-4 m in either run).
-    cg_forced = sum(sum(r.cgIterations) for r, _ in forced)
-    cg_exact = sum(sum(r.cgIterations) for r, _ in exact)
+    cg_forced = sum(sum(r.cg_iterations) for r, _ in forced)
+    cg_exact = sum(sum(r.cg_iterations) for r, _ in exact)
     assert cg_forced < 0.85 * cg_exact
     assert np.abs(x_forced - x_exact).max() < 1e-4

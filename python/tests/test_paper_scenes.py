@@ -29,7 +29,7 @@ def step_and_check(stepper, bodies, frames: int, check=None):
     ipctk on a collision mesh of the test's own, and ``check(frame)``."""
     for frame in range(1, frames + 1):
         report = stepper.step()
-        assert all(after <= before for before, after in report.stepEnergies)
+        assert all(after <= before for before, after in report.step_energies)
         parts, faces, offset = [], [], 0
         for body in bodies.values():
             V = body.now()
@@ -64,7 +64,7 @@ def test_cloths_on_bunny():
     import warnings
     import cloths_on_bunny
     stepper, contact, bodies = cloths_on_bunny.build("small", 1)
-    assert stepper.cg_stopping == "preconditioned"
+    assert stepper.settings.cg_stopping == "preconditioned"
     z0 = bodies["bunny"].now()[:, 2].mean()
     with warnings.catch_warnings():
         warnings.simplefilter("error", yasps.IllConditionedSolve)
@@ -178,7 +178,7 @@ def test_pendulum_swings():
     for _ in range(30):
         report = stepper.step()
         assert report.converged
-        assert all(after <= before for before, after in report.stepEnergies)
+        assert all(after <= before for before, after in report.step_energies)
         phi = parts["phi"].value[:, 0, 0]
         psi = float(parts["psi"].value[0, 0, 0])
         world = parts["position"].compute().value[:, :, 0]
@@ -261,7 +261,7 @@ def test_repulsive_curve(tmp_path):
     assert (mapping.vertex_density() > 0).all()
     r = summary.report
     assert r.iterations > 0
-    assert all(after <= before for before, after in r.stepEnergies)
+    assert all(after <= before for before, after in r.step_energies)
     assert len(summary.positions) == 4
     edges = curve.edges.astype(np.int32)
     for P in summary.positions:

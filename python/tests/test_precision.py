@@ -20,6 +20,7 @@ import yasps
 from conftest import REPO
 from yasps import energies as E
 from yasps.ir import emit_scene
+from yasps.sim import NewtonSettings
 
 sys.path.insert(0, str(REPO / "examples"))
 
@@ -182,7 +183,8 @@ def test_contact_in_f32_stays_apart_and_near_f64():
         # Newton and CG converged far past f32's effect on the step, so
         # that the two precisions' trajectories differ by f32, not by
         # where each Newton loop stopped.
-        stepper = boxes.stepper(velocity_tolerance=1e-5, cg_tolerance=1e-9)
+        stepper = boxes.stepper(velocity_tolerance=1e-5,
+                                settings=NewtonSettings(cg_tolerance=1e-9))
         xs, faces = boxes.xs, boxes.faces
         for _ in range(8):
             # f32 kernels cannot bring every direction below 1e-5 m/s:
@@ -190,7 +192,7 @@ def test_contact_in_f32_stays_apart_and_near_f64():
             report = stepper.step(warn=False)
             V = np.concatenate([x.value[:, :, 0] for x in xs])
             assert np.isfinite(V).all()
-            assert all(b <= a for a, b in report.stepEnergies)
+            assert all(b <= a for a, b in report.step_energies)
             mesh = ipctk.CollisionMesh(V, ipctk.edges(faces), faces)
             assert not ipctk.has_intersections(mesh, V)
             assert V[:, 2].min() > 0.0

@@ -10,8 +10,8 @@ import numpy as np
 import pytest
 
 import yasps
-from yasps.sim import (ImplicitEuler, add_cloth, add_free_vertices,
-                       cloth_grid, lumped_masses)
+from yasps.sim import (ImplicitEuler, NewtonSettings, add_cloth,
+                       add_free_vertices, cloth_grid, lumped_masses)
 from yasps.solve import preconditioner_choice as pc
 from yasps.solve.preconditioner_choice import (BLOCK_JACOBI, MULTILEVEL,
                                                PreconditionerChoice,
@@ -122,7 +122,9 @@ def test_a_checkpoint_carries_the_choice(tmp_path):
         s, fixed, free = stiff_cloth(80, name)
         return ImplicitEuler(s, [free.x], [free.x_hat], dt=0.01,
                              gravity=[(0.0, 0.0, -9.81)], fixed=fixed,
-                             cg_tolerance=1e-4, cg_stopping="preconditioned")
+                             settings=NewtonSettings(
+                                 cg_tolerance=1e-4,
+                                 cg_stopping="preconditioned"))
 
     yasps.config.preconditioner = "auto"
     run = stepper("cloth_saved")

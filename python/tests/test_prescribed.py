@@ -66,7 +66,7 @@ def test_a_motor_keeps_its_rate_through_contact():
     start = soft.x.value[:, :2, 0].copy()
     for _ in range(30):
         report = collision_free(contact, stepper.step)
-        assert report.converged and report.prescribedLag == 0.0
+        assert report.converged and report.prescribed_lag == 0.0
     np.testing.assert_allclose(plate.A.value[0], turn_z(RATE * 0.3) @ A0,
                                atol=1e-6)
     assert stepper.time == pytest.approx(0.3)
@@ -76,7 +76,7 @@ def test_a_motor_keeps_its_rate_through_contact():
                                   soft.x.value[:, 0, 0]) -
                        np.arctan2(start[:, 1], start[:, 0]))
     assert np.median(angles) > 0.1
-    assert contact.minDistance() < 2e-3
+    assert contact.min_distance() < 2e-3
 
 
 def test_moving_pins_carry_a_cloth():
@@ -114,7 +114,7 @@ def test_ccd_stops_a_scripted_motion_short_and_says_so():
                       mask=point)
     lags = []
     for _ in range(6):
-        lags.append(collision_free(contact, stepper.step).prescribedLag)
+        lags.append(collision_free(contact, stepper.step).prescribed_lag)
         assert x.value[3, 2, 0] > 0.0
     assert lags[0] == 0.0 and lags[-1] > 0.05
 

@@ -12,8 +12,8 @@ import numpy as np
 import pytest
 
 import yasps
-from yasps.sim import (ImplicitEuler, add_elastic_tets, add_free_vertices,
-                       box_tet_mesh)
+from yasps.sim import (ImplicitEuler, NewtonSettings, add_elastic_tets,
+                       add_free_vertices, box_tet_mesh)
 
 
 def squeezed_box(mass: float, seed: int = 0, cells: int = 2):
@@ -185,15 +185,17 @@ def test_indefinite_exact_system_projects_more_and_converges():
             g, H_exact, _ = dense_system(scene, np.zeros(10**4, bool))
             assert np.linalg.eigvalsh(H_exact).min() < 0
         stepper = ImplicitEuler(scene, x, x_hat, dt=0.01, gravity=None,
-                                max_iterations=100, projection=projection,
-                                velocity_tolerance=1e-4, cg_tolerance=1e-8)
+                                velocity_tolerance=1e-4,
+                                settings=NewtonSettings(
+                                    max_iterations=100, projection=projection,
+                                    cg_tolerance=1e-8))
         report = stepper.step()
         assert report.converged
-        assert all(b <= a for a, b in report.stepEnergies)
+        assert all(b <= a for a, b in report.step_energies)
         results[projection] = (x.value.copy(), report)
     progressive, full = results["progressive"][1], results["full"][1]
-    assert progressive.projectionRetries > 0
-    assert full.projectionRetries == 0
+    assert progressive.projection_retries > 0
+    assert full.projection_retries == 0
     np.testing.assert_allclose(results["progressive"][0],
                                results["full"][0], atol=1e-5)
     # Exact Hessians where they are safe: fewer Newton iterations.
@@ -202,8 +204,8 @@ def test_indefinite_exact_system_projects_more_and_converges():
 
 def test_unknown_projection_is_refused():
     scene, x, x_hat, _ = squeezed_box(mass=1.0)
-    with pytest.raises(yasps.SceneError, match="projection must be one of"):
-        ImplicitEuler(scene, x, x_hat, dt=0.01, projection="sometimes")
+    with pytest.raises(yasps.ArgumentError, match="projection must be one of"):
+        NewtonSettings(projection="sometimes")
 
 
 def test_a_retry_at_the_same_point_reuses_the_derivatives(monkeypatch):

@@ -70,4 +70,4 @@ def test_implicit_euler_with_fixed_vertices():
         assert all(b <= a for a, b in zip(report.energies, report.energies[1:]))
     np.testing.assert_array_equal(x.value[top, :, 0], verts[top])
     assert (x.value[~top, 2, 0] < verts[~top, 2] - 1e-4).all()
-    assert np.abs(stepper.velocity[top]).max() == 0.0
+    assert np.abs(stepper.velocities[0][top]).max() == 0.0

@@ -11,7 +11,7 @@ import pytest
 
 import yasps
 from yasps.runtime import cpu_backend
-from yasps.sim import newton
+from yasps.sim import NewtonSettings, newton
 from yasps.solve import assemble
 
 from test_minimize import soft_box, system_arrays
@@ -102,9 +102,9 @@ def test_newton_takes_the_energy_norm_rule():
         warnings.simplefilter("error")
         # Every direction to cg_tolerance: the chain's energy is
         # quadratic, so exact directions converge in three iterations.
-        report = newton(s, x, tolerance=1e-12, max_iterations=3,
-                        cg_tolerance=1e-6, cg_stopping="energy_norm",
-                        cg_forcing=False)
+        report = newton(s, x, tolerance=1e-12, settings=NewtonSettings(
+            max_iterations=3, cg_tolerance=1e-6, cg_stopping="energy_norm",
+            cg_forcing=False))
     assert report.converged and s.lastSolve["stopping"] == "energy_norm"
 
 

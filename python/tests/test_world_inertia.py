@@ -12,8 +12,8 @@ import pytest
 
 import yasps
 from yasps import SceneError
-from yasps.sim import (ImplicitEuler, add_rotation_vector_body, newton,
-                       rotation_matrices, wrap_rotation_vectors)
+from yasps.sim import (ImplicitEuler, NewtonSettings, add_rotation_vector_body,
+                       newton, rotation_matrices, wrap_rotation_vectors)
 
 from conftest import REPO
 
@@ -94,7 +94,7 @@ def test_the_pendulum_steps_as_its_hand_written_loop():
         hand_parts["inertia"].x_hat.updateValue(
             (x + DT * velocity + DT * DT * pendulum.GRAVITY)[:, :, None])
         newton(hand, [hand_parts["phi"], hand_parts["psi"]],
-               tolerance=1e-6 * DT, max_iterations=50)
+               tolerance=1e-6 * DT, settings=NewtonSettings(max_iterations=50))
         velocity = (hand_parts["position"].compute().value[:, :, 0] - x) / DT
         np.testing.assert_allclose(
             parts["position"].compute().value,

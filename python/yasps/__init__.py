@@ -32,6 +32,7 @@ from .frontend.services import Services, install
 from .runtime import BackendError, backend, gpu_status
 from .solve import CompileSummary, SolverError
 from .solve import compile_scene as compile
+from .deprecation import YaspsDeprecationWarning
 from .solve.diagnosis import IllConditionedSolve, PrecisionWarning
 
 
@@ -57,7 +58,7 @@ __all__ = [
     "Connectivity", "config",
     "Entity", "IRError", "IllConditionedSolve", "LineageError", "Mesh",
     "PrecisionWarning", "Primitive", "PrimitiveUnion", "Scene", "SceneError", "ShapeError", "SolverError",
-    "ValueUpdateError", "YaspsError", "concat", "constant", "energies",
+    "ValueUpdateError", "YaspsDeprecationWarning", "YaspsError", "concat", "constant", "energies",
     "gpu_status", "hstack", "identity", "scene", "select", "vstack", "zeros",
 ]
 

@@ -14,7 +14,7 @@ or new parameterisations need no contact code of their own::
                 friction=0.2, halfspaces=[((0, 0, 0), (0, 0, 1))])
     c.update(lag=True, dt=0.01)  # pairs now, friction lagged here
     c.update()                   # pairs at the current positions
-    alpha = c.stepBound([-dx for dx in scene.minimizeEnergy()])
+    alpha = c.step_bound([-dx for dx in scene.minimizeEnergy()])
 
 Friction is IPC's lagged, smoothed friction (:mod:`.friction`); obstacles
 are static members of the UNION (meshes) or half-spaces
@@ -30,6 +30,7 @@ from typing import Dict, Optional, Sequence, Tuple, Union
 import ipctk
 import numpy as np
 
+from ..deprecation import add_renamed_members
 from ..frontend.attribute import Attribute
 from ..frontend.errors import SceneError
 from ..frontend.scene import Primitive, PrimitiveUnion, Scene
@@ -52,7 +53,7 @@ from ..frontend.errors import ArgumentError
 __all__ = ["Contact", "MIN_SEPARATION", "PAIR_TYPES", "Relative", "edges_of",
            "surface_of"]
 
-#: Straight pieces that follow a curved (non-linear) motion in stepBound.
+#: Straight pieces that follow a curved (non-linear) motion in step_bound.
 CURVED_PIECES = 8
 
 
@@ -63,7 +64,7 @@ class Contact:
     ``name`` to the scene with one dynamic pair primitive per pair type and
     its barrier energy ``kappa * b(d, dhat)`` (ipctk's BarrierPotential:
     dhat a distance, d squared distances). ``kappa`` is fixed if given;
-    otherwise IPC's adaptive stiffness (:meth:`adaptStiffness`), which reads
+    otherwise IPC's adaptive stiffness (:meth:`adapt_stiffness`), which reads
     the bodies' average mass per vertex: ``average_mass`` if given, else the
     mean of the ``mass`` their vertex primitives record (:mod:`.masses`). ``halfspaces``: planes
     (origin, normal) the vertices stay above. ``friction`` > 0 adds IPC's
@@ -241,7 +242,7 @@ class Contact:
                 raise ArgumentError("Contact.update(lag=True): give the time "
                                     "step dt (friction's threshold is eps_v dt)")
             if self.adaptive is not None and self.adaptive.kappa is None:
-                self.adaptStiffness()
+                self.adapt_stiffness()
             counts.update(self._lag_friction(
                 V, float(dt), V if step_start is None else step_start))
         return counts
@@ -272,7 +273,7 @@ class Contact:
             found.store(self.friction_primitives[arity])
         return {f"friction{a}": len(f.vertices) for a, f in pairs.items()}
 
-    def forgetCandidates(self) -> None:
+    def forget_candidates(self) -> None:
         """Drops the last step bound's broad phase and the last collision
         set's closest distance, which later collision sets reuse where they
         can: ImplicitEuler starts every time step without them, so that a
@@ -306,12 +307,12 @@ class Contact:
         assert self._last_pairs is not None  # _normal_pairs sets it
         return self._last_pairs[1]
 
-    def stepBound(self, steps: Sequence[np.ndarray],
+    def step_bound(self, steps: Sequence[np.ndarray],
                   pieces: int = CURVED_PIECES) -> float:
-        """The bound of :meth:`stepBoundAndLength`, alone."""
-        return self.stepBoundAndLength(steps, pieces)[0]
+        """The bound of :meth:`step_bound_and_length`, alone."""
+        return self.step_bound_and_length(steps, pieces)[0]
 
-    def stepBoundAndLength(self, steps: Sequence[np.ndarray],
+    def step_bound_and_length(self, steps: Sequence[np.ndarray],
                            pieces: int = CURVED_PIECES) -> Tuple[float, float]:
         """The step bound, and the largest distance a world position moves
         over the whole step (the size of a Newton direction in world
@@ -331,7 +332,7 @@ class Contact:
         deviation is largest at its midpoint, as on arcs."""
         targets = self.scene.minimizeTargets
         if len(steps) != len(targets):
-            raise ArgumentError(f"stepBound: {len(steps)} steps for "
+            raise ArgumentError(f"step_bound: {len(steps)} steps for "
                                 f"{len(targets)} targets")
         before = [t.value for t in targets]
         steps = [np.asarray(p).reshape(x.shape) for x, p in zip(before, steps)]
@@ -398,7 +399,7 @@ class Contact:
         system.gradient(out)
         return out
 
-    def adaptStiffness(self) -> float:
+    def adapt_stiffness(self) -> float:
         """IPC's adaptive stiffness (ipctk's heuristics): the initial kappa
         at the first call, from the other energies' gradient and the
         barrier's at the current pairs (call update() first); at later
@@ -449,7 +450,7 @@ class Contact:
         return found if per == "vertex" else \
             member_sums(self.vertices, found)
 
-    def hasIntersections(self) -> bool:
+    def has_intersections(self) -> bool:
         """Whether some edge crosses some triangle (ipctk), or some vertex
         lies below a half-space, now."""
         V = self.world()
@@ -457,7 +458,7 @@ class Contact:
                 or bool(ipctk.has_intersections(self.mesh,
                                                 self.colliding(V))))
 
-    def minDistance(self) -> float:
+    def min_distance(self) -> float:
         """The smallest distance between surface primitives now, among
         those closer than dhat (inf if none are)."""
         V = self.world()
@@ -469,6 +470,14 @@ class Contact:
             return planes if planes < self.dhat else float("inf")
         return min(planes, float(np.sqrt(
             collisions.compute_minimum_distance(self.mesh, C))))
+
+
+# The camelCase spellings before the naming rule (docs/python.md, "Naming").
+add_renamed_members(Contact, {
+    "stepBound": "step_bound", "stepBoundAndLength": "step_bound_and_length",
+    "adaptStiffness": "adapt_stiffness",
+    "hasIntersections": "has_intersections", "minDistance": "min_distance",
+    "forgetCandidates": "forget_candidates"})
 
 
 def _included(points: Union[bool, np.ndarray], count: int,

@@ -22,6 +22,7 @@ from .shapes import bowl_surface, ring_surface, sphere_surface
 from .motion import Motion, affine_motion, affine_velocity, vertex_motion
 from .newton import (ImplicitEuler, NewtonNotConverged, NewtonReport,
                      iteration_totals, newton)
+from .newton_settings import MAX_ITERATIONS, PROJECTIONS, NewtonSettings
 from .output import (RecordedFrame, SurfaceRecorder, render_surfaces,
                      render_surfaces_array, write_video)
 from .rotation import (RotationBody, add_rotation_vector_body,
@@ -41,7 +42,8 @@ __all__ = ["AffineBody", "Body", "Cage", "FreeVertices", "HEX_CORNERS",
            "cage_grid", "hex8_gauss_points", "hex_tets", "lame",
            "lumped_masses",
            "material_constant",
-           "trilinear_weights", "tube_mesh", "polyline_segments", "zigzag_spring", "RunSummary", "simulate", "ImplicitEuler", "NewtonNotConverged", "NewtonReport", "RecordedFrame",
+           "trilinear_weights", "tube_mesh", "polyline_segments", "zigzag_spring", "RunSummary", "simulate", "ImplicitEuler", "NewtonNotConverged", "NewtonReport", "NewtonSettings", "MAX_ITERATIONS",
+           "PROJECTIONS", "RecordedFrame",
            "SurfaceRecorder", "add_affine_body", "add_affine_inertia",
            "add_cloth", "add_elastic_tets",
            "box_tet_mesh", "cloth_corners", "cloth_grid", "hinges_of",

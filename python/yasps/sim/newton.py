@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import time
 import warnings
-from typing import (Callable, Dict, List, Optional, Sequence, Tuple, Union,
+from typing import (Any, Callable, Dict, List, Optional, Sequence, Tuple, Union,
                     overload)
 
 import numpy as np
@@ -19,12 +19,16 @@ from tqdm import tqdm
 
 from ..contact.relative import Relative, resolve
 from ..frontend.attribute import Attribute
-from ..frontend.errors import SceneError
+from ..deprecation import renamed_argument, warn_renamed
+from ..frontend.errors import ArgumentTypeError, SceneError
 from ..runtime import current as current_backend
 from ..solve import SolverError, minimize_energy
 from ..solve.minimize import checked_fixed_mask
 from ..solve.prepare import compile_scene
 from . import checkpoint
+from .newton_report import NewtonNotConverged, NewtonReport
+from .newton_settings import (NewtonSettings, add_settings_attributes,
+                              settings_with_keywords)
 from .forcing import Forcing
 from .inversion import guarded_step_bound
 from .world import WorldInertia
@@ -35,101 +39,6 @@ from .prescribed import (Prescription, add_pull, entry_mask,
 Targets = Union[Attribute, Sequence[Attribute]]
 #: Predictions of targets: None for a target whose inertia is in world space.
 Predictions = Union[Attribute, Sequence[Optional[Attribute]]]
-
-#: The stages of a Newton iteration that a report times; ``compile`` is the
-#: kernels' compilation (or their loading from the caches), done before the
-#: first iteration so that no other stage includes it.
-STAGES = ("compile", "collisions", "ccd", "derivatives", "assembly", "pcg",
-          "energy")
-
-
-class NewtonNotConverged(UserWarning):
-    """Newton stopped at its iteration cap (or with a step too small to
-    lower the energy) before its direction fell below the tolerance: the
-    step's result is not the minimiser the time step asks for."""
-
-
-class NewtonReport:
-    """What one Newton solve did: ``iterations`` (accepted steps),
-    ``energies`` (the total energy before the first and after each accepted
-    step), ``stepEnergies`` (per accepted step the energy before and
-    after it at the same barrier stiffness: after <= before),
-    ``converged``, ``stepBounds`` (the CCD bound of each iteration, with
-    contact), ``stiffness`` (kappa after each change of an adaptive
-    contact's stiffness), ``cgIterations`` (of each direction) and
-    ``seconds``: the time per stage as the paper's Fig. 20 splits it, after
-    ``compile`` (the scene's kernels compiled or loaded up front),
-    ``collisions`` (ipctk's collision sets and the pairs from them, friction's
-    lag included), ``ccd``, ``derivatives`` (local derivatives of every
-    energy), ``assembly`` (indices and the global system), ``pcg`` and
-    ``energy`` (the line search's energy evaluations)."""
-
-    def __init__(self) -> None:
-        self.iterations = 0
-        self.energies: List[float] = []
-        self.stepEnergies: List[Tuple[float, float]] = []
-        self.converged = False
-        self.stepBounds: List[float] = []
-        #: the barrier stiffness after each change by the adaptive rule
-        self.stiffness: List[float] = []
-        self.cgIterations: List[int] = []
-        #: the fraction of each direction taken (after the step bounds and
-        #: the line search; 0 where the line search found no decrease)
-        self.stepSizes: List[float] = []
-        #: the length of each direction (world space with contact) over
-        #: the tolerance: how Newton converged
-        self.residuals: List[float] = []
-        #: directions taken from PCG's last iterate (it hit its limit)
-        self.inexactDirections = 0
-        #: friction lags taken (ImplicitEuler: one per step, more with
-        #: friction_iterations)
-        self.frictionLags = 0
-        #: solves repeated with more instances projected (progressive
-        #: projection), their CG iterations counted in ``cgIterations``
-        self.projectionRetries = 0
-        #: directions solved again to ``cg_tolerance`` because, solved to
-        #: a looser forcing term, they would have ended the solve (their
-        #: CG iterations counted in ``cgIterations``)
-        self.tightenedSolves = 0
-        #: how far (the largest entry) the prescribed entries were left
-        #: short of ``fn(time)`` because CCD stopped them (ImplicitEuler's
-        #: ``prescribe``; a run's: the largest of its steps')
-        self.prescribedLag = 0.0
-        self.seconds: Dict[str, float] = dict.fromkeys(STAGES, 0.0)
-        #: the length of the last direction (world space with contact)
-        #: over the tolerance: below 1 when converged
-        self.residual = 0.0
-        #: a run's frames (from 1) that ended unconverged, with their
-        #: ``residual``
-        self.unconverged: List[Tuple[int, float]] = []
-
-    def add(self, other: "NewtonReport") -> None:
-        """Accumulates another solve's counts and seconds (a run's total)."""
-        self.iterations += other.iterations
-        self.stepEnergies += other.stepEnergies
-        self.inexactDirections += other.inexactDirections
-        self.frictionLags += other.frictionLags
-        self.projectionRetries += other.projectionRetries
-        self.tightenedSolves += other.tightenedSolves
-        self.prescribedLag = max(self.prescribedLag, other.prescribedLag)
-        self.cgIterations += other.cgIterations
-        for stage, seconds in other.seconds.items():
-            self.seconds[stage] = self.seconds.get(stage, 0.0) + seconds
-
-    def __repr__(self) -> str:
-        return (f"<NewtonReport {self.iterations} iterations, "
-                f"converged={self.converged}>")
-
-    def unconverged_text(self) -> str:
-        """What the unconverged frames of a run were, for users: their
-        count and the worst; "" when every frame converged."""
-        if not self.unconverged:
-            return ""
-        frame, residual = max(self.unconverged, key=lambda u: u[1])
-        return (f"{len(self.unconverged)} unconverged frame"
-                f"{'s' * (len(self.unconverged) > 1)} (worst: frame {frame}, "
-                f"last Newton direction {residual:.3g}x the tolerance)")
-
 
 def compile_kernels(scene, contact, progress: bool) -> float:
     """Compiles (or loads) every kernel a Newton step of ``scene`` needs,
@@ -158,17 +67,6 @@ def _check_targets(scene, targets: List[Attribute]) -> None:
                          f"minimisation targets in order ({names})")
 
 
-#: Newton's default iteration cap: a guard, not a budget (STARK has none);
-#: the twisting cloth at dt = 0.01 s needs 40 to 43 in its hardest frame.
-MAX_ITERATIONS = 100
-
-#: How Newton treats indefinite local Hessians: project every instance's
-#: ("full", projected Newton), or progressively (SymX's and STARK's
-#: default): exact Hessians first, and where a solve breaks down or does
-#: not descend, projected for the instances whose DoF blocks' gradients
-#: reach a threshold that falls to a quarter at each such failure and
-#: doubles after each direction taken.
-PROJECTIONS = ("progressive", "full")
 _NONE = float("inf")
 _FIRST_THRESHOLD = {"progressive": _NONE, "full": None}
 #: The threshold's factor after a failed solve and after a direction taken
@@ -191,41 +89,44 @@ def iteration_totals() -> Dict[str, int]:
     return dict(_totals)
 
 
-def newton(scene, x: Targets, tolerance: float,
+def newton(scene, targets: Optional[Targets] = None,
+           tolerance: Optional[float] = None,
            step_bound: Optional[Callable[[np.ndarray, np.ndarray], float]] = None,
-           max_iterations: int = MAX_ITERATIONS, cg_tolerance: float = 1e-4,
-           fixed=None, contact=None,
-           cg_max_iterations: int = 1000,
-           cg_stopping: str = "residual",
-           compile_first: bool = True,
-           projection: str = "progressive",
-           cg_forcing: bool = True) -> NewtonReport:
-    """Minimises the scene's energy over its targets ``x`` (one attribute,
-    or the list of the scene's minimisation targets in order) by Newton's
+           *, settings: Optional[NewtonSettings] = None, fixed=None,
+           contact=None, compile_first: bool = True,
+           **deprecated: Any) -> NewtonReport:
+    """Minimises the scene's energy over its ``targets`` (one attribute, or
+    the list of the scene's minimisation targets in order) by Newton's
     method: directions from ``minimizeEnergy``, the step limited by
     ``step_bound(x, p)`` (single target: the largest safe fraction of the
-    step ``p``) and by ``contact.stepBound`` (ipctk's CCD), then halved
-    until the energy decreases. With ``contact`` its pairs are rebuilt at
-    every iterate and every candidate of the line search. ``fixed`` (a
-    boolean mask of a single target's instances or entries, or a list with
-    one mask or None per target) excludes DoFs, which keep their values.
-    Stops after a step whose whole direction (before the step bounds and
-    the line search) moves no world position (with contact) or target
-    entry by ``tolerance`` or more (IPC's rule). A direction whose PCG
-    stops at ``cg_max_iterations`` before ``cg_tolerance`` is used as it is
-    (counted in ``inexactDirections``). ``cg_stopping``: minimizeEnergy's
-    stopping rule ("residual", "energy_norm" or "preconditioned").
-    ``compile_first``: compile the scene's kernels (``yasps.compile``)
-    before the first iteration, timed as the report's ``compile`` stage; a
-    caller that did so already passes False. ``projection``: one of PROJECTIONS. ``cg_forcing``: solve
-    each direction only as tightly as an inexact Newton method needs
-    (:mod:`yasps.sim.forcing`: a relative residual between 1e-2 and
-    ``cg_tolerance``, tighter as the gradient falls against the solve's
-    first), re-solving to ``cg_tolerance`` a direction that would end the
-    solve; False: every direction to ``cg_tolerance``."""
-    if projection not in PROJECTIONS:
-        raise SceneError(f"newton: projection must be one of "
-                         f"{', '.join(PROJECTIONS)}, got {projection!r}")
+    step ``p``) and by ``contact.step_bound`` (CCD), then halved until the
+    energy decreases. With ``contact`` its pairs are rebuilt at every
+    iterate and every candidate of the line search. ``fixed`` (a boolean
+    mask of a single target's instances or entries, or a list with one mask
+    or None per target) excludes DoFs, which keep their values. Stops after
+    a step whose whole direction (before the step bounds and the line
+    search) moves no world position (with contact) or target entry by
+    ``tolerance`` or more (IPC's rule). ``settings``: the solver's
+    :class:`NewtonSettings` (iteration caps, projection, PCG's tolerance,
+    stopping rule and forcing; the defaults if None). A direction whose PCG
+    stops at ``settings.cg_max_iterations`` before its tolerance is used as
+    it is (counted in ``inexact_directions``). ``compile_first``: compile
+    the scene's kernels (``yasps.compile``) before the first iteration,
+    timed as the report's ``compile`` stage; a caller that did so already
+    passes False.
+
+    Before NewtonSettings, its fields were keywords of newton (and the
+    targets were ``x=``): those spellings still work and warn once."""
+    targets = renamed_argument("newton", "x", "targets", targets, deprecated)
+    settings = settings_with_keywords("newton", settings, deprecated)
+    if targets is None or tolerance is None:
+        raise ArgumentTypeError("newton: give the targets and the tolerance")
+    x = targets
+    max_iterations, cg_tolerance = (settings.max_iterations,
+                                    settings.cg_tolerance)
+    cg_max_iterations, cg_stopping = (settings.cg_max_iterations,
+                                      settings.cg_stopping)
+    projection, cg_forcing = settings.projection, settings.cg_forcing
     targets = _as_list(x)
     _check_targets(scene, targets)
     # Materials that must not invert (IPC's Neo-Hookean) bound the steps
@@ -252,7 +153,7 @@ def newton(scene, x: Targets, tolerance: float,
         # IPC's adaptive barrier stiffness changes the energy itself: the
         # next comparison is made at the new stiffness.
         kappa = contact.kappa
-        if contact.adaptStiffness() != kappa:
+        if contact.adapt_stiffness() != kappa:
             report.stiffness.append(contact.kappa)
             return scene.evaluateEnergy()
         return current_energy
@@ -308,8 +209,8 @@ def newton(scene, x: Targets, tolerance: float,
                                     if threshold == _NONE else threshold)
             if threshold < _SMALLEST_THRESHOLD:
                 threshold = 0.0
-            report.projectionRetries += 1
-        report.inexactDirections += inexact
+            report.projection_retries += 1
+        report.inexact_directions += inexact
         return directions, cg, solve["tolerance"] <= cg_tolerance
 
     def measure(steps: List[np.ndarray]) -> Tuple[float, float, float]:
@@ -325,7 +226,7 @@ def newton(scene, x: Targets, tolerance: float,
         # the barrier held it).
         if contact is not None:
             start = clock()
-            bound, length = contact.stepBoundAndLength(steps)
+            bound, length = contact.step_bound_and_length(steps)
             report.seconds["ccd"] += clock() - start
             return min(alpha, bound), length, bound
         return alpha, max(float(np.abs(p).max()) for p in steps), 1.0
@@ -341,15 +242,15 @@ def newton(scene, x: Targets, tolerance: float,
             # only on a direction solved to the caller's tolerance.
             directions, more, _ = solve_direction(lambda _: cg_tolerance)
             cg += more
-            report.tightenedSolves += 1
+            report.tightened_solves += 1
             steps = [-dx for dx in directions]
             alpha, length, bound = measure(steps)
         if threshold is not None and threshold != _NONE:
             threshold *= _RELEASE
-        report.cgIterations.append(cg)
+        report.cg_iterations.append(cg)
         _totals["cg"] += cg
         if contact is not None:
-            report.stepBounds.append(bound)
+            report.step_bounds.append(bound)
         report.residual = length / tolerance if tolerance > 0 else \
             float("inf")
         report.residuals.append(report.residual)
@@ -364,10 +265,10 @@ def newton(scene, x: Targets, tolerance: float,
             for t, value in zip(targets, current):
                 t.updateValue(value)
             energy()
-            report.stepSizes.append(0.0)
+            report.step_sizes.append(0.0)
             break
-        report.stepSizes.append(alpha)
-        report.stepEnergies.append((current_energy, candidate))
+        report.step_sizes.append(alpha)
+        report.step_energies.append((current_energy, candidate))
         current_energy = candidate
         report.iterations += 1
         _totals["newton"] += 1
@@ -420,18 +321,22 @@ def initial_velocities(targets: Sequence[Attribute], given,
 
 class ImplicitEuler:
     """Implicit Euler time stepping of the scene's minimisation targets
-    (``x``: one attribute or the list of them, in the scene's order), whose
-    inertia energies pull towards the predictions ``x_hat`` (one constant
-    attribute per target): every step predicts ``x_hat = x + dt v + dt^2 g``
-    (``gravity``: one vector for a single target, or one per target, None
-    for none) and minimises the energy by :func:`newton`, with ``contact``
-    if given, until the largest displacement of a Newton step over ``dt`` is
-    below ``velocity_tolerance`` (paper section 9.1; ``Relative(f)``: f
-    times the contact's size per second, as IPC states it); then
-    ``v = (x_new - x_old) / dt``. ``fixed`` (as for :func:`newton`) keeps
-    DoFs where they are; ``cg_stopping`` is PCG's stopping rule (see
-    :func:`newton`). Several targets may also be given as
-    ``targets=[x, A, t], predicted=[x_hat, A_hat, t_hat]``.
+    (``targets``: one attribute or the list of them, in the scene's order),
+    whose inertia energies pull towards the ``predicted`` attributes (one
+    constant attribute per target, or one for a single target): every step
+    predicts ``x_hat = x + dt v + dt^2 g`` (``gravity``: one vector for a
+    single target, or one per target, None for none) and minimises the
+    energy by :func:`newton` with ``settings`` (a :class:`NewtonSettings`),
+    with ``contact`` if given, until the largest displacement of a Newton
+    step over ``dt`` is below ``velocity_tolerance`` (paper section 9.1;
+    ``Relative(f)``: f times the contact's size per second, as IPC states
+    it); then ``v = (x_new - x_old) / dt``. ``fixed`` (as for
+    :func:`newton`) keeps DoFs where they are. ``stepper.settings`` may be
+    replaced between steps.
+
+    The targets and predictions were also ``x`` and ``x_hat``, and the
+    settings' fields keywords of ImplicitEuler (and attributes of the
+    stepper): those spellings still work and warn once.
 
     With friction, the normal forces, tangent bases and closest points of
     friction are lagged at the step's start, and the step is solved once
@@ -442,12 +347,11 @@ class ImplicitEuler:
     follows the step's own normal force, which matters for stiff bodies
     that bounce in contact.
 
-    ``projection`` ("progressive" or "full", see :data:`PROJECTIONS`):
-    whether Newton starts from the exact local Hessians and projects only
-    where a solve needs it (SymX's and STARK's default, and ours: Newton
-    converges quadratically where a cloth buckles), or projects every
-    instance's Hessian (projected Newton). ``cg_forcing``: as for
-    :func:`newton` (on by default).
+    ``settings.projection``: whether Newton starts from the exact local
+    Hessians and projects only where a solve needs it ("progressive":
+    SymX's and STARK's default, and ours: Newton converges quadratically
+    where a cloth buckles), or projects every instance's Hessian ("full",
+    projected Newton).
 
     ``velocities``: the targets' velocities at the start, one array (the
     target's value shape, or (N, rows) for column targets) or None (at
@@ -477,37 +381,30 @@ class ImplicitEuler:
     after each step, for a parameter with several values of the same
     world positions (:func:`yasps.sim.wrap_rotation_vectors`)."""
 
-    def __init__(self, scene, x: Optional[Targets] = None,
-                 x_hat: Optional[Predictions] = None,
-                 dt: Optional[float] = None,
+    def __init__(self, scene, targets: Optional[Targets] = None,
+                 predicted: Optional[Predictions] = None,
+                 dt: Optional[float] = None, *,
+                 settings: Optional[NewtonSettings] = None,
                  gravity=DEFAULT_GRAVITY, velocity_tolerance: float = 1e-2,
                  step_bound: Optional[Callable[[np.ndarray, np.ndarray],
                                                float]] = None,
-                 fixed=None, max_iterations: int = MAX_ITERATIONS,
-                 contact=None,
-                 cg_tolerance: float = 1e-4, cg_max_iterations: int = 1000,
-                 cg_stopping: str = "residual",
-                 friction_iterations: int = 1,
-                 *, targets: Optional[Sequence[Attribute]] = None,
-                 predicted: Optional[Sequence[Optional[Attribute]]] = None,
-                 projection: str = "progressive", cg_forcing: bool = True,
+                 fixed=None, contact=None, friction_iterations: int = 1,
                  warm_start: bool = True, velocities=None, world=None,
                  world_velocities=None,
-                 world_gravity=(0.0, 0.0, -9.81), normalize=None):
-        # targets= and predicted= are the multi-target spelling of x, x_hat.
-        if targets is not None or predicted is not None:
-            if x is not None or x_hat is not None:
-                raise SceneError("ImplicitEuler: give x and x_hat, or "
-                                 "targets= and predicted=, not both")
-            x, x_hat = (None if targets is None else list(targets),
-                        None if predicted is None else list(predicted))
+                 world_gravity=(0.0, 0.0, -9.81), normalize=None,
+                 **deprecated: Any):
+        x: Optional[Targets] = renamed_argument(
+            "ImplicitEuler", "x", "targets", targets, deprecated)
+        x_hat: Optional[Predictions] = renamed_argument(
+            "ImplicitEuler", "x_hat", "predicted", predicted, deprecated)
+        self.settings = settings_with_keywords("ImplicitEuler", settings,
+                                               deprecated)
         if x is not None and x_hat is None and world is not None:
             x_hat = [None] * len(_as_list(x))   # all inertia in world space
         if x is None or x_hat is None or dt is None:
-            raise SceneError("ImplicitEuler: give the targets (x or "
-                             "targets=), their predictions (x_hat or "
-                             "predicted=, None for a target whose inertia "
-                             "is in world space) and dt")
+            raise SceneError("ImplicitEuler: give the targets, their "
+                             "predictions (predicted=, None for a target "
+                             "whose inertia is in world space) and dt")
         single = isinstance(x, Attribute)
         self.scene, self.dt = scene, float(dt)
         self.targets, self.predicted = _as_list(x), _as_list(x_hat)
@@ -571,19 +468,11 @@ class ImplicitEuler:
             # the contact's energies are dt^2 times its potential, which
             # Contact.forces divides out to report newtons.
             contact.energy_scale = self.dt * self.dt
-        self.max_iterations, self.cg_tolerance = max_iterations, cg_tolerance
-        self.cg_max_iterations = cg_max_iterations
-        self.cg_stopping = cg_stopping
         if int(friction_iterations) != friction_iterations or \
                 friction_iterations < 1:
             raise SceneError(f"ImplicitEuler: friction_iterations must be a "
                              f"whole number >= 1, got {friction_iterations!r}")
         self.friction_iterations = int(friction_iterations)
-        if projection not in PROJECTIONS:
-            raise SceneError(f"ImplicitEuler: projection must be one of "
-                             f"{', '.join(PROJECTIONS)}, got {projection!r}")
-        self.projection = projection
-        self.cg_forcing = bool(cg_forcing)
         self.warm_start = bool(warm_start)
         #: the entries that follow a function of time (:meth:`prescribe`)
         self.prescriptions: List[Prescription] = []
@@ -620,7 +509,8 @@ class ImplicitEuler:
         if total.unconverged:
             warnings.warn(
                 f"ImplicitEuler.run: {total.unconverged_text()} of {frames}: "
-                f"Newton stopped at its cap of {self.max_iterations} "
+                f"Newton stopped at its cap of "
+                f"{self.settings.max_iterations} "
                 "iterations (or where the line search found no decrease) "
                 "before the step fell below velocity_tolerance * dt. Raise "
                 "max_iterations, or see docs/contact.md on convergence",
@@ -652,7 +542,7 @@ class ImplicitEuler:
         penalty pulls them there with everything free (so a motor pushes
         what it meets, as IPC's kinematic conditions do), and they move
         the rest of the way; what CCD still forbids is left for later
-        steps, reported as ``report.prescribedLag``. Newton then keeps them
+        steps, reported as ``report.prescribed_lag``. Newton then keeps them
         fixed (:mod:`yasps.sim.prescribed`). ``stepper.time`` counts from 0
         at construction. Registers the penalty as an energy of the
         target's primitive (off until needed)."""
@@ -670,7 +560,7 @@ class ImplicitEuler:
             alpha = bound(now[0], steps[0]) if len(steps) == 1 \
                 else bound(now, steps)
         if self.contact is not None and alpha > 0.0:
-            alpha = min(alpha, self.contact.stepBound(steps))
+            alpha = min(alpha, self.contact.step_bound(steps))
         return alpha
 
     def _start_from_velocities(self, fixed) -> float:
@@ -699,17 +589,8 @@ class ImplicitEuler:
         return newton(self.scene, self.targets,
                       tolerance=self.velocity_tolerance * self.dt,
                       step_bound=self.step_bound,
-                      max_iterations=self.max_iterations,
-                      cg_tolerance=self.cg_tolerance, fixed=fixed,
-                      contact=self.contact,
-                      cg_max_iterations=self.cg_max_iterations,
-                      cg_stopping=self.cg_stopping, compile_first=False,
-                      projection=self.projection, cg_forcing=self.cg_forcing)
-
-    @property
-    def velocity(self) -> np.ndarray:
-        """The first target's velocity (the single-target form)."""
-        return self.velocities[0]
+                      settings=self.settings, fixed=fixed,
+                      contact=self.contact, compile_first=False)
 
     def step(self, warn: bool = True) -> NewtonReport:
         """Advances one time step; returns the Newton report. A step that
@@ -719,7 +600,7 @@ class ImplicitEuler:
         # but ``compile`` includes compiling.
         compile_seconds = compile_kernels(self.scene, self.contact, False)
         if self.contact is not None:
-            self.contact.forgetCandidates()
+            self.contact.forget_candidates()
         previous = [t.value for t in self.targets]
         for inertia in self.world:
             inertia.predict(self.dt, self.world_gravity)
@@ -773,14 +654,14 @@ class ImplicitEuler:
             solve.seconds["collisions"] += lag_seconds
             solve.seconds["ccd"] += guess_seconds + (prescribed_seconds
                                                      if lag == 0 else 0.0)
-            solve.frictionLags = int(friction)
+            solve.friction_lags = int(friction)
             if report is None:
                 report = solve
             else:
                 report.add(solve)
                 report.energies += solve.energies
-                report.stepBounds += solve.stepBounds
-                report.stepSizes += solve.stepSizes
+                report.step_bounds += solve.step_bounds
+                report.step_sizes += solve.step_sizes
                 report.residuals += solve.residuals
                 report.stiffness += solve.stiffness
                 report.converged = solve.converged
@@ -796,7 +677,7 @@ class ImplicitEuler:
                 t.updateValue(fn(t.value))
         self.time += self.dt
         assert report is not None  # friction_iterations >= 1: one solve
-        report.prescribedLag = lagging
+        report.prescribed_lag = lagging
         report.seconds["compile"] += compile_seconds
         if warn and not report.converged and not self._warned:
             self._warned = True
@@ -807,3 +688,17 @@ class ImplicitEuler:
                 "converged tells for each step (warned once per stepper)",
                 NewtonNotConverged, stacklevel=2)
         return report
+
+
+# The spellings before NewtonSettings and the naming rule: the settings'
+# fields as the stepper's attributes, and ``velocity`` for velocities[0].
+add_settings_attributes(ImplicitEuler)
+
+
+def _first_velocity(self: ImplicitEuler) -> np.ndarray:
+    warn_renamed("ImplicitEuler.velocity", "ImplicitEuler.velocities[0]")
+    return self.velocities[0]
+
+
+ImplicitEuler.velocity = property(  # type: ignore[attr-defined]
+    _first_velocity, doc="Deprecated: velocities[0].")

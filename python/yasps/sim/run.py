@@ -55,7 +55,7 @@ class RunSummary:
         r = self.report
         unconverged = r.unconverged_text()
         return (f"{self.frames} frames in {self.seconds:.1f} s, "
-                f"{r.iterations} Newton iterations, {sum(r.cgIterations)} CG "
+                f"{r.iterations} Newton iterations, {sum(r.cg_iterations)} CG "
                 f"iterations, min distance {self.min_distance:.3g} m, "
                 f"{'INTERSECTIONS FOUND' if self.intersections else 'no intersections'}"
                 + (f", {unconverged}" if unconverged else ""))
@@ -124,8 +124,8 @@ def simulate(stepper: ImplicitEuler, bodies: Mapping[str, Body], frames: int,
         P = now()
         recorder.record(frame * stepper.dt, P)
         if contact is not None:
-            closest = min(closest, contact.minDistance())
-            crossed = crossed or contact.hasIntersections()
+            closest = min(closest, contact.min_distance())
+            crossed = crossed or contact.has_intersections()
         if video:
             images.append(render_surfaces_array(meshes(P), bounds=bounds,
                                                 view=view, size=size,
