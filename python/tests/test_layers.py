@@ -156,3 +156,47 @@ def test_the_message_check_finds_one(tmp_path):
     sample.write_text("try:\n    f()\nexcept ValueError as err:\n"
                       "    if 'no target' in str(err):\n        pass\n")
     assert message_tests(sample) == [(4, "'no target' in str(err)")]
+
+
+def frontend_private_fields() -> set:
+    """The private fields the frontend's classes keep (``self._x = ...``)."""
+    found = set()
+    for path in (PACKAGE / "frontend").glob("*.py"):
+        for node in ast.walk(ast.parse(path.read_text())):
+            if isinstance(node, ast.Attribute) and \
+                    isinstance(node.ctx, ast.Store) and \
+                    isinstance(node.value, ast.Name) and \
+                    node.value.id == "self" and node.attr.startswith("_") \
+                    and not node.attr.startswith("__"):
+                found.add(node.attr)
+    return found
+
+
+def private_reads(path: Path, fields: set) -> list:
+    """``obj._x`` in ``path`` for a field ``_x`` of ``fields``, on anything
+    but ``self``: lines and names."""
+    out = []
+    for node in ast.walk(ast.parse(path.read_text())):
+        if isinstance(node, ast.Attribute) and node.attr in fields and not (
+                isinstance(node.value, ast.Name) and
+                node.value.id in ("self", "cls")):
+            out.append(f"{path.name}:{node.lineno} .{node.attr}")
+    return out
+
+
+def test_only_the_frontend_reads_its_private_fields():
+    """The layers above read the frontend's objects through their public
+    members and frontend.introspect, never their private fields."""
+    fields = frontend_private_fields()
+    assert {"_symbols", "_values", "_structure", "_operands"} <= fields
+    found = []
+    for name, path in modules().items():
+        if not name.startswith("yasps.frontend"):
+            found += private_reads(path, fields)
+    assert not found, found
+
+
+def test_the_private_read_check_finds_one(tmp_path):
+    bad = tmp_path / "bad.py"
+    bad.write_text("def f(scene):\n    return scene._symbols\n")
+    assert private_reads(bad, {"_symbols"}) == ["bad.py:2 ._symbols"]

@@ -13,7 +13,7 @@ import pytest
 import yasps
 from yasps import energies as E
 from yasps.runtime import cpu_backend
-from yasps.sim import box_tet_mesh
+from yasps.sim import NewtonSettings, box_tet_mesh
 from yasps.solve import assemble
 
 from conftest import ipctk_collisions
@@ -99,7 +99,8 @@ def test_multilevel_follows_contact_between_solves(restore_preconditioner):
         boxes = soft_boxes.build(name="boxes_" + preconditioner.replace("-", "_"))
         # Every direction to 1e-10 (no forcing terms): then the frames do
         # not depend on the preconditioner.
-        stepper = boxes.stepper(cg_tolerance=1e-10, cg_forcing=False)
+        stepper = boxes.stepper(settings=NewtonSettings(cg_tolerance=1e-10,
+                                                        cg_forcing=False))
         frames, pairs = [], 0
         for _ in range(10):
             stepper.step()

@@ -8,9 +8,10 @@ from dataclasses import dataclass
 from typing import Dict, List, Optional, Sequence, Set, Tuple
 
 from .. import config
+from ..frontend import introspect
 from ..frontend.attribute import Attribute
 from ..frontend.errors import SceneError
-from ..frontend.scene import Scene
+from ..frontend.scene import Entity, Scene
 from ..ir import kernel_ir, symbol_path
 from .params import Param, attribute_params
 from .pipelines import differentiation_pipeline
@@ -82,13 +83,13 @@ _scene_params: Dict[Tuple[str, str], SceneParams] = {}
 
 def _named_attributes(scene: Scene) -> List[Attribute]:
     """Every named attribute of the scene, entity by entity."""
-    out, pending = [], list(scene._symbols.values())
+    out, pending = [], list(introspect.symbols(scene).values())
     while pending:
         entity = pending.pop()
         if isinstance(entity, Attribute):
             out.append(entity)
-        elif hasattr(entity, "_symbols"):
-            pending += list(entity._symbols.values())
+        elif isinstance(entity, Entity):
+            pending += list(introspect.symbols(entity).values())
     return out
 
 

@@ -179,7 +179,8 @@ class Contact:
         self.model = add_contact_energies(
             scene.addMesh(name), vertices, self.positions, self.dhat,
             halfspaces, self.friction > 0, self.eps_v, projection)
-        self._planes = list(halfspaces)
+        #: the half-spaces as given: (point, normal) per plane
+        self.planes: Tuple[tuple, ...] = tuple(halfspaces)
         self.stiffness = self.model.stiffness
         if kappa is not None:
             self.stiffness.updateValue([float(kappa)])

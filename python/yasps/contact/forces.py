@@ -51,7 +51,7 @@ class ContactForces:
         self.scene.addMinimizeTarget(self.positions)
         self.model: ContactModel = add_contact_energies(
             self.scene.addMesh("contact"), points, self.positions,
-            contact.dhat, contact._planes, contact.friction > 0,
+            contact.dhat, list(contact.planes), contact.friction > 0,
             contact.eps_v, "none")
 
     def _copy_state(self, V: np.ndarray) -> None:

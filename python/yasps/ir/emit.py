@@ -13,6 +13,7 @@ import numpy as np
 
 from ..frontend.state import StateKey
 from .. import config
+from ..frontend import introspect
 from ..frontend.attribute import Attribute
 from ..frontend.scene import (Connectivity, Entity, Mesh, Primitive,
                               PrimitiveUnion, Scene)
@@ -73,9 +74,10 @@ class _Locations:
 
     def of(self, attr: Attribute) -> str:
         """`` loc(#locN)`` for ``attr``'s source location, or ""."""
-        if not self.enabled or attr._loc is None:
+        location = introspect.user_location(attr)
+        if not self.enabled or location is None:
             return ""
-        filename, line = attr._loc
+        filename, line = location
         escaped = filename.replace("\\", "\\\\").replace('"', '\\"')
         alias = f"#loc{len(self.definitions)}"
         self.definitions.append(f'{alias} = loc("{escaped}":{line}:0)')
@@ -109,7 +111,7 @@ class _RegionPrinter:
                 self.names[id(node)] = self._emit(node)
                 continue
             stack.append((node, True))
-            for operand in reversed(node._operands):
+            for operand in reversed(introspect.operands(node)):
                 if id(operand) not in self.names:
                     stack.append((operand, False))
         return self.names[id(root)]
@@ -126,10 +128,11 @@ class _RegionPrinter:
             return f"yasps.read {symbol_path(node)} : {t}"
         if node.kind == "literal":
             return (f"yasps.constant "
-                    f"{dense_literal(node._params['value'], self.element)}")
-        op, p = node._op, node._params
-        ops = [self.names[id(o)] for o in node._operands]
-        types = [mat_type(o, self.element) for o in node._operands]
+                    f"{dense_literal(introspect.parameters(node)['value'], self.element)}")
+        op, p = introspect.operation(node), introspect.parameters(node)
+        operands = introspect.operands(node)
+        ops = [self.names[id(o)] for o in operands]
+        types = [mat_type(o, self.element) for o in operands]
         if op in _UNARY_SAME:
             return f"yasps.{op} {ops[0]} : {t}"
         if op in _BINARY_SAME:
@@ -174,8 +177,8 @@ def _emit_attribute(attr: Attribute, depth: int, locations: _Locations,
         return [f"{pad}{decl[attr.kind]} @{attr.name} : {t}{loc}"]
     region = _RegionPrinter(locations, element)
     if attr.kind == "join":
-        conn: Connectivity = attr._params["connectivity"]
-        source = attr._operands[0]
+        conn: Connectivity = introspect.parameters(attr)["connectivity"]
+        source = introspect.operands(attr)[0]
         result = "%0"
         region.lines.append(f"%0 = yasps.join @{conn.name}({symbol_path(source)})"
                             f" : {t}{loc}")
@@ -183,7 +186,7 @@ def _emit_attribute(attr: Attribute, depth: int, locations: _Locations,
         result = "%0"
         region.lines.append(f"%0 = yasps.union @{attr.name} : {t}{loc}")
     else:
-        result = region.value(attr._operands[0])
+        result = region.value(introspect.operands(attr)[0])
     body = [f"{pad}{_INDENT}{line}" for line in region.lines]
     return ([f"{pad}yasps.attr @{attr.name} : {t} {{"] + body +
             [f"{pad}{_INDENT}yasps.yield {result} : {t}", f"{pad}}}{loc}"])
@@ -194,7 +197,7 @@ def _emit_members(entity: Entity, depth: int, locations: _Locations,
                   dynamic_counts: bool, element: str) -> List[str]:
     lines: List[str] = []
     pad = _INDENT * depth
-    symbols = list(entity._symbols.values())
+    symbols = list(introspect.symbols(entity).values())
     for name, expr in extra.get(entity, []):
         symbols.append(Attribute(owner=entity, rows=expr.rows, cols=expr.cols,
                                  kind="computed", op="computed",
@@ -263,13 +266,13 @@ def _emit(scene: Scene, locations: _Locations,
     lines = [f"yasps.scene @{scene.name} {{"]
     lines += _emit_members(scene, 1, locations, extra or {}, dynamic_counts,
                            element)
-    for attr, dynamic, projection in scene._energies:
+    for attr, dynamic, projection in introspect.energy_records(scene):
         flag = " dynamic_instances" if dynamic else ""
         if projection != "clamp":
             flag += f" projection {projection}"
         lines.append(f"{_INDENT}yasps.energy {symbol_path(attr)}{flag}")
-    if scene._targets:
-        targets = ", ".join(symbol_path(t) for t in scene._targets)
+    if scene.minimizeTargets:
+        targets = ", ".join(symbol_path(t) for t in scene.minimizeTargets)
         lines.append(f"{_INDENT}yasps.minimize [{targets}]")
     lines.append("}")
     return "\n".join(lines) + "\n"
@@ -314,12 +317,13 @@ def kernel_ir(scene: Scene,
         precision if precision is not None else scene.precision)
     if not extra:
         cached = scene.state.setdefault(_KERNEL_IRS, dict).get(element)
-        if cached is not None and cached[0] == scene._structure:
+        if cached is not None and \
+                cached[0] == introspect.structure_revision(scene):
             return cached[1]
     located = _Locations(True)
     ir = KernelIR(_emit(scene, located, extra, False, element),
                   located.table())
     if not extra:
         scene.state.setdefault(_KERNEL_IRS, dict)[element] = \
-            (scene._structure, ir)
+            (introspect.structure_revision(scene), ir)
     return ir

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 from typing import Any
 
+from ..frontend import introspect
 from ..frontend.attribute import Attribute, owner_of
 from ..frontend.scene import Entity, Scene
 
@@ -25,5 +26,5 @@ def resolve(scene: Scene, path: str) -> Any:
     """The object a scene-relative path such as ``@m::@v::@x`` names."""
     node: Any = scene
     for name in path.split("::"):
-        node = node._symbols[name.lstrip("@")]
+        node = introspect.symbols(node)[name.lstrip("@")]
     return node

@@ -19,6 +19,7 @@ import numpy as np
 from ..frontend.state import StateKey
 from .. import config
 from ..compiler.params import ArgumentKind, KernelArgument
+from ..frontend import introspect
 from ..frontend.attribute import Attribute
 from ..frontend.scene import Entity, Scene
 from ..ir import kernel_ir, resolve, symbol_path
@@ -68,7 +69,7 @@ def _key(scene: Scene, backend: Backend, threads: Optional[int]) -> tuple:
     """What a plan depends on: the scene's structure (its energies and
     every entity's arguments), the backend, the threads and the kernels'
     settings."""
-    return (scene._structure, id(backend), threads, config.snapshot())
+    return (introspect.structure_revision(scene), id(backend), threads, config.snapshot())
 
 
 def energy_plan(scene: Scene, backend: Backend,

@@ -9,6 +9,7 @@ from typing import Any, Optional
 import numpy as np
 
 from ..compiler.params import ArgumentKind, KernelArgument
+from ..frontend import introspect
 from ..frontend.attribute import owner_of
 from ..frontend.errors import SceneError, ValueUpdateError
 from ..frontend.scene import Connectivity, PrimitiveUnion, Scene
@@ -49,26 +50,28 @@ def input_array(scene: Scene, argument: KernelArgument,
     if kind is ArgumentKind.dof_offsets:
         return target_dof_offsets(scene)
     if kind is ArgumentKind.attr:
-        if target._values is None:
+        values = introspect.stored_values(target)
+        if values is None:
             raise ValueUpdateError(
                 f"{target.describe()} has no values for the current "
                 f"{target.owner.numInstances} instances; call updateValue")
-        return target._values
+        return values
     if kind is ArgumentKind.conn:
         assert isinstance(target, Connectivity)
-        if target._indices is None:
+        indices = introspect.stored_indices(target)
+        if indices is None:
             raise SceneError(f"{target.describe()} has no indices for the "
                              f"current {target.source.numInstances} instances; "
                              "call updateConnectivity")
         # The kernel trusts these indices: a target that shrank since they
         # were set (a dynamic primitive) must not be read out of bounds.
         bound = target.target.numInstances
-        if target._indices.size and int(target._indices.max()) >= bound:
+        if indices.size and int(indices.max()) >= bound:
             raise SceneError(f"{target.describe()} refers to instance "
-                             f"{int(target._indices.max())} of "
+                             f"{int(indices.max())} of "
                              f"{target.target.describe()}, which now has "
                              f"{bound}; call updateConnectivity")
-        return target._indices
+        return indices
     if kind is ArgumentKind.offsets:
         assert isinstance(target, PrimitiveUnion)
         return np.ascontiguousarray(target.offsets, dtype=np.int64)

@@ -22,6 +22,7 @@ from typing import Any, Dict, Iterator, List, Tuple, Union
 
 import numpy as np
 
+from ..frontend import introspect
 from ..frontend.attribute import STORED_KINDS
 from ..frontend.errors import SceneError
 from ..frontend.scene import Entity, Primitive
@@ -68,10 +69,11 @@ def scene_state(scene) -> Dict[str, np.ndarray]:
             if entity.isDynamic:
                 state[f"count:{path}"] = np.array(entity.numInstances)
             for name, conn in entity.connectivities.items():
-                if conn._indices is not None:
+                if introspect.stored_indices(conn) is not None:
                     state[f"conn:{path}:{name}"] = conn.indices
         for name, attr in entity.attributes.items():
-            if attr.kind in STORED_KINDS and attr._values is not None:
+            if attr.kind in STORED_KINDS and \
+                    introspect.stored_values(attr) is not None:
                 state[f"value:{path}:{name}"] = attr.value
     return state
 
@@ -104,8 +106,9 @@ def restore_scene_state(scene, state: Dict[str, np.ndarray]) -> None:
             entity.updateNumInstances(int(state[key]))
         for name, conn in entity.connectivities.items():
             key = f"conn:{path}:{name}"
-            if key in state and (conn._indices is None or not np.array_equal(
-                    conn.indices, state[key])):
+            if key in state and (
+                    introspect.stored_indices(conn) is None
+                    or not np.array_equal(conn.indices, state[key])):
                 conn.updateConnectivity(state[key])
     for path, entity in _entities(scene):
         for name, attr in entity.attributes.items():
@@ -113,7 +116,8 @@ def restore_scene_state(scene, state: Dict[str, np.ndarray]) -> None:
             if key not in state:
                 continue
             value = state[key]
-            if attr._values is None or attr.value.shape != value.shape or \
+            if introspect.stored_values(attr) is None or \
+                    attr.value.shape != value.shape or \
                     not np.array_equal(attr.value, value):
                 attr.updateValue(value)
 

@@ -20,9 +20,11 @@ import numpy as np
 
 from ..frontend.state import StateKey
 from .. import config
+from ..frontend import introspect
 from ..frontend.attribute import Attribute, owner_of
 from ..frontend.errors import SceneError
-from ..frontend.scene import Mesh, Primitive, PrimitiveUnion, Scene
+from ..frontend.scene import (Entity, Mesh, Primitive, PrimitiveUnion,
+                              Scene)
 from ..frontend.values import from_column_major
 from ..ir import kernel_ir
 from ..runtime import Backend
@@ -73,16 +75,17 @@ def _static_structure_key(scene, ir: str, layout: DofLayout,
     the member counts of every union (paper 10.6: only dynamic instances
     change between steps)."""
     connectivities, unions = [], []
-    pending = list(scene._symbols.values())
+    pending = list(introspect.symbols(scene).values())
     while pending:
         entity = pending.pop()
         if isinstance(entity, PrimitiveUnion):
             unions.append(tuple(m.numInstances for m in entity.members))
         if isinstance(entity, Primitive) and not entity.isDynamic:
-            connectivities += [(id(c), c._version)
-                               for c in entity._connectivities.values()]
+            connectivities += [
+                (id(c), introspect.version(c))
+                for c in introspect.connectivities(entity).values()]
         if isinstance(entity, (Mesh, Primitive, PrimitiveUnion)):
-            pending += list(entity._symbols.values())
+            pending += list(introspect.symbols(entity).values())
     return (ir, layout.block_offsets.tobytes(), tuple(sorted(connectivities)),
             tuple(unions), tuple(id(e) for e in static_energies))
 
@@ -124,17 +127,17 @@ def _point_key(scene: Scene, ir: str, backend: Backend,
     structure: the version of every stored value and connectivity, every
     primitive's instance count, the backend, threads and settings."""
     versions: list = []
-    pending = list(scene._symbols.values())
+    pending = list(introspect.symbols(scene).values())
     while pending:
         entity = pending.pop()
         if isinstance(entity, Attribute):
-            versions.append((id(entity), entity._version))
+            versions.append((id(entity), introspect.version(entity)))
         elif isinstance(entity, Primitive):
             versions.append((id(entity), entity.numInstances))
-            versions += [(id(c), c._version)
-                         for c in entity._connectivities.values()]
-        if hasattr(entity, "_symbols"):
-            pending += list(entity._symbols.values())
+            versions += [(id(c), introspect.version(c))
+                         for c in introspect.connectivities(entity).values()]
+        if isinstance(entity, Entity):
+            pending += list(introspect.symbols(entity).values())
     return (ir, id(backend), threads, config.snapshot(), tuple(versions))
 
 
@@ -146,7 +149,7 @@ def _contributions(scene: Scene, backend: Backend, threads: Optional[int],
     # for every energy that reaches it.
     tables: dict = {}
     entries = []
-    for energy, is_dynamic, _ in scene._energies:
+    for energy, is_dynamic, _ in introspect.energy_records(scene):
         try:
             contribution = assembly_contribution(scene, energy, backend,
                                                  threads, ir, tables)

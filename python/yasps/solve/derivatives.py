@@ -15,6 +15,7 @@ from ..compiler import MissingAttributeError
 from ..compiler.pipelines import differentiation_pipeline
 from ..compiler.specs import (DerivativeKernels, KernelRequest,
                               derivative_kernels, scene_params)
+from ..frontend import introspect
 from ..frontend.attribute import Attribute, owner_of
 from ..frontend.errors import SceneError
 from ..frontend.scene import Scene
@@ -261,7 +262,8 @@ class Contribution:
         #: (None: every instance's)
         self._projected_instances: Optional[np.ndarray] = None
         #: the energy's projection method (addEnergy's ``projection``)
-        self._method = next(m for e, _, m in outputs.scene._energies
+        self._method = next(m for e, _, m in
+                            introspect.energy_records(outputs.scene)
                             if e is outputs.energy)
 
     def projected(self) -> LocalInputs:

@@ -12,6 +12,7 @@ import numpy as np
 from ..compiler.params import (JoinParam, Param, ReadParam,
                                attribute_params)
 from ..compiler.pipelines import DIFFERENTIATION_PIPELINE
+from ..frontend import introspect
 from ..frontend.attribute import Attribute, owner_of
 from ..frontend.scene import Entity, Scene
 from ..ir import resolve, symbol_path
@@ -50,7 +51,8 @@ class ParamSlot:
             inst = i if target.owner is self.owner else 0
             return [(target, inst, e) for e in range(target.rows * target.cols)]
         if isinstance(param, JoinParam):
-            conn = self.owner._symbols[param.connectivity.lstrip("@")]
+            conn = introspect.symbols(self.owner)[
+                param.connectivity.lstrip("@")]
             j = int(conn.indices[i, param.slot])
             out = self._resolver.expand(resolve(scene, param.base), j)
         else:
@@ -58,8 +60,9 @@ class ParamSlot:
             offsets = union.offsets
             m = int(np.searchsorted(offsets, i, side="right") - 1)
             member = union.members[m]
-            out = self._resolver.expand(member._attributes[param.attribute],
-                                        i - int(offsets[m]))
+            out = self._resolver.expand(
+                introspect.named_attributes(member)[param.attribute],
+                i - int(offsets[m]))
         return out + [None] * (self.width - len(out))
 
     def __repr__(self) -> str:

@@ -30,6 +30,7 @@ import numpy as np
 from ..frontend.state import StateKey
 from ..compiler.params import JoinParam, Param, ReadParam, UnionParam
 from ..compiler.specs import scene_params
+from ..frontend import introspect
 from ..frontend.attribute import Attribute
 from ..frontend.scene import Primitive, PrimitiveUnion, Scene
 from ..ir import resolve, symbol_path
@@ -102,7 +103,7 @@ class SlotPlan:
                 entries = width = target.rows * target.cols
             else:
                 union = resolve(scene, param.union)
-                attr = union._attributes[param.attribute]
+                attr = introspect.named_attributes(union)[param.attribute]
                 entries, width = attr.rows * attr.cols, param.width
             placements.append((inner, 1, column))
             inner += entries
@@ -146,7 +147,7 @@ class SlotPlan:
             assert isinstance(union, PrimitiveUnion) and name is not None
             out: List[_Leaf] = []
             for member, offset in zip(union.members, union.offsets):
-                out += self._leaves(member._attributes[name],
+                out += self._leaves(introspect.named_attributes(member)[name],
                                     start + int(offset))
             return out
         if id(attr) not in self._source_of:
@@ -176,7 +177,8 @@ class SlotPlan:
         if isinstance(param, JoinParam):
             return self._leaves(resolve(self.scene, param.base), 0)
         union = resolve(self.scene, param.union)
-        return self._leaves(union._attributes[param.attribute], 0)
+        return self._leaves(
+            introspect.named_attributes(union)[param.attribute], 0)
 
     def sources(self, count: int) -> np.ndarray:
         """The (table, row) of every slot of the ``count`` current
@@ -196,7 +198,8 @@ class SlotPlan:
                     np.array([leaf[2] for leaf in leaves]))
             starts, tables, fixed = decoders[key]
             if isinstance(param, JoinParam):
-                conn = self.owner._symbols[param.connectivity.lstrip("@")]
+                conn = introspect.symbols(self.owner)[
+                    param.connectivity.lstrip("@")]
                 index = conn.indices[:count, param.slot]
             elif isinstance(param, UnionParam):
                 index = np.arange(count, dtype=np.int64)
