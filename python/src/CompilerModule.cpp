@@ -28,7 +28,7 @@
 #include "yasps/Dialect/Yasps/IR/Yasps.h"
 #include "yasps/Dialect/Yasps/Transforms/Passes.h"
 #include "yasps/Dialect/Yasps/Transforms/Pipelines.h"
-#include "yasps/Runtime/CpuKernel.h"
+#include "yasps/Runtime/Support/CpuKernel.h"
 #include "yasps/Target/CPU/CpuCompiler.h"
 #include "yasps/Target/CPU/CpuSourceCache.h"
 #include "yasps/Target/GPU/GpuCompiler.h"

@@ -11,8 +11,8 @@
 
 #include "GpuRuntimeBindings.h"
 
-#include "yasps/Runtime/GpuLaunch.h"
-#include "yasps/Runtime/GpuSystem.h"
+#include "yasps/Runtime/Gpu/GpuLaunch.h"
+#include "yasps/Runtime/Gpu/GpuSystem.h"
 
 #include <nanobind/ndarray.h>
 #include <nanobind/stl/optional.h>

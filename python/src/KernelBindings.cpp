@@ -5,7 +5,7 @@
 
 #include "ThreadPools.h"
 
-#include "yasps/Runtime/CpuKernel.h"
+#include "yasps/Runtime/Support/CpuKernel.h"
 
 #include <nanobind/ndarray.h>
 #include <nanobind/stl/string.h>

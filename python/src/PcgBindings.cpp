@@ -2,7 +2,7 @@
 
 #include "PcgBindings.h"
 
-#include "yasps/Runtime/Pcg.h"
+#include "yasps/Runtime/Sparse/Pcg.h"
 
 namespace nb = nanobind;
 using ::yasps::runtime::PcgPreconditioner;

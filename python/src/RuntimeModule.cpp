@@ -13,8 +13,8 @@
 #include "PcgBindings.h"
 #include "ThreadPools.h"
 
-#include "yasps/Runtime/GlobalSystem.h"
-#include "yasps/Runtime/LocalCompression.h"
+#include "yasps/Runtime/Assembly/GlobalSystem.h"
+#include "yasps/Runtime/Assembly/LocalCompression.h"
 
 #include <nanobind/nanobind.h>
 #include <nanobind/ndarray.h>

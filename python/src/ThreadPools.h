@@ -3,7 +3,7 @@
 #ifndef YASPS_PYTHON_THREADPOOLS_H
 #define YASPS_PYTHON_THREADPOOLS_H
 
-#include "yasps/Runtime/ThreadPool.h"
+#include "yasps/Runtime/Support/ThreadPool.h"
 
 namespace yasps::python {
 

@@ -68,7 +68,7 @@
 - ``preconditioner``: PCG's preconditioner, ``"auto"`` (the default),
   ``"block-jacobi"`` (the inverses of the Hessian's diagonal blocks) or
   ``"multilevel"`` (a V-cycle over coarse levels of aggregated blocks,
-  ``runtime/include/yasps/Runtime/Multilevel.h``), on the CPU and the GPU.
+  ``runtime/include/yasps/Runtime/Sparse/Multilevel.h``), on the CPU and the GPU.
   The multilevel one needs several times fewer iterations on meshes; each
   costs about three to four of block-Jacobi's and every solve computes the
   levels' values first (their structure is kept while the Hessian's

@@ -18,8 +18,8 @@
 #ifndef YASPS_RUNTIME_BENCH_KIT_H
 #define YASPS_RUNTIME_BENCH_KIT_H
 
-#include "yasps/Runtime/GpuLaunch.h"
-#include "yasps/Runtime/HostImage.h"
+#include "yasps/Runtime/Gpu/GpuLaunch.h"
+#include "yasps/Runtime/Gpu/HostImage.h"
 
 #include "BenchMain.h"
 

@@ -22,8 +22,8 @@
 #include "BenchMain.h"
 #include "Kit.h"
 
-#include "yasps/Runtime/GpuSystem.h"
-#include "yasps/Runtime/ThreadPool.h"
+#include "yasps/Runtime/Gpu/GpuSystem.h"
+#include "yasps/Runtime/Support/ThreadPool.h"
 
 #include <chrono>
 #include <cstdio>
@@ -210,8 +210,8 @@ int run(int argc, char **argv) {
   start = Clock::now();
   PcgResult cpuSolved = host.solve(cpuDirection.data(), options, pool);
   double cpuSolve = secondsSince(start);
-  std::printf("  %-34s %10.3f ms   (%.1fx the GPU's)\n",
-              "CPU assembly", cpuAssembly * 1e3, cpuAssembly / assemblySeconds);
+  std::printf("  %-34s %10.3f ms   (%.1fx the GPU's)\n", "CPU assembly",
+              cpuAssembly * 1e3, cpuAssembly / assemblySeconds);
   std::printf("  %-34s %10.3f ms   (%u threads, %lld iterations; %.1fx the "
               "GPU's)\n",
               "CPU PCG (block-Jacobi)", cpuSolve * 1e3, cores,

@@ -17,9 +17,9 @@
 //
 //===----------------------------------------------------------------------===//
 
-#include "yasps/Runtime/GlobalSystem.h"
-#include "yasps/Runtime/GpuSystem.h"
-#include "yasps/Runtime/ThreadPool.h"
+#include "yasps/Runtime/Assembly/GlobalSystem.h"
+#include "yasps/Runtime/Gpu/GpuSystem.h"
+#include "yasps/Runtime/Support/ThreadPool.h"
 
 #include "BenchMain.h"
 

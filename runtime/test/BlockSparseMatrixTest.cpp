@@ -1,8 +1,8 @@
 //===- BlockSparseMatrixTest.cpp - tests of the block-sparse Hessian ------===//
 
-#include "yasps/Runtime/BlockSparseMatrix.h"
+#include "yasps/Runtime/Sparse/BlockSparseMatrix.h"
 
-#include "yasps/Runtime/ThreadPool.h"
+#include "yasps/Runtime/Support/ThreadPool.h"
 
 #include <gtest/gtest.h>
 

@@ -6,8 +6,8 @@
 //
 //===----------------------------------------------------------------------===//
 
-#include "yasps/Runtime/CpuKernel.h"
-#include "yasps/Runtime/ThreadPool.h"
+#include "yasps/Runtime/Support/CpuKernel.h"
+#include "yasps/Runtime/Support/ThreadPool.h"
 
 #include <gtest/gtest.h>
 

@@ -5,9 +5,9 @@
 //
 //===----------------------------------------------------------------------===//
 
-#include "yasps/Runtime/CudaMemory.h"
-#include "yasps/Runtime/GpuLaunch.h"
-#include "yasps/Runtime/HostImage.h"
+#include "yasps/Runtime/Gpu/GpuLaunch.h"
+#include "yasps/Runtime/Gpu/HostImage.h"
+#include "yasps/Runtime/Support/CudaMemory.h"
 
 #include "FakeCudaDriver.h"
 

@@ -23,7 +23,7 @@
 //
 //===----------------------------------------------------------------------===//
 
-#include "yasps/Runtime/GpuMultilevelKernels.h"
+#include "Gpu/GpuMultilevelKernels.h"
 
 #include "FiberBlock.h"
 #include "HostImageLoader.h"

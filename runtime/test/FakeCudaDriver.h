@@ -9,7 +9,7 @@
 #ifndef YASPS_RUNTIME_TEST_FAKECUDADRIVER_H
 #define YASPS_RUNTIME_TEST_FAKECUDADRIVER_H
 
-#include "yasps/Runtime/CudaDriver.h"
+#include "yasps/Runtime/Support/CudaDriver.h"
 
 #include <gtest/gtest.h>
 

@@ -1,8 +1,8 @@
 //===- GlobalSystemTest.cpp - tests of Newton system assembly -------------===//
 
-#include "yasps/Runtime/GlobalSystem.h"
-#include "yasps/Runtime/SlotFactors.h"
-#include "yasps/Runtime/ThreadPool.h"
+#include "yasps/Runtime/Assembly/GlobalSystem.h"
+#include "yasps/Runtime/Assembly/SlotFactors.h"
+#include "yasps/Runtime/Support/ThreadPool.h"
 
 #include <gtest/gtest.h>
 

@@ -10,9 +10,9 @@
 //
 //===----------------------------------------------------------------------===//
 
-#include "yasps/Runtime/GpuSystem.h"
-#include "yasps/Runtime/GpuSolverKernels.h"
-#include "yasps/Runtime/ThreadPool.h"
+#include "yasps/Runtime/Gpu/GpuSystem.h"
+#include "Gpu/GpuSolverKernels.h"
+#include "yasps/Runtime/Support/ThreadPool.h"
 
 #include "FakeCudaDriver.h"
 

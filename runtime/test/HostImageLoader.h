@@ -1,6 +1,6 @@
 //===- HostImageLoader.h - the stand-in driver's host images ----*- C++ -*-===//
 //
-// Loads a host image (yasps/Runtime/HostImage.h), the generated GPU kernels
+// Loads a host image (yasps/Runtime/Gpu/HostImage.h), the generated GPU kernels
 // compiled for the host, with LLVM's JIT linker, and runs a kernel over a
 // grid the way a GPU would lay its threads out: block after block, thread
 // after thread, each thread given its ids in a ThreadContext. Generated
@@ -12,7 +12,7 @@
 #ifndef YASPS_RUNTIME_TEST_HOSTIMAGELOADER_H
 #define YASPS_RUNTIME_TEST_HOSTIMAGELOADER_H
 
-#include "yasps/Runtime/HostImage.h"
+#include "yasps/Runtime/Gpu/HostImage.h"
 
 #include <map>
 #include <memory>

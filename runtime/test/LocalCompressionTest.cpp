@@ -1,6 +1,6 @@
 //===- LocalCompressionTest.cpp - tests of local Hessian compression ------===//
 
-#include "yasps/Runtime/LocalCompression.h"
+#include "yasps/Runtime/Assembly/LocalCompression.h"
 
 #include <gtest/gtest.h>
 

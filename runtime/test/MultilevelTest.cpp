@@ -1,11 +1,11 @@
 //===- MultilevelTest.cpp - tests of the multilevel preconditioner --------===//
 
-#include "yasps/Runtime/Multilevel.h"
+#include "yasps/Runtime/Sparse/Multilevel.h"
 
-#include "yasps/Runtime/Aggregation.h"
-#include "yasps/Runtime/BlockSparseMatrix.h"
-#include "yasps/Runtime/Pcg.h"
-#include "yasps/Runtime/ThreadPool.h"
+#include "yasps/Runtime/Sparse/Aggregation.h"
+#include "yasps/Runtime/Sparse/BlockSparseMatrix.h"
+#include "yasps/Runtime/Sparse/Pcg.h"
+#include "yasps/Runtime/Support/ThreadPool.h"
 
 #include <gtest/gtest.h>
 

@@ -1,10 +1,10 @@
 //===- PcgTest.cpp - tests of the block-Jacobi preconditioned CG ----------===//
 
-#include "yasps/Runtime/Pcg.h"
+#include "yasps/Runtime/Sparse/Pcg.h"
 
-#include "yasps/Runtime/BlockSparseMatrix.h"
-#include "yasps/Runtime/Lanczos.h"
-#include "yasps/Runtime/ThreadPool.h"
+#include "yasps/Runtime/Sparse/BlockSparseMatrix.h"
+#include "yasps/Runtime/Sparse/Lanczos.h"
+#include "yasps/Runtime/Support/ThreadPool.h"
 
 #include <gtest/gtest.h>
 

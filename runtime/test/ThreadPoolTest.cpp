@@ -1,6 +1,6 @@
 //===- ThreadPoolTest.cpp - tests of the persistent thread pool -----------===//
 
-#include "yasps/Runtime/ThreadPool.h"
+#include "yasps/Runtime/Support/ThreadPool.h"
 
 #include <gtest/gtest.h>
 

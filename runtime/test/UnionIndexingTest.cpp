@@ -1,6 +1,6 @@
 //===- UnionIndexingTest.cpp - tests of union instance numbering ----------===//
 
-#include "yasps/Runtime/UnionIndexing.h"
+#include "yasps/Runtime/Assembly/UnionIndexing.h"
 
 #include <gtest/gtest.h>
 

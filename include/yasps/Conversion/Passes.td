@@ -108,7 +108,7 @@ def YaspsNVVMToHost : Pass<"yasps-nvvm-to-host", "::mlir::gpu::GPUModuleOp"> {
     Rewrites a GPU module at the NVVM level (after `convert-gpu-to-nvvm`,
     the IR that NVPTX code generation and ptxas turn into a cubin) into LLVM
     dialect code that the host can run, for the stand-in driver's host
-    images (`yasps/Runtime/HostImage.h`):
+    images (`yasps/Runtime/Gpu/HostImage.h`):
 
     - each kernel `@k` becomes `@k__body`, internal, with one more argument,
       a pointer to the thread's `ThreadContext`, from which it reads what

@@ -12,7 +12,7 @@
 //===----------------------------------------------------------------------===//
 
 #include "yasps/Conversion/Passes.h"
-#include "yasps/Runtime/HostImage.h"
+#include "yasps/Runtime/Gpu/HostImage.h"
 
 #include "mlir/Dialect/LLVMIR/NVVMDialect.h"
 #include "mlir/IR/SymbolTable.h"

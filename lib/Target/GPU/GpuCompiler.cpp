@@ -4,7 +4,7 @@
 
 #include "yasps/Conversion/LoopsToGPU/LoopsToGpuPipeline.h"
 #include "yasps/Dialect/Yasps/IR/Yasps.h"
-#include "yasps/Runtime/HostImage.h"
+#include "yasps/Runtime/Gpu/HostImage.h"
 #include "yasps/Target/GPU/HostImage.h"
 
 #include "mlir/Conversion/ArithToLLVM/ArithToLLVM.h"

@@ -3,7 +3,7 @@
 #include "yasps/Target/GPU/HostImage.h"
 
 #include "yasps/Conversion/LoopsToGPU/LoopsToGpuPipeline.h"
-#include "yasps/Runtime/HostImage.h"
+#include "yasps/Runtime/Gpu/HostImage.h"
 #include "yasps/Target/KernelGeneration.h"
 
 #include "mlir/Dialect/GPU/IR/GPUDialect.h"

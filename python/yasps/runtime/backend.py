@@ -46,7 +46,7 @@ class GpuStatus:
     #: (name, compute capability such as "sm_90", memory in bytes) per device.
     devices: Tuple[Tuple[str, str, int], ...]
     #: Whether the driver is the test stand-in that runs host images of the
-    #: generated kernels (``yasps/Runtime/HostImage.h``): the GPU backend
+    #: generated kernels (``yasps/Runtime/Gpu/HostImage.h``): the GPU backend
     #: then compiles them for the host, not for the device's chip.
     host_images: bool = False
 

@@ -41,7 +41,7 @@ class GpuSession:
         self.chip = status.devices[ordinal][1]
         #: what kernels are compiled for: the device's chip, or "host" for
         #: the test stand-in driver, which runs host images of the kernels
-        #: (yasps/Runtime/HostImage.h)
+        #: (yasps/Runtime/Gpu/HostImage.h)
         self.target = "host" if status.host_images else self.chip
         self._libraries: Dict[Tuple[str, str, str], GpuKernels] = {}
         #: the compiled library of each kernel, by (IR, pipeline, path)

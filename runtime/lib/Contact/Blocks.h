@@ -11,7 +11,7 @@
 #ifndef YASPS_RUNTIME_LIB_CONTACT_BLOCKS_H
 #define YASPS_RUNTIME_LIB_CONTACT_BLOCKS_H
 
-#include "yasps/Runtime/ThreadPool.h"
+#include "yasps/Runtime/Support/ThreadPool.h"
 
 #include <algorithm>
 #include <cstdint>

@@ -9,7 +9,7 @@
 //
 //===----------------------------------------------------------------------===//
 
-#include "yasps/Runtime/GpuMultilevelKernels.h"
+#include "GpuMultilevelKernels.h"
 
 using namespace yasps::runtime::gpu;
 

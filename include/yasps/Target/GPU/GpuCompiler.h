@@ -14,7 +14,7 @@
 #ifndef YASPS_TARGET_GPU_GPUCOMPILER_H
 #define YASPS_TARGET_GPU_GPUCOMPILER_H
 
-#include "yasps/Runtime/GpuParam.h"
+#include "yasps/Runtime/Gpu/GpuParam.h"
 #include "yasps/Target/KernelGeneration.h"
 
 #include "mlir/IR/DialectRegistry.h"

@@ -1,6 +1,6 @@
 //===- HostImage.h - GPU kernel modules compiled for the host ---*- C++ -*-===//
 //
-// The host image of a GPU kernel module (yasps/Runtime/HostImage.h): the
+// The host image of a GPU kernel module (yasps/Runtime/Gpu/HostImage.h): the
 // module lowered to NVVM as for its cubins, made callable on the host by
 // yasps-nvvm-to-host, translated to LLVM IR and compiled for the host CPU
 // into a relocatable object, behind the image's header. The stand-in driver

@@ -18,7 +18,7 @@
 #define YASPS_RUNTIME_CONTACT_BROADPHASE_H
 
 #include "yasps/Runtime/Contact/SurfaceMesh.h"
-#include "yasps/Runtime/ThreadPool.h"
+#include "yasps/Runtime/Support/ThreadPool.h"
 
 #include <array>
 #include <cstdint>

@@ -15,7 +15,7 @@
 #ifndef YASPS_RUNTIME_CONTACT_DISTANCE_H
 #define YASPS_RUNTIME_CONTACT_DISTANCE_H
 
-#include "yasps/Runtime/HostDevice.h"
+#include "yasps/Runtime/Support/HostDevice.h"
 
 #include <cstdint>
 
