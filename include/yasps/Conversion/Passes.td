@@ -72,6 +72,27 @@ def YaspsLowerToLoops : Pass<"yasps-lower-to-loops", "::mlir::ModuleOp"> {
   ];
 }
 
+def YaspsStripScenes : Pass<"yasps-strip-scenes", "::mlir::ModuleOp"> {
+  let summary = "Erase the scene description once kernels are generated";
+  let description = [{
+    Removes every `yasps.scene` op, leaving the generated kernel functions in
+    upstream dialects only, ready for lowering to LLVM or GPU code.
+  }];
+}
+
+def YaspsCountOps : Pass<"yasps-count-ops", "::mlir::ModuleOp"> {
+  let summary = "Annotate generated kernels with their arithmetic op counts";
+  let description = [{
+    Attaches `yasps.op_counts` to every kernel function made by
+    `yasps-lower-to-loops`: how many floating-point multiplications,
+    additions (and subtractions), divisions and math-library calls its body
+    contains, counted statically (an op inside a loop counts once). Run it
+    after `canonicalize` and `cse` to measure the code that is compiled; the
+    CPU compiler does. (MLIR's pass statistics would be the usual channel,
+    but they are compiled out of Debian's LLVM build.)
+  }];
+}
+
 def YaspsSinkScratchIntoLaunch
     : Pass<"yasps-sink-scratch-into-launch", "::mlir::ModuleOp"> {
   let summary = "Give every GPU thread its own kernel scratch buffers";

@@ -1,10 +1,11 @@
 //===- StripScenes.cpp - erase scenes after kernel generation -------------===//
 
-#include "yasps/Dialect/Yasps/Transforms/Passes.h"
+#include "yasps/Conversion/Passes.h"
+#include "yasps/Dialect/Yasps/IR/Yasps.h"
 
 namespace mlir::yasps {
 #define GEN_PASS_DEF_YASPSSTRIPSCENES
-#include "yasps/Dialect/Yasps/Transforms/Passes.h.inc"
+#include "yasps/Conversion/Passes.h.inc"
 } // namespace mlir::yasps
 
 using namespace mlir;

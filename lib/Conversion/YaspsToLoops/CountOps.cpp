@@ -1,6 +1,7 @@
 //===- CountOps.cpp - arithmetic op counts of generated kernels -----------===//
 
-#include "yasps/Dialect/Yasps/Transforms/Passes.h"
+#include "yasps/Conversion/Passes.h"
+#include "yasps/Dialect/Yasps/IR/Yasps.h"
 
 #include "mlir/Dialect/Arith/IR/Arith.h"
 #include "mlir/Dialect/Func/IR/FuncOps.h"
@@ -8,7 +9,7 @@
 
 namespace mlir::yasps {
 #define GEN_PASS_DEF_YASPSCOUNTOPS
-#include "yasps/Dialect/Yasps/Transforms/Passes.h.inc"
+#include "yasps/Conversion/Passes.h.inc"
 } // namespace mlir::yasps
 
 using namespace mlir;
