@@ -2,9 +2,10 @@
 did and warns once (per old name and process) with
 :class:`YaspsDeprecationWarning`, naming its replacement.
 
-The package's naming rule (``docs/python.md``, "Naming"): the scene API
-that the paper defines is camelCase as the paper writes it; the layers built
-on it (``yasps.contact``, ``yasps.sim``, ``yasps.sweep``) are snake_case.
+The package's naming rule (``docs/python.md``, "Names and old
+spellings"): the scene API that the paper defines is camelCase as the paper
+writes it; the layers built on it (``yasps.contact``, ``yasps.sim``,
+``yasps.sweep``) are snake_case.
 """
 
 from __future__ import annotations

@@ -592,6 +592,12 @@ class ImplicitEuler:
                       settings=self.settings, fixed=fixed,
                       contact=self.contact, compile_first=False)
 
+    @property
+    def velocity(self) -> np.ndarray:
+        """Deprecated: ``velocities[0]``."""
+        warn_renamed("ImplicitEuler.velocity", "ImplicitEuler.velocities[0]")
+        return self.velocities[0]
+
     def step(self, warn: bool = True) -> NewtonReport:
         """Advances one time step; returns the Newton report. A step that
         ends unconverged warns (NewtonNotConverged, once per stepper;
@@ -690,15 +696,6 @@ class ImplicitEuler:
         return report
 
 
-# The spellings before NewtonSettings and the naming rule: the settings'
-# fields as the stepper's attributes, and ``velocity`` for velocities[0].
+# The settings' fields as the stepper's attributes, spelled so before
+# NewtonSettings.
 add_settings_attributes(ImplicitEuler)
-
-
-def _first_velocity(self: ImplicitEuler) -> np.ndarray:
-    warn_renamed("ImplicitEuler.velocity", "ImplicitEuler.velocities[0]")
-    return self.velocities[0]
-
-
-ImplicitEuler.velocity = property(  # type: ignore[attr-defined]
-    _first_velocity, doc="Deprecated: velocities[0].")
