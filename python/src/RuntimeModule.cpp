@@ -15,6 +15,7 @@
 
 #include "yasps/Runtime/Assembly/GlobalSystem.h"
 #include "yasps/Runtime/Assembly/LocalCompression.h"
+#include "yasps/Runtime/Sparse/PcgSolver.h"
 
 #include <nanobind/nanobind.h>
 #include <nanobind/ndarray.h>
@@ -178,7 +179,7 @@ public:
   solve(DoubleArray out, double tolerance, int64_t maxIterations,
         unsigned threads, std::optional<MaskArray> fixed,
         ::yasps::runtime::PcgStopping stopping,
-        ::yasps::runtime::PcgPreconditioner preconditioner) const {
+        ::yasps::runtime::PcgPreconditioner preconditioner) {
     check(out, size_t(size()));
     ::yasps::runtime::PcgOptions options;
     options.preconditioner = preconditioner;
@@ -194,7 +195,8 @@ public:
     {
       nb::gil_scoped_release release;
       result =
-          system->solve(out.data(), options, ::yasps::python::poolFor(threads));
+          solver->solve(system->hessianParts(), system->gradient().data(),
+                        out.data(), options, ::yasps::python::poolFor(threads));
     }
     return result;
   }
@@ -277,6 +279,10 @@ private:
   }
   std::vector<Int64Array> staticMaps, dynamicMaps;
   std::unique_ptr<::yasps::runtime::GlobalSystem> system;
+  /// Solves this system, keeping its multilevel preconditioner from one
+  /// Newton iteration to the next.
+  std::unique_ptr<::yasps::runtime::PcgSolver> solver =
+      std::make_unique<::yasps::runtime::PcgSolver>();
 };
 
 /// A NumPy array that owns `values`.

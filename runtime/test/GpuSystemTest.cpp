@@ -250,7 +250,8 @@ protected:
   void expectSameSolve(const PcgOptions &options, int checkEvery = 8) {
     ThreadPool pool(1);
     std::vector<double> expected(host->size());
-    PcgResult cpu = host->solve(expected.data(), options, pool);
+    PcgResult cpu = solvePcg(host->hessianParts(), host->gradient().data(),
+                             expected.data(), options, pool);
     DeviceBuffer x(*context, host->size() * sizeof(double));
     PcgResult result = gpu->solve(x.pointer(), options, checkEvery);
     EXPECT_EQ(result.converged, cpu.converged);
@@ -353,7 +354,8 @@ TEST_P(GpuSystemTest, StopsByTheEnergyNormLikeTheCpu) {
   expectSameSolve(options);
   ThreadPool pool(1);
   std::vector<double> expected(host->size());
-  PcgResult cpu = host->solve(expected.data(), options, pool);
+  PcgResult cpu = solvePcg(host->hessianParts(), host->gradient().data(),
+                           expected.data(), options, pool);
   DeviceBuffer x(*context, host->size() * sizeof(double));
   PcgResult gpuResult = gpu->solve(x.pointer(), options);
   EXPECT_TRUE(gpuResult.converged);
@@ -371,7 +373,8 @@ TEST_P(GpuSystemTest, StopsByThePreconditionedResidualLikeTheCpu) {
   expectSameSolve(options, 1);
   ThreadPool pool(1);
   std::vector<double> expected(host->size());
-  PcgResult cpu = host->solve(expected.data(), options, pool);
+  PcgResult cpu = solvePcg(host->hessianParts(), host->gradient().data(),
+                           expected.data(), options, pool);
   DeviceBuffer x(*context, host->size() * sizeof(double));
   PcgResult gpuResult = gpu->solve(x.pointer(), options, 1);
   EXPECT_TRUE(gpuResult.converged);
@@ -390,7 +393,8 @@ TEST_P(GpuSystemTest, RestartsFromTheRecomputedResidualLikeTheCpu) {
   options.maxIterations = 100000;
   ThreadPool pool(1);
   std::vector<double> expected(host->size());
-  PcgResult cpu = host->solve(expected.data(), options, pool);
+  PcgResult cpu = solvePcg(host->hessianParts(), host->gradient().data(),
+                           expected.data(), options, pool);
   DeviceBuffer x(*context, host->size() * sizeof(double));
   PcgResult result = gpu->solve(x.pointer(), options);
   ASSERT_EQ(cpu.stop, PcgStop::RoundOff);
@@ -571,7 +575,9 @@ TEST_P(GpuSystemTest, HandlesEmptyEnergiesAndParts) {
   PcgOptions options;
   options.relativeTolerance = 1e-12;
   std::vector<double> expected(withEmpty.size());
-  PcgResult cpu = withEmpty.solve(expected.data(), options, pool);
+  PcgResult cpu =
+      solvePcg(withEmpty.hessianParts(), withEmpty.gradient().data(),
+               expected.data(), options, pool);
   DeviceBuffer x(*context, withEmpty.size() * sizeof(double));
   PcgResult result = mirror.solve(x.pointer(), options);
   EXPECT_TRUE(cpu.converged);
@@ -619,7 +625,8 @@ TEST_P(StandInBarrierTest, AMissingBarrierShowsWhereThreadsRunAsThreads) {
   options.relativeTolerance = 1e-10;
   ThreadPool pool(1);
   std::vector<double> expected(host->size());
-  PcgResult cpu = host->solve(expected.data(), options, pool);
+  PcgResult cpu = solvePcg(host->hessianParts(), host->gradient().data(),
+                           expected.data(), options, pool);
   auto skipSync =
       test::fakeCudaFunction<void(const char *, int)>("fakeCudaSkipSync");
   skipSync("yasps_dot", 0);

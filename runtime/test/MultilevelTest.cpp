@@ -5,6 +5,7 @@
 #include "yasps/Runtime/Sparse/Aggregation.h"
 #include "yasps/Runtime/Sparse/BlockSparseMatrix.h"
 #include "yasps/Runtime/Sparse/Pcg.h"
+#include "yasps/Runtime/Sparse/PcgSolver.h"
 #include "yasps/Runtime/Support/ThreadPool.h"
 
 #include <gtest/gtest.h>
@@ -361,6 +362,46 @@ TEST(Multilevel, RefreshFollowsValuesAndChangedParts) {
     for (std::size_t i = 0; i < b.size(); ++i)
       EXPECT_EQ(kept[i], fresh[i]);
   }
+}
+
+TEST(PcgSolver, KeepsTheLevelsBetweenSolvesAsACacheDoes) {
+  ThreadPool pool(1);
+  Grid grid(6, 0.01, /*extra=*/true);
+  BlockSparseMatrix m = grid.matrix();
+  std::vector<double> b = randomVector(m.size(), 17);
+  PcgOptions jacobi;
+  jacobi.relativeTolerance = 1e-8;
+  PcgOptions levels = jacobi;
+  levels.preconditioner = PcgPreconditioner::Multilevel;
+  levels.multilevel.coarsestDofs = 60;
+  PcgSolver solver;
+  std::vector<double> x(b.size()), fresh(b.size());
+
+  // Block-Jacobi keeps nothing; a multilevel solve keeps its levels.
+  EXPECT_TRUE(solver.solve({&m}, b.data(), x.data(), jacobi, pool).converged);
+  EXPECT_FALSE(solver.keepsPreconditioner());
+  EXPECT_TRUE(solver.solve({&m}, b.data(), x.data(), levels, pool).converged);
+  EXPECT_TRUE(solver.keepsPreconditioner());
+
+  // New values, same structure: the kept levels are refreshed, and the
+  // solve is that of levels built afresh, to the bit.
+  for (double &v : m.values())
+    v *= 3.0;
+  PcgResult kept = solver.solve({&m}, b.data(), x.data(), levels, pool);
+  PcgResult built = solvePcg({&m}, b.data(), fresh.data(), levels, pool);
+  EXPECT_EQ(kept.iterations, built.iterations);
+  for (std::size_t i = 0; i < b.size(); ++i)
+    EXPECT_EQ(x[i], fresh[i]);
+
+  // A cache the caller gives is used instead of the solver's own.
+  solver.forget();
+  EXPECT_FALSE(solver.keepsPreconditioner());
+  std::unique_ptr<Multilevel> own;
+  PcgOptions shared = levels;
+  shared.multilevelCache = &own;
+  EXPECT_TRUE(solver.solve({&m}, b.data(), x.data(), shared, pool).converged);
+  EXPECT_TRUE(own != nullptr);
+  EXPECT_FALSE(solver.keepsPreconditioner());
 }
 
 TEST(Multilevel, ResultsDoNotDependOnTheThreadCount) {

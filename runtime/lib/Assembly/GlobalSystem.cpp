@@ -519,12 +519,3 @@ std::vector<double> GlobalSystem::toDense() const {
     dense[i] += more[i];
   return dense;
 }
-
-PcgResult GlobalSystem::solve(double *x, const PcgOptions &options,
-                              ThreadPool &pool) const {
-  std::lock_guard<std::mutex> lock(*solveMutex_);
-  PcgOptions kept = options;
-  if (!kept.multilevelCache)
-    kept.multilevelCache = &multilevel_;
-  return solvePcg(hessianParts(), gradientValues.data(), x, kept, pool);
-}

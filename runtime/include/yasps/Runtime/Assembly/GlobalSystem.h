@@ -20,8 +20,6 @@
 #include "yasps/Runtime/Sparse/Pcg.h"
 
 #include <cstdint>
-#include <memory>
-#include <mutex>
 #include <vector>
 
 namespace yasps::runtime {
@@ -118,12 +116,6 @@ public:
   /// The dense H (both parts), row-major. For tests and debugging.
   std::vector<double> toDense() const;
 
-  /// Solves H x = g by PCG (x has size() entries). The multilevel
-  /// preconditioner's levels are kept between solves, rebuilt only when the
-  /// Hessian's structure changes (set_dynamic); solves on one system are
-  /// serialised.
-  PcgResult solve(double *x, const PcgOptions &options, ThreadPool &pool) const;
-
   /// Per energy: for each instance and parameter, the index of its block
   /// among the instance's blocks and its offset in the block (-1: no DoF);
   /// for each instance, the stored slot of every pair of its blocks.
@@ -180,11 +172,6 @@ private:
   Part dynamicPart;
   std::vector<double> gradientValues;
   bool singleProduct_ = false;
-  // solve()'s multilevel preconditioner and the lock that serialises
-  // solves (behind a pointer: mutexes cannot move).
-  mutable std::unique_ptr<Multilevel> multilevel_;
-  mutable std::unique_ptr<std::mutex> solveMutex_ =
-      std::make_unique<std::mutex>();
 };
 
 } // namespace yasps::runtime

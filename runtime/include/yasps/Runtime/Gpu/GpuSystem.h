@@ -76,7 +76,7 @@ public:
   /// options.preconditioner: block-Jacobi, or the multilevel V-cycle
   /// (Multilevel.h; its levels' structure built on the host once, their
   /// values on the device every solve). Same contract as
-  /// GlobalSystem::solve; the host looks at the solver's state every
+  /// PcgSolver::solve; the host looks at the solver's state every
   /// `checkEvery` iterations (iterations queued past the end do nothing).
   PcgResult solve(cu::DevicePtr x, const PcgOptions &options,
                   int checkEvery = 8);
