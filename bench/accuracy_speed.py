@@ -77,7 +77,9 @@ from typing import Callable, Dict, Iterator, List, Optional, Sequence, Tuple
 os.environ.setdefault("YASPS_CACHE_DIR", tempfile.mkdtemp(prefix="yasps-bench-"))
 HERE = Path(__file__).resolve().parent
 REPO = HERE.parent
-sys.path.insert(0, str(REPO / "python"))
+import benchlib  # noqa: E402
+
+benchlib.use_this_checkout()
 sys.path.insert(0, str(REPO / "examples"))
 
 import ipctk  # noqa: E402

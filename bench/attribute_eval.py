@@ -25,12 +25,13 @@ from pathlib import Path
 import numpy as np
 
 HERE = Path(__file__).resolve().parent
-sys.path.insert(0, str(HERE.parent / "python"))
-sys.path.insert(0, str(HERE))
+import benchlib  # noqa: E402
+
+benchlib.use_this_checkout()
 
 import yasps  # noqa: E402
-from timing import median  # noqa: E402
-from meshes import bunny  # noqa: E402
+from benchlib.timing import median  # noqa: E402
+from benchlib.meshes import bunny  # noqa: E402
 
 
 def build_scene():

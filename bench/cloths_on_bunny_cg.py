@@ -29,6 +29,9 @@ import warnings
 from pathlib import Path
 
 REPO = Path(__file__).resolve().parents[1]
+import benchlib  # noqa: E402
+
+benchlib.use_this_checkout()
 sys.path.insert(0, str(REPO / "examples" / "paper"))
 
 import cloths_on_bunny  # noqa: E402

@@ -2,7 +2,7 @@
 """Compile times of a soft+affine contact scene, and what pair-count
 changes cost afterwards.
 
-The scene (bench/contact_scene.py): a soft box (stable Neo-Hookean,
+The scene (bench/benchlib/contact_scene.py): a soft box (stable Neo-Hookean,
 inertia) and an affine box (inertia on A and t, ABD orthogonality) whose
 vertices form one UNION, with dynamic PP, PE, PT and EE pairs carrying the
 IPC barrier. Prints:
@@ -37,8 +37,9 @@ import time
 from pathlib import Path
 
 HERE = Path(__file__).resolve().parent
-sys.path.insert(0, str(HERE.parent / "python"))
-sys.path.insert(0, str(HERE))
+import benchlib  # noqa: E402
+
+benchlib.use_this_checkout()
 
 
 def worker(task: str, energy: str) -> dict:

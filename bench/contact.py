@@ -22,21 +22,21 @@ from __future__ import annotations
 
 import argparse
 import os
-import sys
 import tempfile
 import time
 from pathlib import Path
 
 os.environ.setdefault("YASPS_CACHE_DIR", tempfile.mkdtemp(prefix="yasps-bench-"))
 HERE = Path(__file__).resolve().parent
-sys.path.insert(0, str(HERE.parent / "python"))
-sys.path.insert(0, str(HERE))
+import benchlib  # noqa: E402
+
+benchlib.use_this_checkout()
 
 import ipctk  # noqa: E402
 import numpy as np  # noqa: E402
 
 import yasps  # noqa: E402
-from timing import median  # noqa: E402
+from benchlib.timing import median  # noqa: E402
 from yasps import energies as E  # noqa: E402
 from yasps.contact import Contact, surface_of  # noqa: E402
 from yasps.runtime import cpu_backend  # noqa: E402

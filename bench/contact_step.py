@@ -33,6 +33,9 @@ from pathlib import Path
 import numpy as np
 
 REPO = Path(__file__).resolve().parents[1]
+import benchlib  # noqa: E402
+
+benchlib.use_this_checkout()
 sys.path.insert(0, str(REPO / "examples" / "paper"))
 
 import mat_twist  # noqa: E402

@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """yasps on the CPU against TinyAD and SymX on the same work, one thread.
 
-The work is bench/newton_system.py's: stable Neo-Hookean (yasps.energies'
+The work is bench/benchlib/elastic_scenes.py's: stable Neo-Hookean (yasps.energies'
 formula: dt2 = 1e-4, mu = 1e4, lambda = 4e4, alpha = 1 + 3 mu / (4 lambda))
 plus inertia (mass 1e-3) on the tets of ../shared/data/bunny-<mesh>.msh,
 the vertices moved by normal noise of 1e-3 (seed 0). Three stages are timed
@@ -53,14 +53,15 @@ for _var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS",
 os.environ.setdefault("YASPS_CACHE_DIR", tempfile.mkdtemp(prefix="yasps-bench-"))
 
 HERE = Path(__file__).resolve().parent
-sys.path.insert(0, str(HERE.parent / "python"))
-sys.path.insert(0, str(HERE))
+import benchlib  # noqa: E402
+
+benchlib.use_this_checkout()
 
 import numpy as np  # noqa: E402
 
 import yasps  # noqa: E402
-from meshes import bunny  # noqa: E402
-from timing import median  # noqa: E402
+from benchlib.meshes import bunny  # noqa: E402
+from benchlib.timing import median  # noqa: E402
 from yasps import energies as E  # noqa: E402
 from yasps.compiler.cpu import compile_cpu  # noqa: E402
 from yasps.compiler.pipelines import differentiation_pipeline  # noqa: E402
@@ -68,7 +69,7 @@ from yasps.ir import emit_scene  # noqa: E402
 from yasps.runtime.inputs import host_input  # noqa: E402
 from yasps.compiler.params import ArgumentKind  # noqa: E402
 
-#: bench/newton_system.py's constants.
+#: bench/benchlib/elastic_scenes.py's constants.
 DT2, MU, LAM, MASS, NOISE, SEED = 1e-4, 1e4, 4e4, 1e-3, 1e-3, 0
 TOLERANCE = 1e-4
 DRIVERS = HERE / "cpp" / "peers"
@@ -78,7 +79,7 @@ Results = Dict[str, object]
 
 class Work:
     """The mesh, the deformed positions and the per-tet constants, and the
-    yasps scene built from them exactly as newton_system.build() does."""
+    yasps scene built from them exactly as benchlib.elastic_scenes.snh_scene does."""
 
     def __init__(self, mesh: str) -> None:
         verts, tets = bunny(mesh)

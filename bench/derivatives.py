@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """Per-instance energy derivatives: yasps kernels against JAX and PyTorch.
 
-For each energy of bench/energy_cases.py (inertia with gravity, mass-spring,
+For each energy of bench/benchlib/energy_cases.py (inertia with gravity, mass-spring,
 stable Neo-Hookean on positions, through F and on F, Baraff-Witkin cloth,
 dihedral bending, the IPC barrier on point-point, point-edge,
 point-triangle and edge-edge distances, ABD orthogonality, a pendulum in
@@ -26,7 +26,6 @@ from __future__ import annotations
 
 import argparse
 import os
-import sys
 import tempfile
 import warnings
 from functools import partial
@@ -41,13 +40,15 @@ os.environ.setdefault("YASPS_CACHE_DIR", tempfile.mkdtemp(prefix="yasps-bench-")
 import numpy as np  # noqa: E402
 
 HERE = Path(__file__).resolve().parent
-sys.path.insert(0, str(HERE.parent / "python"))
+import benchlib  # noqa: E402
+
+benchlib.use_this_checkout()
 
 import jax  # noqa: E402
 import jax.numpy as jnp  # noqa: E402
 
-from energy_cases import CASES, ArrayOps, check_agrees  # noqa: E402
-from timing import median  # noqa: E402
+from benchlib.energy_cases import CASES, ArrayOps, check_agrees  # noqa: E402
+from benchlib.timing import median  # noqa: E402
 
 try:
     import torch  # noqa: E402

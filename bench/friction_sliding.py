@@ -37,7 +37,9 @@ from pathlib import Path
 os.environ.setdefault("YASPS_CACHE_DIR",
                       tempfile.mkdtemp(prefix="yasps-bench-"))
 ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT / "python"))
+import benchlib  # noqa: E402
+
+benchlib.use_this_checkout()
 sys.path.insert(0, str(ROOT / "examples"))
 
 import numpy as np  # noqa: E402

@@ -14,7 +14,7 @@ iteration. Needs a CUDA GPU; each part is checked before it is timed.
    against PyTorch (``torch.func.vmap`` of ``grad`` / ``hessian``) and JAX
    (``jit(vmap(...))``) on the same GPU, float64, after checking that all
    three agree with the CPU kernels.
-3. ``newton``: one ``minimizeEnergy`` of bench/newton_system.py's scene on
+3. ``newton``: one ``minimizeEnergy`` of bench/benchlib/elastic_scenes.py's bunny_snh scene on
    the GPU backend (derivatives, indices, assembly, PCG), split into stages,
    against the CPU backend.
 
@@ -32,8 +32,9 @@ from pathlib import Path
 
 os.environ.setdefault("YASPS_CACHE_DIR", tempfile.mkdtemp(prefix="yasps-bench-"))
 HERE = Path(__file__).resolve().parent
-sys.path.insert(0, str(HERE.parent / "python"))
-sys.path.insert(0, str(HERE))
+import benchlib  # noqa: E402
+
+benchlib.use_this_checkout()
 
 import numpy as np  # noqa: E402
 
@@ -43,16 +44,15 @@ from yasps.ir import emit_scene  # noqa: E402
 from yasps.runtime import cpu_backend, gpu_backend  # noqa: E402
 from yasps.solve import assemble  # noqa: E402
 
-from newton_system import build  # noqa: E402
-from gpu_kit import bunny_snh_inputs  # noqa: E402
-from timing import median, per_call  # noqa: E402
+from benchlib.elastic_scenes import bunny_snh, bunny_snh_inputs  # noqa: E402
+from benchlib.timing import median, per_call  # noqa: E402
 
 
 def spmv(repeat: int) -> None:
     import torch
     import scipy.sparse as sparse
 
-    s = build()
+    s = bunny_snh()
     system = assemble(s, gpu_backend()).system
     host = assemble(s, cpu_backend()).system
     n = system.size
@@ -181,7 +181,7 @@ def derivatives(repeat: int) -> None:
 
 
 def newton() -> None:
-    s = build()
+    s = bunny_snh()
     print("one Newton iteration, bunny-19k, stable Neo-Hookean + inertia "
           "(second call: static structure reused)")
     rows = {}

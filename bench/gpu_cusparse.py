@@ -16,7 +16,6 @@ a GPU; the times then say nothing about cuSPARSE).
 from __future__ import annotations
 
 import argparse
-import sys
 import warnings
 from pathlib import Path
 
@@ -24,8 +23,10 @@ import numpy as np
 import scipy.sparse as sparse
 import torch
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-from timing import per_call  # noqa: E402
+import benchlib  # noqa: E402
+
+benchlib.use_this_checkout()
+from benchlib.timing import per_call  # noqa: E402
 
 
 def main() -> None:

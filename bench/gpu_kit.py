@@ -29,8 +29,9 @@ from typing import Dict, List, Tuple
 
 os.environ.setdefault("YASPS_CACHE_DIR", tempfile.mkdtemp(prefix="yasps-kit-"))
 HERE = Path(__file__).resolve().parent
-sys.path.insert(0, str(HERE.parent / "python"))
-sys.path.insert(0, str(HERE))
+import benchlib  # noqa: E402
+
+benchlib.use_this_checkout()
 
 import numpy as np  # noqa: E402
 
@@ -41,26 +42,15 @@ from yasps.runtime import cpu_backend  # noqa: E402
 from yasps.runtime.inputs import host_input  # noqa: E402
 from yasps.solve import DofLayout, assemble  # noqa: E402
 
-from energy_cases import CASES  # noqa: E402
-from meshes import bunny  # noqa: E402
+from benchlib.energy_cases import CASES  # noqa: E402
+from benchlib.elastic_scenes import bunny_snh, bunny_snh_inputs  # noqa: E402
+from benchlib.kit_files import peer_inputs  # noqa: E402
 
 #: Instances whose CPU values a kit keeps for checking the GPU's.
 CHECKED = 2000
 #: The Newton direction's PCG tolerance (tight, so that both backends'
 #: solutions agree closely).
 NEWTON_TOLERANCE = 1e-10
-
-
-def bunny_snh_inputs():
-    """Current positions (N, 12) and inverse rest shapes (N, 9) of the
-    bunny's tets, positions perturbed (the same as bench/gpu.py)."""
-    verts, tets = bunny("19k")
-    rng = np.random.default_rng(0)
-    rest = verts[tets]
-    cur = rest + rng.normal(scale=1e-3 * np.abs(verts).max(), size=rest.shape)
-    dm_inv = np.linalg.inv(np.stack([rest[:, k] - rest[:, 0]
-                                     for k in (1, 2, 3)], axis=2))
-    return cur.reshape(-1, 12), dm_inv.reshape(-1, 9)
 
 
 def write_kit(kit: Path, scene, kernels: List[Tuple[str, str, int, np.ndarray]],
@@ -103,20 +93,6 @@ def write_kit(kit: Path, scene, kernels: List[Tuple[str, str, int, np.ndarray]],
     (kit / "kernels.txt").write_text("\n".join(lines + extra) + "\n")
 
 
-#: The SNH kit's input buffers: the tets' corners (4 points of 3 per tet)
-#: and inverse rest shapes (column-major 3x3 per tet).
-SNH_POSITIONS, SNH_INVERSES = "attr_m.v.x.npy", "attr_m.e.inv.npy"
-
-
-def peer_inputs(kit: Path):
-    """The formula's inputs (bench/energy_cases.py's snh_positions) from the
-    SNH kit's buffers: positions (N, 12) and row-major inverse rest shapes
-    (N, 9)."""
-    x = np.load(kit / SNH_POSITIONS).reshape(-1, 12)
-    inverses = np.load(kit / SNH_INVERSES).reshape(-1, 3, 3)
-    return x, np.ascontiguousarray(np.transpose(inverses, (0, 2, 1))).reshape(-1, 9)
-
-
 def snh_kit(kit: Path) -> None:
     arrays = bunny_snh_inputs()
     case = next(c for c in CASES if c.name == "stable Neo-Hookean (x, 12)")
@@ -132,8 +108,7 @@ def snh_kit(kit: Path) -> None:
 
 
 def newton_kit(kit: Path) -> None:
-    from newton_system import build
-    scene = build()
+    scene = bunny_snh()
     kernels, energies = [], []
     for energy in scene.energies:
         base = "::".join("@" + n for n in energy.owner.path + [energy.name])

@@ -8,7 +8,7 @@ comparison with yasps' kernels timed by yasps-kernel-bench.
 Takes the formula's inputs from the kit (bench/gpu_kit.py's peer_inputs:
 positions (N, 12) and inverse rest shapes (N, 9) of the bunny's tets),
 evaluates the gradient
-and Hessian of bench/energy_cases.py's independent stable Neo-Hookean
+and Hessian of bench/benchlib/energy_cases.py's independent stable Neo-Hookean
 formula with ``torch.func.vmap`` of ``grad`` / ``hessian`` and with JAX's
 ``jit(vmap(...))``, float64 on the default GPU, checks the first instances
 against the CPU kernels' values in the kit, and prints the time of each for
@@ -20,21 +20,21 @@ from __future__ import annotations
 
 import argparse
 import re
-import sys
 from functools import partial
 from pathlib import Path
 
 import numpy as np
 
 HERE = Path(__file__).resolve().parent
-sys.path.insert(0, str(HERE))
 # energy_cases imports yasps, which loads its compiled extension only when
 # it compiles: none is needed here.
-sys.path.insert(0, str(HERE.parent / "python"))
+import benchlib  # noqa: E402
 
-from energy_cases import ArrayOps, TorchOps, snh_positions  # noqa: E402
-from gpu_kit import peer_inputs  # noqa: E402
-from timing import per_call  # noqa: E402
+benchlib.use_this_checkout()
+
+from benchlib.energy_cases import ArrayOps, TorchOps, snh_positions  # noqa: E402
+from benchlib.kit_files import peer_inputs  # noqa: E402
+from benchlib.timing import per_call  # noqa: E402
 
 
 #: The paper's RTX 4090 figures for the same work, ms, as the GPU issue

@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """PSD projection through linear maps, on and off, per energy.
 
-For each energy of bench/energy_cases.py, N instances are compiled twice:
+For each energy of bench/benchlib/energy_cases.py, N instances are compiled twice:
 with ``linear-maps=true`` (yasps' default: where the energy reaches its
 parameters through a linear cut with fewer entries, such as a tet's
 deformation gradient, the Hessian is projected in the cut's entries, J^T
@@ -18,20 +18,20 @@ from __future__ import annotations
 
 import argparse
 import os
-import sys
 import tempfile
 from functools import partial
 from pathlib import Path
 
 os.environ.setdefault("YASPS_CACHE_DIR", tempfile.mkdtemp(prefix="yasps-bench-"))
 HERE = Path(__file__).resolve().parent
-sys.path.insert(0, str(HERE.parent / "python"))
-sys.path.insert(0, str(HERE))
+import benchlib  # noqa: E402
+
+benchlib.use_this_checkout()
 
 import numpy as np  # noqa: E402
 
-import energy_cases as cases  # noqa: E402
-from timing import median  # noqa: E402
+from benchlib import energy_cases as cases  # noqa: E402
+from benchlib.timing import median  # noqa: E402
 from yasps.compiler.cpu import compile_cpu  # noqa: E402
 from yasps.ir import emit_scene  # noqa: E402
 from yasps.runtime.inputs import host_input  # noqa: E402

@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """The spread of many warm Newton iterations on the 19k-vertex bunny.
 
-bench/newton_system.py's scene, ``minimizeEnergy`` (CG relative residual
+bench/benchlib/elastic_scenes.py's bunny_snh scene, ``minimizeEnergy`` (CG relative residual
 1e-4) called ``--calls`` times after three warm-up calls: per stage
 (derivatives, indices, assembly, solve) and in total, the median, the 90th
 percentile and the slowest call, and the minor page faults each call took
@@ -25,7 +25,6 @@ from __future__ import annotations
 import argparse
 import os
 import resource
-import sys
 import tempfile
 import time
 from pathlib import Path
@@ -35,15 +34,15 @@ for _var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
     os.environ[_var] = "1"
 
 HERE = Path(__file__).resolve().parent
-sys.path.insert(0, str(HERE.parent / "python"))
-sys.path.insert(0, str(HERE))
+import benchlib  # noqa: E402
+
+benchlib.use_this_checkout()
 
 import numpy as np  # noqa: E402
 
 import yasps  # noqa: E402
-from meshes import bunny  # noqa: E402
-from newton_system import build  # noqa: E402
-from preconditioners import scene  # noqa: E402
+from benchlib.meshes import bunny  # noqa: E402
+from benchlib.elastic_scenes import bunny_snh, snh_scene  # noqa: E402
 
 STAGES = ("derivatives", "indices", "assembly", "solve")
 
@@ -58,12 +57,12 @@ def main() -> None:
     args = parser.parse_args()
     yasps.config.preconditioner = args.preconditioner
     if args.sorted_tets:
-        # preconditioners.scene is newton_system.build's scene for any mesh.
+        # snh_scene is bunny_snh's scene for any mesh.
         verts, tets = bunny("19k")
         tets = tets[np.lexsort((tets.max(axis=1), tets.min(axis=1)))]
-        s = scene("bunny_sorted", verts, tets, 1e-4)
+        s = snh_scene("bunny_sorted", verts, tets, 1e-4)
     else:
-        s = build()
+        s = bunny_snh()
     for threads in args.threads:
         for _ in range(3):
             s.minimizeEnergy(tolerance=1e-4, threads=threads)

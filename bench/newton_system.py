@@ -15,50 +15,23 @@ from __future__ import annotations
 
 import argparse
 import os
-import sys
 import tempfile
 from pathlib import Path
 
 os.environ.setdefault("YASPS_CACHE_DIR", tempfile.mkdtemp(prefix="yasps-bench-"))
 HERE = Path(__file__).resolve().parent
-sys.path.insert(0, str(HERE.parent / "python"))
-sys.path.insert(0, str(HERE))
+import benchlib  # noqa: E402
+
+benchlib.use_this_checkout()
 
 import numpy as np  # noqa: E402
 import scipy.sparse as sparse  # noqa: E402
 
 import yasps  # noqa: E402
-from timing import median  # noqa: E402
-from yasps import energies as E  # noqa: E402
+from benchlib.timing import median  # noqa: E402
 from yasps.runtime import cpu_backend  # noqa: E402
 from yasps.solve import assemble  # noqa: E402
-from meshes import bunny  # noqa: E402
-
-
-def build():
-    verts, tets = bunny("19k")
-    rest = verts[tets]
-    dm = np.stack([rest[:, k] - rest[:, 0] for k in (1, 2, 3)], axis=2)
-    rng = np.random.default_rng(0)
-    s = yasps.scene("bunny")
-    m = s.addMesh("bunny")
-    v = m.addPrimitive("v", numInstances=len(verts))
-    t = m.addPrimitive("t", numInstances=len(tets))
-    x = v.addAttribute("x", rows=3)
-    x.updateValue(verts + rng.normal(scale=1e-3, size=verts.shape))
-    v.addConstant("x_hat", rows=3).updateValue(verts)
-    t.addConstant("inv", rows=3, cols=3).updateValue(np.linalg.inv(dm))
-    t.addConstant("vol", rows=1).updateValue(np.abs(np.linalg.det(dm))[:, None] / 6)
-    t2v = t.addConnectivity("t2v", v, tets, 4)
-    c = t.addAttribute("c", through=t2v, source=x)
-    dt2 = 1e-4
-    s.addEnergy(t.addAttribute("elastic", computed_attribute=dt2 * E.stable_neo_hookean(
-        E.deformation_gradient(c, t["inv"]), 1e4, 4e4, t["vol"])))
-    s.addEnergy(v.addAttribute("inertia", computed_attribute=E.inertia(x, v["x_hat"], 1e-3)))
-    s.addMinimizeTarget([x])
-    return s
-
-
+from benchlib.elastic_scenes import bunny_snh  # noqa: E402
 
 
 def main() -> None:
@@ -69,7 +42,7 @@ def main() -> None:
                         "comparison stays on one)")
     args = parser.parse_args()
     yasps.config.num_threads = args.threads
-    s = build()
+    s = bunny_snh()
     s.minimizeEnergy(tolerance=1e-4)          # compiles the kernels
     first_indices = s.lastSolve["seconds"]["indices"]
     s.minimizeEnergy(tolerance=1e-4)

@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """f32 against f64 derivative kernels on the CPU, one thread.
 
-For every energy of ``bench/energy_cases.py`` (or those named with
+For every energy of ``bench/benchlib/energy_cases.py`` (or those named with
 ``--cases``) the gradient, Hessian and projected-Hessian kernels are
 compiled from the scene in f64 and in f32 (``yasps.config.precision``; each
 with its default SIMD width: twice the lanes in f32), timed alternately on
@@ -22,19 +22,20 @@ from __future__ import annotations
 
 import argparse
 import os
-import sys
 import tempfile
 from pathlib import Path
 
 os.environ.setdefault("YASPS_CACHE_DIR", tempfile.mkdtemp(prefix="yasps-bench-"))
 HERE = Path(__file__).resolve().parent
-sys.path.insert(0, str(HERE.parent / "python"))
+import benchlib  # noqa: E402
+
+benchlib.use_this_checkout()
 
 import numpy as np  # noqa: E402
 
 import yasps  # noqa: E402
-from energy_cases import CASES  # noqa: E402
-from newton_system import build as bunny_scene  # noqa: E402
+from benchlib.energy_cases import CASES  # noqa: E402
+from benchlib.elastic_scenes import bunny_snh as bunny_scene  # noqa: E402
 
 KERNELS = ("grad", "hess", "hess_proj")
 PRECISIONS = ("f64", "f32")

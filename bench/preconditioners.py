@@ -43,44 +43,20 @@ from typing import Dict, List
 os.environ.setdefault("YASPS_CACHE_DIR", tempfile.mkdtemp(prefix="yasps-bench-"))
 
 HERE = Path(__file__).resolve().parent
-sys.path.insert(0, str(HERE.parent / "python"))
-sys.path.insert(0, str(HERE))
+import benchlib  # noqa: E402
+
+benchlib.use_this_checkout()
 
 import numpy as np  # noqa: E402
 
 import yasps  # noqa: E402
-from meshes import bunny  # noqa: E402
-from yasps import energies as E  # noqa: E402
+from benchlib.elastic_scenes import MASS, snh_scene  # noqa: E402
+from benchlib.meshes import bunny  # noqa: E402
 from yasps.sim import box_tet_mesh  # noqa: E402
 
-MU, LAM, MASS, NOISE = 1e4, 4e4, 1e-3, 1e-3
 #: The CG relative residual (--tolerance).
 TOLERANCE = 1e-4
 PRECONDITIONERS = ("block-jacobi", "multilevel")
-
-
-def scene(name: str, verts: np.ndarray, tets: np.ndarray, dt2: float,
-          mass: float = MASS):
-    """Stable Neo-Hookean + inertia (`mass` per vertex) on (verts, tets),
-    mildly deformed."""
-    rest = verts[tets]
-    dm = np.stack([rest[:, k] - rest[:, 0] for k in (1, 2, 3)], axis=2)
-    rng = np.random.default_rng(0)
-    s = yasps.scene(name)
-    m = s.addMesh("m")
-    v = m.addPrimitive("v", numInstances=len(verts))
-    t = m.addPrimitive("t", numInstances=len(tets))
-    x = v.addAttribute("x", rows=3)
-    x.updateValue(verts + rng.normal(scale=NOISE, size=verts.shape))
-    v.addConstant("x_hat", rows=3).updateValue(verts)
-    t.addConstant("inv", rows=3, cols=3).updateValue(np.linalg.inv(dm))
-    t.addConstant("vol", rows=1).updateValue(np.abs(np.linalg.det(dm))[:, None] / 6)
-    c = t.addAttribute("c", through=t.addConnectivity("t2v", v, tets, 4), source=x)
-    s.addEnergy(t.addAttribute("elastic", computed_attribute=dt2 * E.stable_neo_hookean(
-        E.deformation_gradient(c, t["inv"]), MU, LAM, t["vol"])))
-    s.addEnergy(v.addAttribute("inertia", computed_attribute=E.inertia(x, v["x_hat"], mass)))
-    s.addMinimizeTarget([x])
-    return s
 
 
 def scenes(boxes: List[int]) -> Dict[str, tuple]:
@@ -129,13 +105,14 @@ def measure(s, repeat: int) -> Dict[str, dict]:
 STAND_IN = """
 import json, sys
 sys.path.insert(0, %r)
-import preconditioners as bench  # puts yasps on the path
+import benchlib.elastic_scenes as scenes
+import preconditioners as bench
 import numpy as np, yasps
 yasps.config.gpu_derivatives = False
 yasps.config.backend = "gpu"
 verts, tets = np.load(%r), np.load(%r)
 bench.TOLERANCE = %r
-s = bench.scene("stand_in", verts, tets, %r, %r)
+s = scenes.snh_scene("stand_in", verts, tets, %r, %r)
 out = {}
 for p in bench.PRECONDITIONERS:
     yasps.config.preconditioner = p
@@ -184,7 +161,7 @@ def main() -> None:
              "solve BJ / ML (ms) | setup BJ / ML (ms) | per iteration BJ / ML (ms) | "
              "iterations ratio | solve ratio |", "|" + "---|" * 10]
     for name, (verts, tets, dt2, mass) in scenes(args.boxes).items():
-        s = scene(name.replace(" ", "_").replace("^", "").replace("-", "_"),
+        s = snh_scene(name.replace(" ", "_").replace("^", "").replace("-", "_"),
                   verts, tets, dt2, mass)
         runs = {}
         backends = [("cpu", t) for t in args.threads]

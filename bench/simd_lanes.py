@@ -2,7 +2,7 @@
 """SIMD lanes on the CPU: each energy's kernels one instance at a time
 against several instances per vector instruction.
 
-For every energy of ``bench/energy_cases.py`` the gradient, Hessian and
+For every energy of ``bench/benchlib/energy_cases.py`` the gradient, Hessian and
 projected-Hessian kernels are compiled twice, with ``yasps.config.simd_lanes
 = 1`` (scalar code, one instance per loop iteration) and with the host's
 vector width (``simd_lanes = 0``), checked to agree, and timed alternately on
@@ -16,19 +16,20 @@ from __future__ import annotations
 
 import argparse
 import os
-import sys
 import tempfile
 from pathlib import Path
 
 os.environ.setdefault("YASPS_CACHE_DIR", tempfile.mkdtemp(prefix="yasps-bench-"))
 HERE = Path(__file__).resolve().parent
-sys.path.insert(0, str(HERE.parent / "python"))
+import benchlib  # noqa: E402
+
+benchlib.use_this_checkout()
 
 import numpy as np  # noqa: E402
 
 import yasps  # noqa: E402
-from energy_cases import CASES  # noqa: E402
-from timing import median  # noqa: E402
+from benchlib.energy_cases import CASES  # noqa: E402
+from benchlib.timing import median  # noqa: E402
 
 KERNELS = ("grad", "hess", "hess_proj")
 

@@ -4,7 +4,7 @@ STARK's public Python API, and writes what every frame did.
 
 Our own code (yasps ships no STARK code): bench/stark_peer.py runs it in a
 subprocess whose ``PYTHONPATH`` holds the pystark it built, with the scene
-that bench/stark_scenes.py exported from the yasps side (``scene.npz``:
+that bench/benchlib/stark_scenes.py exported from the yasps side (``scene.npz``:
 the meshes, pins and held edges; ``scene.json``: the STARK constants
 matched to yasps' materials):
 

@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """yasps against STARK on two whole contact scenes, one and two threads.
 
-The scenes (bench/stark_scenes.py): A, the twisting cloth of
+The scenes (bench/benchlib/stark_scenes.py): A, the twisting cloth of
 examples/paper/mat_twist.py (625 vertices, 100 frames), and B, a soft tet
 bunny (bunny-1.8k.msh) dropped onto a cloth pinned at its corners (2,494
 vertices, 60 frames). Both at dt = 0.01 s, no friction, dhat = 1e-3 m,
@@ -19,7 +19,7 @@ bindings (pystark) from the checkout given, with CMake into --build-dir
 at its first run, take minutes once), then runs each scene on each side in
 its own process, side by side for each thread count: STARK through
 bench/stark_driver.py (our code on pystark's public API), yasps through
-bench/stark_scenes.py. Every frame of both is checked by ipctk, apart from
+bench/benchlib/stark_scenes.py. Every frame of both is checked by ipctk, apart from
 either code: intersections and the closest distance. It prints per scene
 and thread count the seconds per frame (compilation and STARK's
 initialisation excluded), Newton iterations per frame, CG iterations per
@@ -65,11 +65,13 @@ from pathlib import Path
 from typing import Dict, List, Optional
 
 HERE = Path(__file__).resolve().parent
-sys.path.insert(0, str(HERE))
+import benchlib  # noqa: E402
+
+benchlib.use_this_checkout()
 
 import numpy as np  # noqa: E402
 
-import stark_scenes  # noqa: E402
+from benchlib import stark_scenes  # noqa: E402
 
 SCENES = {"A": ("twist", "A, twisting cloth"),
           "B": ("bunny", "B, bunny on pinned cloth")}
@@ -231,10 +233,10 @@ def load_run(path: Path) -> Run:
 
 def run_yasps(scene: str, frames: int, threads: int, wrapper: List[str],
               work: Path, tag: str, newton_cap: Optional[int]) -> Run:
-    """yasps on the scene (bench/stark_scenes.py), after a warm-up run that
+    """yasps on the scene (bench/benchlib/stark_scenes.py), after a warm-up run that
     compiles its kernels under the build wrapper."""
     env = thread_env(threads)
-    script = [sys.executable, str(HERE / "stark_scenes.py"), "yasps", scene]
+    script = [sys.executable, str(HERE / "stark_yasps_side.py"), scene]
     if newton_cap is not None:
         script += ["--newton-cap", str(newton_cap)]
     output = work / f"yasps-{scene}-{tag}.npz"

@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """Symbolic differentiation: yasps against SymPy on every benchmark energy.
 
-For each energy of bench/energy_cases.py (inertia with gravity, mass-spring,
+For each energy of bench/benchlib/energy_cases.py (inertia with gravity, mass-spring,
 stable Neo-Hookean on positions and on F, Baraff-Witkin cloth, dihedral
 bending, the IPC barrier on point-point, point-edge, point-triangle and
 edge-edge distances, ABD orthogonality, a pendulum in angles), prints the
@@ -28,7 +28,6 @@ import ctypes
 import os
 import re
 import subprocess
-import sys
 import tempfile
 import time
 from pathlib import Path
@@ -36,13 +35,15 @@ from typing import Callable, Dict, List, Sequence, Tuple
 
 os.environ.setdefault("YASPS_CACHE_DIR", tempfile.mkdtemp(prefix="yasps-bench-"))
 HERE = Path(__file__).resolve().parent
-sys.path.insert(0, str(HERE.parent / "python"))
+import benchlib  # noqa: E402
+
+benchlib.use_this_checkout()
 
 import numpy as np  # noqa: E402
 import sympy as sp  # noqa: E402
 
-from energy_cases import CASES, Case, SympyOps, YaspsEnergy, check_agrees  # noqa: E402
-from timing import median  # noqa: E402
+from benchlib.energy_cases import CASES, Case, SympyOps, YaspsEnergy, check_agrees  # noqa: E402
+from benchlib.timing import median  # noqa: E402
 from yasps import compiler  # noqa: E402
 from yasps.compiler.pipelines import DIFFERENTIATION_PIPELINE  # noqa: E402
 from yasps.ir import emit_scene  # noqa: E402

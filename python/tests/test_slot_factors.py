@@ -20,7 +20,7 @@ from yasps.solve import assembly_inputs
 from yasps.solve.assembly import assemble
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "bench"))
-from contact_scene import build  # noqa: E402
+from benchlib.contact_scene import build  # noqa: E402
 
 #: (separate_reduced_hessians, slot_jacobians) of the three paths.
 PATHS = {"dense": (False, False), "padded": (True, False),

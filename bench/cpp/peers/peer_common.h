@@ -9,7 +9,7 @@
 //   inv.bin     n_tets * 9 doubles, Dm^-1 row-major (Dm = rest edge columns)
 //   vol.bin     n_tets doubles, rest volumes
 //
-// The energy is yasps.energies' (bench/newton_system.py's build()):
+// The energy is yasps.energies' (bench/benchlib/elastic_scenes.py's snh_scene):
 //   elastic(t) = dt2 * vol * [mu/2 (I_C - 3) - mu/2 log(I_C + 1)
 //                             + lambda/2 (J - alpha)^2],
 //   F = [x1 - x0, x2 - x0, x3 - x0] Dm^-1, I_C = |F|^2, J = det F,

@@ -71,7 +71,7 @@ _NONE = float("inf")
 _FIRST_THRESHOLD = {"progressive": _NONE, "full": None}
 #: The threshold's factor after a failed solve and after a direction taken
 #: (SymX's ``ppn_tightening_factor`` and ``ppn_release_factor``, 0.5 and 2
-#: there). A quarter, not half: on the STARK scenes (bench/stark_scenes.py)
+#: there). A quarter, not half: on the STARK scenes (bench/benchlib/stark_scenes.py)
 #: nine directions in ten needed a retry, in chains of up to eight at 0.5,
 #: and frames took 2-4% less time at 0.25 with as many Newton iterations.
 _TIGHTEN, _RELEASE = 0.25, 2.0

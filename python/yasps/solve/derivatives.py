@@ -405,7 +405,7 @@ class Contribution:
 #: Progressive projection: where at most this fraction of an energy's
 #: instances is chosen, only those are projected (from their exact
 #: Hessians); above it, the energy's projection kernel runs over all. On
-#: the bunny dropped on a cloth (bench/stark_scenes.py) retries chose a few
+#: the bunny dropped on a cloth (bench/benchlib/stark_scenes.py) retries chose a few
 #: dozen of 7,356 tets, whose whole projection kernel took 7 ms per retry.
 ROWS_FRACTION = 0.25
 

@@ -3,14 +3,15 @@ reader (``yasps.sim.read_tet_mesh``)."""
 
 from __future__ import annotations
 
-from pathlib import Path
 from typing import Tuple
 
 import numpy as np
 
+from benchlib import ROOT
 from yasps.sim import read_tet_mesh
 
-DATA = Path(__file__).resolve().parents[2] / "shared" / "data"
+#: The data folder beside the checkout.
+DATA = ROOT.parent / "shared" / "data"
 
 
 def bunny(size: str = "19k") -> Tuple[np.ndarray, np.ndarray]:

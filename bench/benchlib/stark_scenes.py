@@ -1,4 +1,3 @@
-#!/usr/bin/env python3
 """The two contact scenes of bench/stark_peer.py: their yasps side, the
 meshes and matched constants they give STARK, and the checks every frame
 of both sides gets.
@@ -17,18 +16,13 @@ below 1e-2 m/s (at most ImplicitEuler's cap of iterations, or
 --newton-cap), block-Jacobi PCG to relative residual 1e-4 (at most 1,000
 iterations).
 
-The yasps side runs in its own process (bench/stark_peer.py starts it):
-
-    python3 bench/stark_scenes.py yasps twist|bunny --frames N --threads T \
-        [--newton-cap K] --output RUN.npz
-
-and writes the same per-frame arrays as bench/stark_driver.py (``--frames
-0`` only compiles or loads the kernels).
+The yasps side runs in its own process (bench/stark_yasps_side.py, which
+bench/stark_peer.py starts) and writes the same per-frame arrays as
+bench/stark_driver.py.
 """
 
 from __future__ import annotations
 
-import argparse
 import json
 import sys
 import time
@@ -37,9 +31,9 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Callable, Dict, Optional, Tuple
 
-HERE = Path(__file__).resolve().parent
-sys.path.insert(0, str(HERE.parent / "python"))
-sys.path.insert(0, str(HERE.parent / "examples" / "paper"))
+from benchlib import ROOT
+
+sys.path.insert(0, str(ROOT / "examples" / "paper"))
 
 import ipctk  # noqa: E402
 import numpy as np  # noqa: E402
@@ -367,22 +361,3 @@ def trajectory_gap(spec: Spec, a: np.ndarray, b: np.ndarray) -> float:
     key = next(iter(physics(spec, a[0])))
     return float(max(abs(physics(spec, x)[key] - physics(spec, y)[key])
                      for x, y in zip(a, b)))
-
-
-def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    parser.add_argument("side", choices=("yasps",))
-    parser.add_argument("scene", choices=sorted(SCENES))
-    parser.add_argument("--frames", type=int, required=True)
-    parser.add_argument("--threads", type=int, default=1)
-    parser.add_argument("--newton-cap", type=int, default=None,
-                        help="Newton's iteration cap (default: "
-                        "ImplicitEuler's)")
-    parser.add_argument("--output", type=Path, required=True)
-    args = parser.parse_args()
-    np.savez(args.output, **run_yasps(args.scene, args.frames, args.threads,
-                                      args.newton_cap))
-
-
-if __name__ == "__main__":
-    main()
