@@ -64,3 +64,20 @@ def test_registering_a_checkout_writes_one_pth_file(tmp_path, monkeypatch):
     purelib.write_text("not a folder")  # site-packages not writable
     target = register_checkout.register(REPO)
     assert target == user / "yasps-checkout.pth"
+
+
+def test_each_subpackage_has_an_extra_of_pinned_packages():
+    import re
+    import tomllib
+
+    with open(REPO / "pyproject.toml", "rb") as f:
+        extras = tomllib.load(f)["project"]["optional-dependencies"]
+    assert {"contact", "sim", "sweep"} <= set(extras)
+    assert set(extras["sim"]) == set(extras["meshes"]) | set(extras["pictures"])
+    pinned = {m.group(1).lower() for m in re.finditer(
+        r"^([A-Za-z0-9_.-]+)==", (REPO / "requirements.txt").read_text(), re.M)}
+    for name, wanted in extras.items():
+        for requirement in wanted:
+            package = re.split(r"[<>=!\[ ]", requirement)[0].lower()
+            assert package in pinned, \
+                f"extra {name!r} needs {package}, which requirements.txt does not pin"
