@@ -11,6 +11,7 @@ import pytest
 
 import yasps
 import yasps.contact
+import yasps.diff
 import yasps.sim
 import yasps.sweep
 from conftest import REPO
@@ -19,7 +20,7 @@ from test_layers import LAYERS
 PYTHON_MD = (REPO / "docs" / "python.md").read_text()
 ARCHITECTURE_MD = (REPO / "docs" / "architecture.md").read_text()
 WORDS = set(re.findall(r"[A-Za-z_][A-Za-z0-9_]*", PYTHON_MD))
-MODULES = [yasps, yasps.sim, yasps.contact, yasps.sweep]
+MODULES = [yasps, yasps.sim, yasps.contact, yasps.diff, yasps.sweep]
 #: Classes users get from the API rather than construct: their
 #: constructors' parameters are not the API.
 NOT_CONSTRUCTED = {"Attribute"}

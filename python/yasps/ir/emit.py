@@ -7,7 +7,7 @@ anonymous sub-expressions inlined and shared sub-expressions emitted once.
 
 from __future__ import annotations
 
-from typing import Dict, List, Optional, Tuple
+from typing import Dict, List, Optional, Sequence, Set, Tuple
 
 import numpy as np
 
@@ -168,13 +168,15 @@ class _RegionPrinter:
 
 
 def _emit_attribute(attr: Attribute, depth: int, locations: _Locations,
-                    element: str) -> List[str]:
+                    element: str, variables: Set[int]) -> List[str]:
     pad = _INDENT * depth
     t = mat_type(attr, element)
     loc = locations.of(attr)
     decl = {"data": "yasps.data_attr", "constant": "yasps.const_attr"}
     if attr.kind in decl:
-        return [f"{pad}{decl[attr.kind]} @{attr.name} : {t}{loc}"]
+        # A constant differentiated against is a variable of the IR.
+        kind = "data" if id(attr) in variables else attr.kind
+        return [f"{pad}{decl[kind]} @{attr.name} : {t}{loc}"]
     region = _RegionPrinter(locations, element)
     if attr.kind == "join":
         conn: Connectivity = introspect.parameters(attr)["connectivity"]
@@ -194,7 +196,8 @@ def _emit_attribute(attr: Attribute, depth: int, locations: _Locations,
 
 def _emit_members(entity: Entity, depth: int, locations: _Locations,
                   extra: Dict[Entity, List[Tuple[str, Attribute]]],
-                  dynamic_counts: bool, element: str) -> List[str]:
+                  dynamic_counts: bool, element: str,
+                  variables: Set[int]) -> List[str]:
     lines: List[str] = []
     pad = _INDENT * depth
     symbols = list(introspect.symbols(entity).values())
@@ -204,14 +207,15 @@ def _emit_members(entity: Entity, depth: int, locations: _Locations,
                                  operands=(expr,), name=name))
     for symbol in symbols:
         if isinstance(symbol, Attribute):
-            lines += _emit_attribute(symbol, depth, locations, element)
+            lines += _emit_attribute(symbol, depth, locations, element,
+                                     variables)
         elif isinstance(symbol, Connectivity):
             lines.append(f"{pad}yasps.connectivity @{symbol.name} -> "
                          f"{entity_path(symbol.target)} arity {symbol.arity}")
         elif isinstance(symbol, Mesh):
             lines.append(f"{pad}yasps.mesh @{symbol.name} {{")
             lines += _emit_members(symbol, depth + 1, locations, extra,
-                                   dynamic_counts, element)
+                                   dynamic_counts, element, variables)
             lines.append(f"{pad}}}")
         elif isinstance(symbol, Primitive):
             dynamic = " dynamic" if symbol.isDynamic else ""
@@ -221,14 +225,14 @@ def _emit_members(entity: Entity, depth: int, locations: _Locations,
             lines.append(f"{pad}yasps.primitive @{symbol.name}"
                          f"({count}){dynamic} {{")
             lines += _emit_members(symbol, depth + 1, locations, extra,
-                                   dynamic_counts, element)
+                                   dynamic_counts, element, variables)
             lines.append(f"{pad}}}")
         elif isinstance(symbol, PrimitiveUnion):
             members = ", ".join(entity_path(m) for m in symbol.members)
             lines.append(f"{pad}yasps.primitive_union @{symbol.name} "
                          f"[{members}] {{")
             lines += _emit_members(symbol, depth + 1, locations, extra,
-                                   dynamic_counts, element)
+                                   dynamic_counts, element, variables)
             lines.append(f"{pad}}}")
     return lines
 
@@ -260,19 +264,22 @@ def text_and_locations(ir: str) -> Tuple[str, str]:
 
 def _emit(scene: Scene, locations: _Locations,
           extra: Optional[Dict[Entity, List[Tuple[str, Attribute]]]],
-          dynamic_counts: bool, precision: Optional[str]) -> str:
+          dynamic_counts: bool, precision: Optional[str],
+          differentiated: Sequence[Attribute] = ()) -> str:
     element = config.resolve_precision(
         precision if precision is not None else scene.precision)
+    variables = {id(a) for a in differentiated}
     lines = [f"yasps.scene @{scene.name} {{"]
     lines += _emit_members(scene, 1, locations, extra or {}, dynamic_counts,
-                           element)
+                           element, variables)
     for attr, dynamic, projection in introspect.energy_records(scene):
         flag = " dynamic_instances" if dynamic else ""
         if projection != "clamp":
             flag += f" projection {projection}"
         lines.append(f"{_INDENT}yasps.energy {symbol_path(attr)}{flag}")
-    if scene.minimizeTargets:
-        targets = ", ".join(symbol_path(t) for t in scene.minimizeTargets)
+    minimized = list(scene.minimizeTargets) + list(differentiated)
+    if minimized:
+        targets = ", ".join(symbol_path(t) for t in minimized)
         lines.append(f"{_INDENT}yasps.minimize [{targets}]")
     lines.append("}")
     return "\n".join(lines) + "\n"
@@ -305,25 +312,31 @@ _KERNEL_IRS: StateKey[Dict[str, Tuple[int, KernelIR]]] = StateKey(
 
 def kernel_ir(scene: Scene,
               extra: Optional[Dict[Entity, List[Tuple[str, Attribute]]]] = None,
-              precision: Optional[str] = None) -> KernelIR:
+              precision: Optional[str] = None,
+              differentiated: Sequence[Attribute] = ()) -> KernelIR:
     """The IR that kernels are compiled from: the scene with its source
     locations kept apart (:class:`KernelIR`), and without what changes
     between Newton iterations. Kernels take instance counts at launch and
     read connectivities, union offsets and values from buffers, so dynamic
     primitives are written with 0 instances: a new number of collision
     pairs gives the same text, which the compiled libraries are cached
-    by."""
+    by. ``differentiated`` lists stored attributes that are not targets
+    (constants, usually) to differentiate against as well: they are written
+    as variables and minimised over with the targets, after them, so that
+    the derivative kernels also take derivatives with respect to them (the
+    adjoint's mixed derivatives, yasps.solve.adjoint)."""
     element = config.resolve_precision(
         precision if precision is not None else scene.precision)
-    if not extra:
+    cacheable = not extra and not differentiated
+    if cacheable:
         cached = scene.state.setdefault(_KERNEL_IRS, dict).get(element)
         if cached is not None and \
                 cached[0] == introspect.structure_revision(scene):
             return cached[1]
     located = _Locations(True)
-    ir = KernelIR(_emit(scene, located, extra, False, element),
+    ir = KernelIR(_emit(scene, located, extra, False, element, differentiated),
                   located.table())
-    if not extra:
+    if cacheable:
         scene.state.setdefault(_KERNEL_IRS, dict)[element] = \
             (introspect.structure_revision(scene), ir)
     return ir

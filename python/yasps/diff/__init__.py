@@ -1,0 +1,47 @@
+"""Gradients of a simulation's outcome with respect to its inputs.
+
+The static case: after a converged solve of min_x E(x; theta),
+:func:`equilibrium_gradient` gives dL/dtheta for a loss L(x*) from dL/dx*,
+by one linear solve with the exact Hessian and the compiler's mixed
+derivatives d(grad_x E)/dtheta (yasps.solve.adjoint; docs/diff.md)::
+
+    yasps.sim.newton(s, [x], 1e-10, fixed=[pinned])
+    grads = yasps.diff.equilibrium_gradient(
+        s, dloss={x: dL_dx}, parameters=[cloth["cloth_stretch"]],
+        fixed=[pinned])
+    grads[cloth["cloth_stretch"]]          # shaped like its value
+
+Any stored attribute that is not a target may be a parameter: materials
+(the sim helpers store them as constants), per-element rest-shape
+constants, masses, predictions.
+"""
+
+from __future__ import annotations
+
+from typing import Mapping, Optional, Sequence
+
+from .. import runtime
+from ..frontend.attribute import Attribute
+from ..frontend.scene import Scene
+from ..solve.adjoint import AdjointWarning, Gradients
+from ..solve.adjoint import equilibrium_gradient as _equilibrium_gradient
+
+__all__ = ["AdjointWarning", "Gradients", "equilibrium_gradient"]
+
+
+def equilibrium_gradient(scene: Scene, dloss: Mapping[Attribute, object],
+                         parameters: Sequence[Attribute], fixed=None,
+                         tolerance: float = 1e-6,
+                         threads: Optional[int] = None) -> Gradients:
+    """dL/dtheta at the minimiser the scene holds, for each of
+    ``parameters``, given ``dloss`` (dL/dx* per target, each shaped like the
+    target's value; targets left out contribute nothing). ``fixed`` is
+    minimizeEnergy's and newton's (one mask or None per target): those DoFs
+    do not move with the parameters. The Hessian is the exact one (never
+    projected), solved directly on the free DoFs; warns with
+    AdjointWarning when the free gradient's largest entry exceeds
+    ``tolerance`` (the adjoint holds at a minimiser only). Returns a
+    :class:`Gradients`: parameter -> array shaped like its value."""
+    return _equilibrium_gradient(scene, dloss, parameters, runtime.current(),
+                                 fixed=fixed, threads=threads,
+                                 tolerance=tolerance)

@@ -1,0 +1,336 @@
+"""Adjoints of energy minimisation: how a minimiser moves when the scene's
+constants move.
+
+At a minimiser x* of E(x; theta) the free gradient vanishes, so for a loss
+L(x*) the implicit function theorem gives
+
+    H lambda = dL/dx      (H the exact Hessian on the free DoFs)
+    dL/dtheta = -lambda^T d(grad_x E)/dtheta
+
+The mixed derivatives d(grad_x E)/dtheta come from the compiler: the scene
+is emitted with the constants theta written as variables and minimised
+over after the targets (``kernel_ir(differentiated=...)``), so each
+energy's generated ``__hess`` kernel is the exact Hessian in (x, theta),
+through JOINs, UNIONs and any parameterisation; its (x, x) block is the
+Hessian the adjoint solves with and its (x, theta) block the mixed
+derivatives. Scenes that differentiate no constant compile nothing more.
+
+:func:`adjoint_terms` evaluates those per-instance Hessians with the
+global index of each local variable; :class:`AdjointSystem` assembles them
+(SciPy, exact, for the small and medium scenes this is meant for) and
+gives the solve and the vector-Jacobian products; :func:`equilibrium_gradient`
+is the static case end to end (yasps.diff re-exports it).
+"""
+
+from __future__ import annotations
+
+import warnings
+from dataclasses import dataclass
+from typing import Dict, List, Mapping, Optional, Sequence
+
+import numpy as np
+
+from ..compiler import MissingAttributeError
+from ..compiler.params import JoinParam, ReadParam
+from ..compiler.pipelines import DIFFERENTIATION_PIPELINE
+from ..frontend import introspect
+from ..frontend.attribute import STORED_KINDS, Attribute, owner_of
+from ..frontend.errors import ArgumentError, ArgumentTypeError, SceneError
+from ..frontend.scene import Scene
+from ..frontend.values import from_column_major, to_column_major
+from ..ir import kernel_ir, resolve, symbol_path
+from ..runtime import Backend
+from .assembly import DofLayout
+from .minimize import fixed_dof_mask
+from .params import Location, ParamResolver, ParamSlot
+
+#: Exact Hessians, never factored or projected: the adjoint needs H itself.
+EXACT_PIPELINE = (f"{DIFFERENTIATION_PIPELINE}{{hessian-factors=never "
+                  "linear-maps=false}")
+
+
+class AdjointWarning(UserWarning):
+    """The state an adjoint starts from is not a converged minimiser, so
+    the gradient it gives is that of a point the solve did not reach."""
+
+
+class Variables:
+    """The variables of the adjoint: the targets' DoFs (as DofLayout lays
+    them out), then every entry of each parameter, instance after
+    instance, column-major within an instance."""
+
+    def __init__(self, scene: Scene, parameters: Sequence[Attribute]):
+        self.layout = DofLayout(list(scene.minimizeTargets))
+        self.parameters = list(parameters)
+        self.offset: Dict[int, int] = dict(self.layout.offset)
+        size = self.layout.size
+        for p in self.parameters:
+            self.offset[id(p)] = size
+            size += owner_of(p).numInstances * p.rows * p.cols
+        self.size = size
+
+    @property
+    def num_dofs(self) -> int:
+        return self.layout.size
+
+    def contains(self, attr: Attribute) -> bool:
+        return id(attr) in self.offset
+
+    def index(self, location: Location) -> int:
+        """The variable of a local parameter's location (-1: padding)."""
+        if location is None:
+            return -1
+        attr, instance, entry = location
+        return self.offset[id(attr)] + instance * attr.rows * attr.cols + entry
+
+    def split(self, vector: np.ndarray, attr: Attribute) -> np.ndarray:
+        """``attr``'s part of a vector over the variables, shaped like its
+        value, (N, rows, cols)."""
+        start = self.offset[id(attr)]
+        n = owner_of(attr).numInstances * attr.rows * attr.cols
+        return from_column_major(vector[start:start + n].copy(), attr.rows,
+                                 attr.cols)
+
+
+class _Resolver(ParamResolver):
+    """Parameters behind JOINs and UNIONs, where the parameters of the
+    adjoint count as targets."""
+
+    def __init__(self, scene: Scene, ir: str, variables: Variables):
+        super().__init__(scene, ir)
+        self.variables = variables
+
+    def expand(self, attr: Attribute, instance: int) -> List[Location]:
+        if attr.kind in STORED_KINDS:
+            if self.variables.contains(attr):
+                return [(attr, instance, e) for e in range(attr.rows * attr.cols)]
+            return []
+        return super().expand(attr, instance)
+
+
+@dataclass
+class EnergyTerm:
+    """One energy's exact local gradients (N, n) and Hessians (N, n, n) in
+    its local variables (targets and parameters), and the variable of each
+    local variable, ``index`` (N, n), -1 for UNION padding."""
+    energy: Attribute
+    index: np.ndarray
+    gradient: np.ndarray
+    hessian: np.ndarray
+
+
+def _group_index(scene: Scene, slot: ParamSlot, count: int,
+                 variables: Variables) -> np.ndarray:
+    """The variables of one parameter group for every instance (count,
+    width): arrays for reads and JOINs of a stored variable, else
+    instance by instance through the group's locations."""
+    param = slot.param
+    if isinstance(param, ReadParam):
+        target = resolve(scene, param.target)
+        size = target.rows * target.cols
+        instances = np.arange(count) if target.owner is slot.owner \
+            else np.zeros(count, dtype=np.int64)
+        return variables.offset[id(target)] + instances[:, None] * size + \
+            np.arange(size)[None, :]
+    if isinstance(param, JoinParam):
+        base = resolve(scene, param.base)
+        if base.kind in STORED_KINDS and variables.contains(base):
+            size = base.rows * base.cols
+            conn = introspect.symbols(slot.owner)[param.connectivity.lstrip("@")]
+            gathered = np.asarray(conn.indices[:, param.slot], dtype=np.int64)
+            return variables.offset[id(base)] + gathered[:, None] * size + \
+                np.arange(size)[None, :]
+    return np.array([[variables.index(loc) for loc in slot.locations(i)]
+                     for i in range(count)], dtype=np.int64).reshape(count, -1)
+
+
+def adjoint_terms(scene: Scene, variables: Variables, backend: Backend,
+                  threads: Optional[int] = None) -> List[EnergyTerm]:
+    """Every registered energy's exact local derivatives in the targets
+    and ``variables.parameters``, at the scene's current values (the
+    collision pairs it holds included), evaluated on ``backend``'s host."""
+    host = backend.host
+    ir = kernel_ir(scene, differentiated=variables.parameters)
+    resolver = _Resolver(scene, ir, variables)
+    terms = []
+    for energy in scene.energies:
+        base = symbol_path(energy)
+        paths = [base + "__grad", base + "__hess"]
+        try:
+            kernels = host.compile(ir, paths, scene.name, EXACT_PIPELINE)
+        except MissingAttributeError:
+            continue  # reads neither a target nor a parameter
+        owner = owner_of(energy)
+        count = owner.numInstances
+        groups = [ParamSlot(p, owner, resolver) for p in kernels.params(paths[0])]
+        index = np.concatenate(
+            [_group_index(scene, g, count, variables) for g in groups], axis=1) \
+            if groups else np.zeros((count, 0), dtype=np.int64)
+        n = index.shape[1]
+        gradient = host.to_host(host.run(kernels, scene, paths[0], count,
+                                         threads), (count, n, 1))[:, :, 0]
+        hessian = host.to_host(host.run(kernels, scene, paths[1], count,
+                                        threads), (count, n, n))
+        terms.append(EnergyTerm(energy, index, np.array(gradient),
+                                np.array(hessian)))
+    return terms
+
+
+class AdjointSystem:
+    """The exact Hessian of the targets' free DoFs and the mixed
+    derivatives in the parameters, assembled from :func:`adjoint_terms`."""
+
+    def __init__(self, variables: Variables, terms: Sequence[EnergyTerm],
+                 fixed: Optional[np.ndarray] = None):
+        from scipy import sparse
+
+        self.variables = variables
+        self.terms = list(terms)
+        nx = variables.num_dofs
+        self.fixed = np.zeros(nx, dtype=bool) if fixed is None \
+            else np.asarray(fixed, dtype=bool)
+        rows, cols, values = [], [], []
+        gradient = np.zeros(nx)
+        for term in self.terms:
+            i = term.index[:, :, None]
+            j = term.index[:, None, :]
+            both = (i >= 0) & (i < nx) & (j >= 0) & (j < nx)
+            both = np.broadcast_to(both, term.hessian.shape)
+            rows.append(np.broadcast_to(i, term.hessian.shape)[both])
+            cols.append(np.broadcast_to(j, term.hessian.shape)[both])
+            values.append(term.hessian[both])
+            own = (term.index >= 0) & (term.index < nx)
+            gradient += np.bincount(term.index[own], term.gradient[own],
+                                    minlength=nx)
+        self.gradient = gradient
+        self.hessian = sparse.coo_matrix(
+            (np.concatenate(values) if values else np.zeros(0),
+             (np.concatenate(rows) if rows else np.zeros(0, dtype=np.int64),
+              np.concatenate(cols) if cols else np.zeros(0, dtype=np.int64))),
+            shape=(nx, nx)).tocsc()
+
+    def free_gradient_norm(self) -> float:
+        """The largest entry of the gradient on the free DoFs (0 at an exact
+        minimiser)."""
+        free = self.gradient[~self.fixed]
+        return float(np.abs(free).max()) if free.size else 0.0
+
+    def solve(self, rhs: np.ndarray) -> np.ndarray:
+        """lambda with H_ff lambda_f = rhs_f and lambda = 0 on fixed DoFs,
+        by a sparse direct solve. Raises SceneError where H_ff is singular
+        (a free DoF no energy holds)."""
+        from scipy.sparse.linalg import MatrixRankWarning, spsolve
+
+        free = np.flatnonzero(~self.fixed)
+        out = np.zeros(self.variables.num_dofs)
+        if free.size == 0:
+            return out
+        block = self.hessian[free][:, free]
+        with warnings.catch_warnings():
+            warnings.simplefilter("error", MatrixRankWarning)
+            try:
+                solved = spsolve(block.tocsc(), rhs[free])
+            except MatrixRankWarning:
+                raise SceneError("the adjoint's Hessian is singular on the "
+                                 "free DoFs: some free DoF is held by no "
+                                 "energy (fix it)") from None
+        out[free] = solved
+        return out
+
+    def mixed_vjp(self, lam: np.ndarray) -> np.ndarray:
+        """lambda^T d(grad_x E)/dtheta over the parameters' entries (the
+        variables after the DoFs, in their order)."""
+        nx = self.variables.num_dofs
+        out = np.zeros(self.variables.size - nx)
+        for term in self.terms:
+            i = term.index[:, :, None]
+            j = term.index[:, None, :]
+            mixed = np.broadcast_to((i >= 0) & (i < nx) & (j >= nx),
+                                    term.hessian.shape)
+            rows = np.broadcast_to(i, term.hessian.shape)[mixed]
+            cols = np.broadcast_to(j, term.hessian.shape)[mixed]
+            out += np.bincount(cols - nx, lam[rows] * term.hessian[mixed],
+                               minlength=out.size)
+        return out
+
+
+def checked_parameters(scene: Scene, parameters: Sequence[Attribute],
+                       what: str) -> List[Attribute]:
+    """``parameters`` as a list, each a stored attribute of ``scene`` that
+    is not a target, none twice."""
+    out: List[Attribute] = []
+    for p in parameters:
+        if not isinstance(p, Attribute):
+            raise ArgumentTypeError(f"{what}: a parameter must be an "
+                                    f"Attribute, not {type(p).__name__}")
+        if p.kind not in STORED_KINDS:
+            raise ArgumentError(
+                f"{what}: {p.describe()} is computed; differentiate with "
+                "respect to the stored constants it is computed from")
+        if owner_of(p).scene is not scene:
+            raise ArgumentError(f"{what}: {p.describe()} is not of scene "
+                                f"{scene.name!r}")
+        if any(p is t for t in scene.minimizeTargets):
+            raise ArgumentError(f"{what}: {p.describe()} is a minimisation "
+                                "target, not a parameter")
+        if any(p is q for q in out):
+            raise ArgumentError(f"{what}: {p.describe()} is listed twice")
+        out.append(p)
+    return out
+
+
+def loss_vector(variables: Variables, dloss: Mapping[Attribute, object],
+                what: str) -> np.ndarray:
+    """dL/dx over the DoFs from ``dloss`` (target -> array shaped like its
+    value; targets left out contribute nothing)."""
+    out = np.zeros(variables.num_dofs)
+    targets = variables.layout.targets
+    for attr, value in dloss.items():
+        if not any(attr is t for t in targets):
+            raise ArgumentError(f"{what}: dloss names {attr.describe()}, "
+                                "which is not a minimisation target")
+        start = variables.offset[id(attr)]
+        n = owner_of(attr).numInstances
+        flat = to_column_major(value, n, attr.rows, attr.cols,
+                               f"{what}: dloss of {attr.describe()}")
+        out[start:start + flat.size] += flat
+    return out
+
+
+class Gradients(dict):
+    """dL/dtheta per parameter (keyed by the Attribute), each shaped like
+    the parameter's value, (N, rows, cols)."""
+
+
+def equilibrium_gradient(scene: Scene, dloss: Mapping[Attribute, object],
+                         parameters: Sequence[Attribute], backend: Backend,
+                         fixed=None, threads: Optional[int] = None,
+                         tolerance: float = 1e-6) -> Gradients:
+    """The gradient of a loss L(x*) with respect to ``parameters`` at the
+    minimiser x* the scene holds (after a converged solve), given
+    dL/dx* as ``dloss`` (target -> array shaped like its value). ``fixed``
+    is minimizeEnergy's (one mask or None per target): fixed DoFs do not
+    move with the parameters. Warns (AdjointWarning) when the free
+    gradient's largest entry exceeds ``tolerance``: the adjoint holds at a
+    minimiser only."""
+    what = "equilibrium_gradient"
+    if not scene.minimizeTargets:
+        raise SceneError(f"{what}: scene {scene.name!r} has no "
+                         "minimisation target")
+    params = checked_parameters(scene, parameters, what)
+    variables = Variables(scene, params)
+    rhs = loss_vector(variables, dloss, what)
+    mask = fixed_dof_mask(variables.layout, fixed)
+    system = AdjointSystem(variables, adjoint_terms(scene, variables, backend,
+                                                    threads), mask)
+    residual = system.free_gradient_norm()
+    if residual > tolerance:
+        warnings.warn(f"{what}: the free gradient's largest entry is "
+                      f"{residual:.3g} (above {tolerance:g}): the scene is "
+                      "not at a converged minimiser, so this is the "
+                      "gradient of a point the solve did not reach",
+                      AdjointWarning, stacklevel=2)
+    lam = system.solve(rhs)
+    total = -system.mixed_vjp(lam)
+    return Gradients({p: variables.split(np.concatenate(
+        [np.zeros(variables.num_dofs), total]), p) for p in params})
