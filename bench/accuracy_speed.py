@@ -45,13 +45,17 @@ reports:
   that mesh, or a vertex below the ground);
 - the Newton and CG iterations of the run.
 
-It prints a table per scene, writes every number to
-``DIR/accuracy_speed.json`` and a Pareto plot per scene
-(``DIR/pareto_<scene>.png``: time against trajectory error, each setting a
-labelled point, the Pareto front drawn).
+It prints a table per scene, writes every number to --json (default
+bench/results/accuracy_speed.json: the tables ``drop``, ``cloth`` and
+``contact`` as printed, ``summary`` with every scene's settings in the
+columns of docs/accuracy.md, and every figure of every run in its
+values) and a Pareto plot per scene (``DIR/pareto_<scene>.png``, DIR from
+--output: time against trajectory error, each setting a labelled point,
+the Pareto front drawn).
 
     python3 bench/accuracy_speed.py [--frames 20] [--scenes drop,cloth,contact]
                                     [--output out/accuracy_speed] [--quick]
+                                    [--json PATH]
 
 ``--quick`` runs 2 frames of 4 settings (a smoke test).
 """
@@ -60,11 +64,9 @@ from __future__ import annotations
 
 import argparse
 import gc
-import json
 import math
 import os
 import platform
-import subprocess
 import sys
 import tempfile
 import time
@@ -83,6 +85,7 @@ benchlib.use_this_checkout()
 sys.path.insert(0, str(REPO / "examples"))
 
 import ipctk  # noqa: E402
+from benchlib.results import Results, add_json_argument  # noqa: E402
 import numpy as np  # noqa: E402
 from tqdm import tqdm  # noqa: E402
 
@@ -507,43 +510,116 @@ def bench_scene(spec: SceneSpec, frames: int, quick: bool) -> Optional[dict]:
 
 # ------------------------------------------------------------------ output
 
-def _fmt(value: Optional[float], spec: str = ".1e", missing: str = "-") -> str:
-    return missing if value is None else format(value, spec)
+#: The columns of a scene's table in the JSON: (header, format).
+SCENE_COLUMNS = (("setting", ""), ("time (s)", "{:.2f}"), ("speed-up", "{:.2f}x"),
+                 ("trajectory error", "{:.1e}"), ("energy error", "{:.1e}"),
+                 ("min distance (m)", "{:.1e}"), ("intersecting frames", ""),
+                 ("Newton", ""), ("CG", ""), ("notes", ""))
+
+
+def row_notes(row: dict) -> List[str]:
+    """What a setting's line says besides its numbers."""
+    notes = []
+    if row["unconverged_frames"]:
+        notes.append(f"{row['unconverged_frames']} frames unconverged")
+    if row["inexact_directions"]:
+        notes.append(f"{row['inexact_directions']} inexact directions")
+    if row["compiled_during_run"]:
+        notes.append("compiled during the run")
+    if row["warnings"]:
+        notes.append(f"{len(row['warnings'])} kinds of warnings")
+    return notes
+
+
+def scene_rows(result: dict) -> List[list]:
+    """The scene's table, one row per setting (SCENE_COLUMNS); a failed
+    setting has its name and the error alone."""
+    rows = []
+    for row in result["settings"]:
+        if row.get("seconds") is None:
+            rows.append([row["name"]] + [None] * (len(SCENE_COLUMNS) - 2)
+                        + [f"failed: {row['error']}"])
+            continue
+        rows.append([row["name"], row["seconds"], row.get("speedup"),
+                     row["trajectory_error"], row["energy_rel_diff"],
+                     row["min_distance"], row["intersecting_frames"],
+                     row["newton_iterations"], row["cg_iterations"],
+                     "; ".join(row_notes(row))])
+    return rows
+
+
+def scene_title(result: dict) -> str:
+    ref = result["reference"]
+    return (f"{result['scene']}: {result['summary']}; {result['frames']} "
+            f"frames, size {result['size']:.3f} m; reference (f64, CG 1e-10, "
+            f"Newton tolerance /100) {ref['seconds']:.2f} s, Newton "
+            f"{ref['newton_iterations']}, CG {ref['cg_iterations']}")
 
 
 def print_table(result: dict) -> None:
     """The scene's table: one line per setting."""
-    ref = result["reference"]
-    print(f"\n{result['scene']}: {result['summary']}; {result['frames']} "
-          f"frames, size {result['size']:.3f} m; reference (f64, CG 1e-10, "
-          f"Newton tolerance /100) {ref['seconds']:.2f} s, Newton "
-          f"{ref['newton_iterations']}, CG {ref['cg_iterations']}")
+    print(f"\n{scene_title(result)}")
     header = (f"{'setting':18s}{'time s':>8s}{'speed-up':>9s}{'traj err':>10s}"
               f"{'energy':>9s}{'min dist':>10s}{'isect':>6s}{'Newton':>7s}"
               f"{'CG':>7s}  notes")
     print(header)
     print("-" * len(header))
-    for row in result["settings"]:
-        if row.get("seconds") is None:
-            print(f"{row['name']:18s}  failed: {row['error']}")
+    for (name, seconds, speedup, error, energy, distance, isect, newton, cg,
+         notes) in scene_rows(result):
+        if seconds is None:
+            print(f"{name:18s}  {notes}")
             continue
-        notes = []
-        if row["unconverged_frames"]:
-            notes.append(f"{row['unconverged_frames']} frames unconverged")
-        if row["inexact_directions"]:
-            notes.append(f"{row['inexact_directions']} inexact directions")
-        if row["compiled_during_run"]:
-            notes.append("compiled during the run")
-        if row["warnings"]:
-            notes.append(f"{len(row['warnings'])} kinds of warnings")
-        print(f"{row['name']:18s}{row['seconds']:8.2f}"
-              f"{_fmt(row.get('speedup'), '8.2f')}x"
-              f"{_fmt(row['trajectory_error'], '10.1e')}"
-              f"{_fmt(row['energy_rel_diff'], '9.1e')}"
-              f"{_fmt(row['min_distance'], '10.1e', '       inf')}"
-              f"{'yes' if row['intersections'] else 'no':>6s}"
-              f"{row['newton_iterations']:7d}{row['cg_iterations']:7d}"
-              f"  {'; '.join(notes)}")
+        print(f"{name:18s}{seconds:8.2f}"
+              + ("       -x" if speedup is None else f"{speedup:8.2f}x")
+              + ("         -" if error is None else f"{error:10.1e}")
+              + ("        -" if energy is None else f"{energy:9.1e}")
+              + ("       inf" if distance is None else f"{distance:10.1e}")
+              + f"{'yes' if isect else 'no':>6s}{newton:7d}{cg:7d}  {notes}")
+
+
+def describe(setting: dict) -> str:
+    """A setting in words, as docs/accuracy.md's table names it."""
+    axis = setting["axis"]
+    s = setting["setting"]
+    if axis == "default":
+        return f"default ({s['precision']}, CG {_e(s['cg_tolerance'])})"
+    if axis == "precision x cg":
+        if s["precision"] == "f64":
+            return f"CG {_e(s['cg_tolerance'])}"
+        if s["cg_tolerance"] == DEFAULT.cg_tolerance:
+            return s["precision"]
+        return f"{s['precision']}, CG {_e(s['cg_tolerance'])}"
+    if axis == "newton":
+        return f"Newton tolerance x{s['newton_factor']:g}"
+    if axis == "projection":
+        return ("no projection" if s["projection"] == "none"
+                else f"{s['projection']} projection")
+    if axis == "linear maps":
+        return "linear-map projection off"
+    return setting["name"]  # dhat x0.5, kappa x10 fixed
+
+
+def summary_rows(results: Dict[str, dict]) -> List[list]:
+    """Every scene's settings in docs/accuracy.md's columns: "scene:
+    setting", time (s and speed-up), trajectory error, Newton / CG, and the
+    notes."""
+    rows = []
+    for name, result in results.items():
+        for row in result["settings"]:
+            label = f"{name}: {describe(row)}"
+            if row.get("seconds") is None:
+                rows.append([label, None, None, None, f"failed: {row['error']}"])
+                continue
+            notes = row_notes(row)
+            time_cell = None
+            if row.get("speedup") is not None:
+                time_cell = {"s": row["seconds"], "speedup": row["speedup"]}
+            else:
+                notes.insert(0, f"{row['seconds']:.2f} s (the default failed)")
+            rows.append([label, time_cell, row["trajectory_error"],
+                         {"newton": row["newton_iterations"],
+                          "cg": row["cg_iterations"]}, "; ".join(notes)])
+    return rows
 
 
 def pareto_front(points: Sequence[Tuple[float, float]]) -> List[int]:
@@ -602,14 +678,6 @@ def plot(result: dict, path: Path) -> None:
     plt.close(fig)
 
 
-def _git(*args: str) -> Optional[str]:
-    try:
-        return subprocess.run(["git", *args], cwd=REPO, capture_output=True,
-                              text=True, check=True).stdout.strip()
-    except (OSError, subprocess.CalledProcessError):
-        return None
-
-
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--frames", type=int, default=None,
@@ -620,7 +688,9 @@ def main() -> None:
     parser.add_argument("--quick", action="store_true",
                         help=f"{QUICK_FRAMES} frames, 4 settings (smoke test)")
     parser.add_argument("--output", type=Path,
-                        default=Path("out/accuracy_speed"))
+                        default=Path("out/accuracy_speed"),
+                        help="folder for the Pareto plots")
+    add_json_argument(parser, "accuracy_speed")
     args = parser.parse_args()
     names = [n.strip() for n in args.scenes.split(",") if n.strip()]
     unknown = [n for n in names if n not in SCENES]
@@ -647,16 +717,32 @@ def main() -> None:
         picture = args.output / f"pareto_{name}.png"
         plot(result, picture)
         print(f"plot: {picture}", flush=True)
-    meta = {"frames": frames, "quick": args.quick, "threads": 1,
-            "backend": yasps.backend(),
-            "commit": _git("rev-parse", "HEAD"),
-            "dirty": bool(_git("status", "--porcelain", "--untracked-files=no")),
-            "host": platform.node(), "cpus": os.cpu_count(),
-            "date": time.strftime("%Y-%m-%d %H:%M:%S %Z"),
-            "seconds": time.perf_counter() - started}
-    output = args.output / "accuracy_speed.json"
-    output.write_text(json.dumps({"meta": meta, "scenes": results}, indent=1))
-    print(f"\nresults: {output} ({meta['seconds']:.0f} s in all)")
+    out = Results("accuracy_speed")
+    for name, result in results.items():
+        out.table(name, [c[0] for c in SCENE_COLUMNS], scene_rows(result),
+                  [c[1] for c in SCENE_COLUMNS],
+                  scene_title(result) + ". Time: the frames' wall time, one "
+                  "thread; trajectory error: the largest position difference "
+                  "to the reference after the last frame / scene size; energy "
+                  "error: the total energy's difference to the reference's "
+                  "then / the reference's largest; min distance: the smallest "
+                  "over the run.")
+    out.table("summary", ["scene: setting", "time", "trajectory error",
+                          "Newton / CG", "notes"], summary_rows(results),
+              ["", "{0[s]:.2f} s ({0[speedup]:.2f}x)", "{:.1e}",
+               "{0[newton]} / {0[cg]}", ""],
+              f"{frames} frames, one thread. Time: the frames' wall time "
+              "(speed-up over the default setting); trajectory error: the "
+              "largest position difference to the reference (f64, CG 1e-10, "
+              "Newton tolerance /100) after the last frame, over the scene's "
+              "size; Newton and CG: iteration counts.")
+    seconds = time.perf_counter() - started
+    out.values["run"] = {"frames": frames, "quick": args.quick, "threads": 1,
+                         "backend": yasps.backend(), "host": platform.node(),
+                         "seconds": seconds}
+    out.values["scenes"] = results
+    path = out.write(args.json)
+    print(f"\nresults: {path} ({seconds:.0f} s in all)")
 
 
 if __name__ == "__main__":

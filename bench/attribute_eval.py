@@ -8,7 +8,7 @@ from the on-disk cache in a new process), and evaluation time on one thread
 against the same computation written in NumPy and in C++ (-O3
 -march=native, built here). Ratios are what to compare across machines.
 
-    python3 bench/attribute_eval.py [--repeat 20]
+    python3 bench/attribute_eval.py [--repeat 20] [--json PATH]
 """
 
 from __future__ import annotations
@@ -30,6 +30,7 @@ import benchlib  # noqa: E402
 benchlib.use_this_checkout()
 
 import yasps  # noqa: E402
+from benchlib.results import Results, add_json_argument  # noqa: E402
 from benchlib.timing import median  # noqa: E402
 from benchlib.meshes import bunny  # noqa: E402
 
@@ -85,7 +86,9 @@ def build_cpp(workdir: Path) -> ctypes.CDLL:
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--repeat", type=int, default=20)
+    add_json_argument(parser, "attribute_eval")
     args = parser.parse_args()
+    results = Results("attribute_eval")
 
     with tempfile.TemporaryDirectory() as tmp:
         cache = str(Path(tmp) / "cache")
@@ -100,6 +103,7 @@ def main() -> None:
         # The kernel alone, as the runtime launches it.
         from yasps.compiler.cpu import compile_cpu
         from yasps.ir import emit_scene
+        from yasps.runtime.cpu import launch
         from yasps.runtime.inputs import host_input
         from yasps.compiler.params import ArgumentKind
         path = "@bunny::@tets::@F"
@@ -107,8 +111,8 @@ def main() -> None:
         out = np.empty(len(tets) * 9)
         buffers = [out if a.kind is ArgumentKind.out else host_input(s, a)
                    for a in library.kernel(path).arguments]
-        kernel = median(lambda: library.launch(path, len(tets), buffers, 1),
-                             args.repeat)
+        kernel = median(lambda: launch(library, path, len(tets), buffers, 1),
+                        args.repeat)
         end_to_end = median(lambda: F.compute(threads=1), args.repeat)
 
         # NumPy: gather, differences, batched 3x3 products.
@@ -132,19 +136,41 @@ def main() -> None:
         np.testing.assert_allclose(cpp_out, out, rtol=1e-12, atol=1e-12)
         cpp_time = median(call, args.repeat)
 
-    print(f"deformation gradient of {len(tets)} tets (bunny-19k), one thread, "
-          f"median of {args.repeat}")
-    print(f"  cold compile (new process, empty cache): "
-          f"lower {cold['lower_seconds'] * 1e3:.1f} ms + codegen "
-          f"{cold['codegen_seconds'] * 1e3:.1f} ms; first compute() "
-          f"{cold['first_compute'] * 1e3:.1f} ms")
-    print(f"  warm start (new process, disk cache):    "
-          f"load {warm['codegen_seconds'] * 1e3:.1f} ms; first compute() "
-          f"{warm['first_compute'] * 1e3:.1f} ms")
+    title = (f"deformation gradient of {len(tets)} tets (bunny-19k), one "
+             f"thread, median of {args.repeat}")
+    results.values.update(tets=len(tets), repeat=args.repeat, cold=cold,
+                          warm=warm)
+    # Milliseconds; a warm start loads the object where a cold one lowers
+    # and generates code.
+    startup = [
+        ["cold compile (new process, empty cache)", cold["lower_seconds"] * 1e3,
+         cold["codegen_seconds"] * 1e3, cold["first_compute"] * 1e3],
+        ["warm start (new process, disk cache)", None,
+         warm["codegen_seconds"] * 1e3, warm["first_compute"] * 1e3]]
+    results.table("startup", ["start", "lower", "codegen / load",
+                              "first compute()"], startup,
+                  ["", "{:.1f} ms", "{:.1f} ms", "{:.1f} ms"],
+                  f"{title[0].upper()}{title[1:]}.")
+    times = [[name, t * 1e3, t / cpp_time]
+             for name, t in [("yasps kernel", kernel),
+                             ("yasps compute()", end_to_end),
+                             ("NumPy", numpy_time),
+                             ("C++ loop (-O3)", cpp_time)]]
+    results.table("times", ["", "time", "vs C++"], times,
+                  ["", "{:.2f} ms", "{:.2f}x"],
+                  f"{title[0].upper()}{title[1:]}.")
+
+    print(title)
+    (_, lower, codegen, cold_first), (_, _, load, warm_first) = startup
+    print(f"  cold compile (new process, empty cache): lower {lower:.1f} ms + "
+          f"codegen {codegen:.1f} ms; first compute() {cold_first:.1f} ms")
+    print(f"  warm start (new process, disk cache):    load {load:.1f} ms; "
+          f"first compute() {warm_first:.1f} ms")
     print(f"  {'':24s}{'time':>10s}{'vs C++':>10s}")
-    for name, t in [("yasps kernel", kernel), ("yasps compute()", end_to_end),
-                    ("NumPy", numpy_time), ("C++ loop (-O3)", cpp_time)]:
-        print(f"  {name:24s}{t * 1e3:8.2f} ms{t / cpp_time:9.2f}x")
+    for name, ms, ratio in times:
+        print(f"  {name:24s}{ms:8.2f} ms{ratio:9.2f}x")
+    path = results.write(args.json)
+    print(f"results: {path}")
 
 
 if __name__ == "__main__":

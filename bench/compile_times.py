@@ -22,6 +22,9 @@ IPC barrier. Prints:
    and the median time of a call whose counts changed against one whose
    counts (and pairs) were set again unchanged.
 
+The tables also go to ``--json`` (bench/results/compile_times.json):
+``energies`` (1.), ``whole_scene`` (2.) and ``pair_counts`` (3.).
+
     python3 bench/compile_times.py [--calls 200] [--max-pairs 5000]
 """
 
@@ -41,12 +44,26 @@ import benchlib  # noqa: E402
 
 benchlib.use_this_checkout()
 
+from benchlib.results import Results, add_json_argument  # noqa: E402
+
+#: The energies' names in the tables (docs/benchmarks.md), by qualified name.
+LABELS = {
+    "soft.t.elastic": "soft tets, stable Neo-Hookean",
+    "soft.v.inertia": "soft inertia",
+    "rigid.body.inertia": "affine inertia",
+    "rigid.body.orth": "ABD orthogonality",
+    "world.pp.barrier": "PP barrier",
+    "world.pe.barrier": "PE barrier",
+    "world.pt.barrier": "PT barrier",
+    "world.ee.barrier": "EE barrier",
+}
+
 
 def worker(task: str, energy: str) -> dict:
     """Runs in a fresh process (the cache directory comes from the
     environment): builds the scene and times ``task``."""
     import yasps
-    from contact_scene import build
+    from benchlib.contact_scene import build
     from yasps.runtime import (FactoredInputs, SlotFactoredInputs,
                                cpu_backend)
     from yasps.solve import assembly_inputs
@@ -99,12 +116,12 @@ def run_worker(task: str, energy: str, cache: str) -> dict:
     return json.loads(out.stdout.splitlines()[-1])
 
 
-def count_changes(calls: int, max_pairs: int) -> None:
+def count_changes(calls: int, max_pairs: int, results: Results) -> None:
     import numpy as np
 
     import yasps
-    from contact_scene import PAIR_TYPES, build, random_pairs
-    from timing import median
+    from benchlib.contact_scene import PAIR_TYPES, build, random_pairs
+    from benchlib.timing import median
 
     yasps.config.backend = "cpu"
     s, primitives, connectivities, positions = build()
@@ -137,12 +154,32 @@ def count_changes(calls: int, max_pairs: int) -> None:
     without.minimizeEnergy()
     empty = median(lambda: s.minimizeEnergy(tolerance=1e-4), 50)
     none = median(lambda: without.minimizeEnergy(tolerance=1e-4), 50)
-    print(f"  per call with no pairs: {1e3 * empty:.2f} ms; the same scene "
-          f"without the four pair energies: {1e3 * none:.2f} ms "
-          f"(the pair energies' fixed cost {1e3 * (empty - none):.2f} ms)")
-    print(f"  median per call, counts changed: {1e3 * np.median(changed):.2f} "
-          f"ms; counts set again unchanged: {1e3 * np.median(same):.2f} ms; "
-          f"difference {1e3 * (np.median(changed) - np.median(same)):+.2f} ms")
+    changed_ms = 1e3 * float(np.median(changed))
+    same_ms = 1e3 * float(np.median(same))
+    row = [calls, max_pairs, requests, 1e3 * empty, 1e3 * none,
+           1e3 * (empty - none), changed_ms, same_ms, changed_ms - same_ms]
+    table = results.table(
+        "pair_counts",
+        ["calls", "pairs per type", "compiler requests",
+         "no pairs (ms)", "without pair energies (ms)",
+         "pair energies' fixed cost (ms)", "counts changed (ms)",
+         "counts set again (ms)", "difference (ms)"],
+        [row],
+        ["{:,}", "0-{:,}", "{:,}", "{:.2f}", "{:.2f}", "{:.2f}", "{:.2f}",
+         "{:.2f}", "{:+.2f}"],
+        "minimizeEnergy calls with every pair type's count drawn in the "
+        "range: compiler requests made, the time per call with no pairs "
+        "against the same scene without the four pair energies, and the "
+        "median time of a call whose counts changed against one whose "
+        "counts (and pairs) were set again unchanged.")
+    _, _, _, empty_ms, none_ms, fixed_ms, changed_ms, same_ms, diff_ms = \
+        table.rows[0]
+    print(f"  per call with no pairs: {empty_ms:.2f} ms; the same scene "
+          f"without the four pair energies: {none_ms:.2f} ms (the pair "
+          f"energies' fixed cost {fixed_ms:.2f} ms)")
+    print(f"  median per call, counts changed: {changed_ms:.2f} ms; counts "
+          f"set again unchanged: {same_ms:.2f} ms; difference "
+          f"{diff_ms:+.2f} ms")
 
 
 def main() -> None:
@@ -150,41 +187,71 @@ def main() -> None:
     parser.add_argument("--calls", type=int, default=200)
     parser.add_argument("--max-pairs", type=int, default=5000)
     parser.add_argument("--worker", nargs=2, help=argparse.SUPPRESS)
+    add_json_argument(parser, "compile_times")
     args = parser.parse_args()
     if args.worker:
         print(json.dumps(worker(*args.worker)))
         return
 
-    from contact_scene import build
+    from benchlib.contact_scene import build
+    results = Results("compile_times")
     s, *_ = build()
     names = [e.owner.qualifiedName + "." + e.name for e in s.energies]
     print("cold compile per energy (fresh process and cache), seconds; "
           "doubles stored per instance for assembly (gradient and Hessian "
           "or its factors) as assembled, with padded per-instance J, and "
           "dense; doubles of the shared Jacobian tables it reads")
-    print(f"{'energy':24} {'minimizeEnergy':>15} {'+energyDerivatives':>19} "
+    print(f"{'energy':29} {'minimizeEnergy':>15} {'+energyDerivatives':>19} "
           f"{'n':>4} {'stored':>16} {'padded J':>9} {'dense':>6} "
           f"{'tables':>7}")
+    rows = []
     for name in names:
         with tempfile.TemporaryDirectory() as cache:
             r = run_worker("energy", name, cache)
         n = r["n"]
-        print(f"{name:24} {r['assembly']:15.2f} {r['derivatives']:19.2f} "
-              f"{n:4d} {r['stored']:>6} ({r['how']:>7}) {r['padded']:>9} "
-              f"{n + n * n:>6} {r['tables']:>7}")
-    for task, how in (("compile", "yasps.compile(scene), then"),
-                      ("scene", "without yasps.compile:")):
+        rows.append([LABELS.get(name, name), r["assembly"], r["derivatives"],
+                     n, {"stored": r["stored"], "as": r["how"]}, r["padded"],
+                     n + n * n, r["tables"]])
+        label, assembly, derivatives, n, stored, padded, dense, tables = \
+            rows[-1]
+        print(f"{label:29} {assembly:15.2f} {derivatives:19.2f} "
+              f"{n:4d} {stored['stored']:>6} ({stored['as']:>7}) "
+              f"{padded:>9} {dense:>6} {tables:>7}")
+    results.table(
+        "energies",
+        ["energy", "cold, minimizeEnergy's kernels (s)",
+         "+ energyDerivatives (s)", "n", "stored per instance",
+         "padded J", "dense", "tables"],
+        rows,
+        ["", "{:.2f}", "{:.2f}", "{}", "{0[stored]:,} ({0[as]})", "{:,}",
+         "{:,}", "{:,}"])
+    rows = []
+    for task, how, label in (
+            ("compile", "yasps.compile(scene), then", "yasps.compile(scene)"),
+            ("scene", "without yasps.compile:", "without yasps.compile")):
         with tempfile.TemporaryDirectory() as cache:
             cold = run_worker(task, "", cache)
             warm = run_worker(task, "", cache)
+        rows.append([label, cold["seconds"], cold["kernels_compiled"],
+                     cold["requests"], warm["seconds"],
+                     warm["kernels_compiled"], warm["requests"]])
+        _, cold_s, cold_k, cold_r, warm_s, warm_k, warm_r = rows[-1]
         print(f"\nwhole scene, {how} the first minimizeEnergy and "
               f"evaluateEnergy:")
-        print(f"  cold {cold['seconds']:.2f} s ({cold['kernels_compiled']} "
-              f"kernels compiled, {cold['requests']} compiler requests); "
-              f"warm, new process with the disk cache {warm['seconds']:.2f} s "
-              f"({warm['kernels_compiled']} compiled, {warm['requests']} "
-              f"requests)")
-    count_changes(args.calls, args.max_pairs)
+        print(f"  cold {cold_s:.2f} s ({cold_k} kernels compiled, {cold_r} "
+              f"compiler requests); warm, new process with the disk cache "
+              f"{warm_s:.2f} s ({warm_k} compiled, {warm_r} requests)")
+    results.table(
+        "whole_scene",
+        ["whole scene", "cold (s)", "kernels compiled", "compiler requests",
+         "warm (s)", "kernels compiled, warm", "compiler requests, warm"],
+        rows, ["", "{:.2f}", "{}", "{}", "{:.2f}", "{}", "{}"],
+        "The first minimizeEnergy and evaluateEnergy of the whole scene, "
+        "cold (fresh process and kernel cache) and warm (a new process with "
+        "the disk cache).")
+    count_changes(args.calls, args.max_pairs, results)
+    path = results.write(args.json)
+    print(f"results: {path}")
 
 
 if __name__ == "__main__":

@@ -28,6 +28,12 @@ yasps' on the first --check tets and stops if they disagree.
 
     python3 bench/cpu_peers.py --tinyad DIR --symx DIR [--repeat 5] [--rounds 3] [--mesh 19k]
 
+The tables go to --json (default bench/results/cpu_peers.json):
+``comparison`` (the table above), ``comparison_full_projection`` (yasps
+projecting the 12x12 local Hessian as the peers do), ``rounds`` (each
+round's ratios), ``agreement``, ``residuals`` and ``split`` (each tool's
+Newton direction by stage).
+
 Either peer may be left out (its columns are then skipped). TinyAD needs
 Eigen 3: --eigen DIR, else /usr/include/eigen3, else the copy bundled with
 SymX. --build-wrapper prefixes every compile command (CMake's and the
@@ -44,7 +50,7 @@ import subprocess
 import sys
 import tempfile
 from pathlib import Path
-from typing import Dict, List, Optional, Tuple
+from typing import Any, Dict, List, Optional, Tuple
 
 # One thread for everyone, the drivers included (they inherit this).
 for _var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS",
@@ -61,11 +67,14 @@ import numpy as np  # noqa: E402
 
 import yasps  # noqa: E402
 from benchlib.meshes import bunny  # noqa: E402
+from benchlib.results import Results, Table, add_json_argument  # noqa: E402
+from benchlib.tables import cell_text  # noqa: E402
 from benchlib.timing import median  # noqa: E402
 from yasps import energies as E  # noqa: E402
 from yasps.compiler.cpu import compile_cpu  # noqa: E402
 from yasps.compiler.pipelines import differentiation_pipeline  # noqa: E402
 from yasps.ir import emit_scene  # noqa: E402
+from yasps.runtime.cpu import launch as launch_kernel  # noqa: E402
 from yasps.runtime.inputs import host_input  # noqa: E402
 from yasps.compiler.params import ArgumentKind  # noqa: E402
 
@@ -74,7 +83,8 @@ DT2, MU, LAM, MASS, NOISE, SEED = 1e-4, 1e4, 4e4, 1e-3, 1e-3, 0
 TOLERANCE = 1e-4
 DRIVERS = HERE / "cpp" / "peers"
 PEERS = ("TinyAD", "SymX")
-Results = Dict[str, object]
+#: One tool's figures (times in seconds end in "_s").
+ToolResults = Dict[str, Any]
 
 
 class Work:
@@ -163,7 +173,7 @@ def build_drivers(build: Path, tinyad: Optional[Path], symx: Optional[Path],
     run(["cmake", "--build", str(build), f"-j{jobs}", "--target", *targets])
 
 
-def run_driver(command: List[str], out: Path, check: int) -> Results:
+def run_driver(command: List[str], out: Path, check: int) -> ToolResults:
     """Runs a driver; its "@peer key value" lines, and its check values
     ``grad`` (check, 12) and ``hess`` (check, 12, 12)."""
     out.mkdir(parents=True, exist_ok=True)
@@ -173,7 +183,7 @@ def run_driver(command: List[str], out: Path, check: int) -> Results:
     if done.returncode != 0:
         sys.stdout.write(done.stdout[-6000:])
         raise SystemExit(f"cpu_peers: {Path(command[0]).name} failed ({done.returncode})")
-    results: Results = {}
+    results: ToolResults = {}
     for line in done.stdout.splitlines():
         if line.startswith("@peer "):
             _, key, value = line.split(" ", 2)
@@ -188,7 +198,7 @@ def run_driver(command: List[str], out: Path, check: int) -> Results:
 
 # --- yasps ------------------------------------------------------------------------
 
-def yasps_results(work: Work, repeat: int) -> Results:
+def yasps_results(work: Work, repeat: int) -> ToolResults:
     """yasps' per-tet kernel times, its Newton direction and its check
     values, one thread."""
     yasps.config.num_threads = 1
@@ -202,12 +212,12 @@ def yasps_results(work: Work, repeat: int) -> Results:
         kernel = kernels.kernel(path)
         out = np.empty(count * kernel.rows * kernel.cols, dtype=kernel.out_dtype)
         buffers = [out if a.kind is ArgumentKind.out else host_input(s, a) for a in kernel.arguments]
-        launches.append(lambda p=path, b=buffers: kernels.launch(p, count, b, 1))
+        launches.append(lambda p=path, b=buffers: launch_kernel(kernels, p, count, b, 1))
     grad_k, hess_k, proj_k = launches
     for launch in launches:
         launch()  # warm: output pages touched
     kind = kernels.kernel(paths[2]).projection
-    results: Results = {
+    results: ToolResults = {
         "projection_kind": kind,
         "grad_hess_s": median(lambda: (grad_k(), hess_k()), repeat),
         # The projected kernel recomputes the Hessian: with the gradient
@@ -223,6 +233,11 @@ def yasps_results(work: Work, repeat: int) -> Results:
     s.minimizeEnergy(tolerance=TOLERANCE)  # compiles the scene's kernels
     stages: Dict[str, List[float]] = {}
     for _ in range(repeat):
+        # The positions written back unchanged: a new version, so that the
+        # call computes the derivatives again (an assembly at the point of
+        # the last one reuses them), as at a new point.
+        x = s.minimizeTargets[0]
+        x.updateValue(x.value)
         s.minimizeEnergy(tolerance=TOLERANCE)
         seconds = dict(s.lastSolve["seconds"])
         seconds["total"] = sum(seconds.values())
@@ -238,7 +253,7 @@ def yasps_results(work: Work, repeat: int) -> Results:
     return results
 
 
-def check_agrees(name: str, peer: Results, ours: Results, check: int) -> Tuple[float, float]:
+def check_agrees(name: str, peer: ToolResults, ours: ToolResults, check: int) -> Tuple[float, float]:
     """Stops unless the peer's gradients and unprojected Hessians agree with
     yasps' to 1e-12, relative to each tet's largest entry; returns the
     largest relative differences."""
@@ -258,39 +273,76 @@ def check_agrees(name: str, peer: Results, ours: Results, check: int) -> Tuple[f
 
 # --- the table --------------------------------------------------------------------
 
-def table(results: Dict[str, Results], count: int) -> List[str]:
-    """The comparison table (Markdown): times and ratios peer / yasps."""
+#: The tools' cells of the comparison carry their row's format: a cell is
+#: {"value": number or text, "format": format spec}.
+TOOL_CELL = "{0[value]:{0[format]}}"
+
+
+def comparison(results: Dict[str, ToolResults], count: int
+               ) -> Tuple[List[str], List[list], List[str]]:
+    """The comparison table's columns, rows and formats: times and ratios
+    peer / yasps."""
     peers = [p for p in PEERS if p in results]
     ours = results["yasps"]
 
     def per_tet(key: str):
         return lambda r: r[key] * 1e9 / count
 
-    rows = [
-        ("gradient+Hessian (ns/tet)", per_tet("grad_hess_s"), "{:.0f}"),
-        ("+PSD projection (ns/tet)", per_tet("grad_hess_proj_s"), "{:.0f}"),
-        ("projected matrix", lambda r: r["projection"], "{}"),
-        ("Newton direction (ms)", lambda r: r["newton_s"] * 1e3, "{:.1f}"),
-        ("of which solve (ms)", lambda r: r["solve_s"] * 1e3, "{:.1f}"),
-        ("PCG iterations", lambda r: r["iterations"], "{:.0f}"),
-        ("PCG per iteration (ms)", lambda r: r["solve_s"] * 1e3 / r["iterations"], "{:.3f}"),
+    measures = [
+        ("gradient+Hessian (ns/tet)", per_tet("grad_hess_s"), ".0f"),
+        ("+PSD projection (ns/tet)", per_tet("grad_hess_proj_s"), ".0f"),
+        ("projected matrix", lambda r: r["projection"], ""),
+        ("Newton direction (ms)", lambda r: r["newton_s"] * 1e3, ".1f"),
+        ("of which solve (ms)", lambda r: r["solve_s"] * 1e3, ".1f"),
+        ("PCG iterations", lambda r: r["iterations"], ".0f"),
+        ("PCG per iteration (ms)", lambda r: r["solve_s"] * 1e3 / r["iterations"], ".3f"),
     ]
-    header = ["per tet / per step"] + peers + ["yasps"] + [f"yasps vs {p}" for p in peers]
-    lines = ["| " + " | ".join(header) + " |", "|" + "---|" * len(header)]
-    for label, value, fmt in rows:
-        cells = [label] + [fmt.format(value(results[p])) for p in peers + ["yasps"]]
+    columns = (["per tet / per step"] + peers + ["yasps"]
+               + [f"yasps vs {p}" for p in peers])
+    rows = []
+    for label, value, spec in measures:
+        cells: list = [label] + [{"value": value(results[p]), "format": spec}
+                                 for p in peers + ["yasps"]]
         for p in peers:
             mine, theirs = value(ours), value(results[p])
-            cells.append("" if isinstance(mine, str) else f"{theirs / mine:.2f}x")
-        lines.append("| " + " | ".join(cells) + " |")
-    return lines
+            cells.append(None if isinstance(mine, str) else theirs / mine)
+        rows.append(cells)
+    formats = [""] + [TOOL_CELL] * (len(peers) + 1) + ["{:.2f}x"] * len(peers)
+    return columns, rows, formats
+
+
+def markdown(table: Table) -> str:
+    """The table as Markdown, its cells formatted as the documents show
+    them."""
+    lines = ["| " + " | ".join(table.columns) + " |",
+             "|" + "---|" * len(table.columns)]
+    lines += ["| " + " | ".join(cell_text(v, f) for v, f in
+                                zip(row, table.formats)) + " |"
+              for row in table.rows]
+    return "\n".join(lines)
+
+
+def plain(r: ToolResults) -> Dict[str, Any]:
+    """A tool's figures for the JSON: no check values, numbers as Python's."""
+    out: Dict[str, Any] = {}
+    for key, value in r.items():
+        if key in ("grad", "hess"):
+            continue
+        if key == "rounds":
+            value = [plain(x) for x in value]
+        elif isinstance(value, dict):
+            value = {k: float(v) for k, v in value.items()}
+        elif isinstance(value, np.generic):
+            value = value.item()
+        out[key] = value
+    return out
 
 
 def one_round(args: argparse.Namespace, work: Work, check: int,
-              wrapper: List[str]) -> Tuple[Dict[str, Results], Optional[Results]]:
+              wrapper: List[str]) -> Tuple[Dict[str, ToolResults], Optional[ToolResults]]:
     """One round: each peer's driver (--repeat runs of each stage), then
     yasps, and where yasps projects in F, yasps with the 12x12 projection."""
-    results: Dict[str, Results] = {}
+    results: Dict[str, ToolResults] = {}
     if args.tinyad or args.symx:
         with tempfile.TemporaryDirectory(prefix="yasps-cpu-peers-") as tmp:
             inputs = Path(tmp) / "inputs"
@@ -311,7 +363,7 @@ def one_round(args: argparse.Namespace, work: Work, check: int,
     print("yasps: compiling and timing", flush=True)
     results["yasps"] = yasps_results(work, args.repeat)
     # Where yasps projects in F (9x9), also the peers' 12x12 projection.
-    full: Optional[Results] = None
+    full: Optional[ToolResults] = None
     if results["yasps"]["projection_kind"] != "full" and \
             getattr(yasps.config, "linear_map_projection", None) is True:
         print("yasps: again with the 12x12 projection "
@@ -324,7 +376,7 @@ def one_round(args: argparse.Namespace, work: Work, check: int,
     return results, full
 
 
-def combine(rounds: List[Results]) -> Results:
+def combine(rounds: List[ToolResults]) -> ToolResults:
     """One tool's results over rounds: the median of each time (and of each
     stage of a split), everything else (check values, names, iteration
     counts, the same in every round) from the first round."""
@@ -339,27 +391,26 @@ def combine(rounds: List[Results]) -> Results:
     return combined
 
 
-def per_round_ratios(results: Dict[str, Results]) -> List[str]:
+def per_round_ratios(results: Dict[str, ToolResults]) -> List[list]:
     """Each round's ratio peer / yasps of the stages the acceptance names,
-    from times taken in the same round."""
+    from times taken in the same round: rows of the measure, the ratio of
+    each round, the lowest and the median."""
     ours = results["yasps"]["rounds"]
     measures = (
         ("+PSD projection", lambda r: r["grad_hess_proj_s"]),
         ("Newton direction", lambda r: r["newton_s"]),
         ("PCG per iteration", lambda r: r["solve_s"] / r["iterations"]),
     )
-    lines = []
+    rows = []
     for name in PEERS:
         if name not in results:
             continue
         theirs = results[name]["rounds"]
         for label, value in measures:
             ratios = [value(t) / value(o) for t, o in zip(theirs, ours)]
-            lines.append(f"{label}, yasps vs {name}, each round: "
-                         + " ".join(f"{x:.2f}x" for x in ratios)
-                         + f" (lowest {min(ratios):.2f}x, median "
-                         f"{float(np.median(ratios)):.2f}x)")
-    return lines
+            rows.append([f"{label}, yasps vs {name}", *ratios, min(ratios),
+                         float(np.median(ratios))])
+    return rows
 
 
 def main() -> None:
@@ -381,6 +432,7 @@ def main() -> None:
     parser.add_argument("--build-wrapper", default="",
                         help="command prefixed to every compile, e.g. 'flock LOCK'")
     parser.add_argument("--jobs", type=int, default=2, help="parallel build jobs")
+    add_json_argument(parser, "cpu_peers")
     args = parser.parse_args()
     given = {"TinyAD": args.tinyad, "SymX": args.symx}
     for name, path in given.items():
@@ -407,8 +459,8 @@ def main() -> None:
         build_drivers(args.build_dir, args.tinyad, args.symx, eigen, wrapper, args.jobs)
     # Rounds alternate the tools: this host's speed drifts by up to 2x within
     # minutes, so each round's ratios compare times taken close together.
-    rounds: List[Dict[str, Results]] = []
-    fulls: List[Results] = []
+    rounds: List[Dict[str, ToolResults]] = []
+    fulls: List[ToolResults] = []
     for number in range(1, args.rounds + 1):
         print(f"round {number} of {args.rounds}", flush=True)
         results, full = one_round(args, work, check, wrapper)
@@ -417,48 +469,92 @@ def main() -> None:
             fulls.append(full)
     results = {name: combine([r[name] for r in rounds]) for name in rounds[0]}
     full = combine(fulls) if fulls else None
+    out = Results("cpu_peers")
+    out.values.update(mesh=args.mesh, vertices=len(work.x), tets=count,
+                      repeat=args.repeat, rounds=args.rounds, check=check,
+                      skipped=[n for n, p in given.items() if p is None])
+    agreement = []
     for name in PEERS:
         if name in results:
             g, h = check_agrees(name, results[name], results["yasps"], check)
+            agreement.append([name, check, g, h])
             print(f"{name} agrees with yasps on {check} tets: gradients to "
                   f"{g:.1e}, Hessians to {h:.1e} (relative to each tet's largest entry)")
 
+    setting = (f"bunny-{args.mesh} ({len(work.x):,} vertices, {count:,} tets), "
+               f"stable Neo-Hookean + inertia, one thread, median of "
+               f"{args.repeat} runs per round, median over {args.rounds} "
+               f"rounds; ratios: peer / yasps (above 1: yasps takes less time "
+               f"or fewer iterations)")
     print()
-    print("\n".join(table(results, count)))
+    print(markdown(out.table("comparison", *comparison(results, count),
+                             note=setting + ".")))
     print()
     if full is not None:
         print("yasps projecting the full 12x12 local Hessian as the peers do "
               "(yasps.config.linear_map_projection = False):")
         print()
-        print("\n".join(table({**results, "yasps": full}, count)))
+        print(markdown(out.table(
+            "comparison_full_projection",
+            *comparison({**results, "yasps": full}, count),
+            note=setting + "; yasps projecting the full 12x12 local Hessian "
+            "as the peers do (yasps.config.linear_map_projection = False).")))
         print()
     print("ratios: peer / yasps (above 1: yasps takes less time or fewer iterations)")
-    if len(rounds) > 1:
-        print("\n".join(per_round_ratios(results)))
+    if len(rounds) > 1 and len(results) > 1:
+        ratios = out.table(
+            "rounds", ["measure"] + [f"round {k}" for k in
+                                     range(1, len(rounds) + 1)]
+            + ["lowest", "median"], per_round_ratios(results),
+            [""] + ["{:.2f}x"] * (len(rounds) + 2),
+            "Each round's ratio peer / yasps, from times taken in the same "
+            "round.")
+        for label, *each, lowest, middle in ratios.rows:
+            print(f"{label}, each round: " + " ".join(f"{x:.2f}x" for x in each)
+                  + f" (lowest {lowest:.2f}x, median {middle:.2f}x)")
     for name, path in given.items():
         if path is None:
             print(f"{name} skipped (no --{name.lower()} DIR)")
-    for name in PEERS + ("yasps",):
-        r = results.get(name)
-        if r is None:
-            continue
-        print(f"{name}: {r['solver']}, relative residual ||g - H dx||/||g|| = "
-              f"{r['relative_residual']:.2e}")
-    split = results["yasps"]["split"]
-    print("yasps Newton direction split: " + ", ".join(
-        f"{stage} {seconds * 1e3:.1f} ms" for stage, seconds in split.items()))
+    if agreement:
+        out.table("agreement", ["peer", "tets", "gradients", "Hessians"],
+                  agreement, ["", "", "{:.1e}", "{:.1e}"],
+                  "The largest difference of the peer's per-tet gradients and "
+                  "unprojected Hessians to yasps', relative to each tet's "
+                  "largest entry.")
+    residuals = out.table(
+        "residuals", ["tool", "solver", "relative residual"],
+        [[name, results[name]["solver"], results[name]["relative_residual"]]
+         for name in PEERS + ("yasps",) if name in results],
+        ["", "", "{:.2e}"], "The Newton direction's relative residual "
+        "||g - H dx|| / ||g||, recomputed.")
+    for name, solver, residual in residuals.rows:
+        print(f"{name}: {solver}, relative residual ||g - H dx||/||g|| = "
+              f"{residual:.2e}")
+    split = [["yasps", stage, seconds * 1e3]
+             for stage, seconds in results["yasps"]["split"].items()]
     tinyad = results.get("TinyAD")
     if tinyad is not None:
-        print(f"TinyAD Newton direction split: eval_with_hessian_proj (derivatives, "
-              f"projection, triplet assembly) "
-              f"{(tinyad['newton_s'] - tinyad['solve_s']) * 1e3:.1f} ms, solve "
-              f"{tinyad['solve_s'] * 1e3:.1f} ms")
+        split += [["TinyAD", "eval_with_hessian_proj (derivatives, projection, "
+                   "triplet assembly)", (tinyad["newton_s"] - tinyad["solve_s"]) * 1e3],
+                  ["TinyAD", "solve", tinyad["solve_s"] * 1e3]]
     symx = results.get("SymX")
     if symx is not None:
-        print(f"SymX Newton direction split: derivatives "
-              f"{symx['newton_derivatives_s'] * 1e3:.1f} ms, projection "
-              f"{symx['newton_projection_s'] * 1e3:.1f} ms, assembly "
-              f"{symx['newton_assembly_s'] * 1e3:.1f} ms, solve {symx['solve_s'] * 1e3:.1f} ms")
+        split += [["SymX", "derivatives", symx["newton_derivatives_s"] * 1e3],
+                  ["SymX", "projection", symx["newton_projection_s"] * 1e3],
+                  ["SymX", "assembly", symx["newton_assembly_s"] * 1e3],
+                  ["SymX", "solve", symx["solve_s"] * 1e3]]
+    out.table("split", ["tool", "stage", "time (ms)"], split,
+              ["", "", "{:.1f}"], "Each tool's Newton direction by stage.")
+    for name in ("yasps",) + PEERS:
+        stages = [f"{stage} {ms:.1f} ms" for tool, stage, ms in split
+                  if tool == name]
+        if stages:
+            print(f"{name} Newton direction split: " + ", ".join(stages))
+    out.values["tools"] = {name: plain(r) for name, r in results.items()}
+    if full is not None:
+        out.values["yasps_full_projection"] = plain(full)
+    path = out.write(args.json)
+    print(f"results: {path}")
 
 
 if __name__ == "__main__":

@@ -15,7 +15,7 @@ first checks that every peer's gradient and Hessian agree with yasps'. Prints
 time per instance and the ratios, plus yasps' symbolic differentiation +
 kernel compile time and the Hessian kernel's multiplications and additions.
 
-    python3 bench/derivatives.py [--count 20000] [--repeat 5]
+    python3 bench/derivatives.py [--count 20000] [--repeat 5] [--json PATH]
 
 PyTorch is optional (`pip install torch`): without it the script says so
 and prints the JAX columns only. SymPy-generated code is compared in
@@ -48,13 +48,14 @@ import jax  # noqa: E402
 import jax.numpy as jnp  # noqa: E402
 
 from benchlib.energy_cases import CASES, ArrayOps, check_agrees  # noqa: E402
+from benchlib.results import Results, add_json_argument  # noqa: E402
 from benchlib.timing import median  # noqa: E402
 
 try:
     import torch  # noqa: E402
     from torch.func import grad as torch_grad  # noqa: E402
     from torch.func import hessian as torch_hessian, vmap as torch_vmap  # noqa: E402
-    from energy_cases import TorchOps  # noqa: E402
+    from benchlib.energy_cases import TorchOps  # noqa: E402
     TORCH_SKIPPED: Optional[str] = None
 except ImportError as err:  # PyTorch is optional
     torch = None
@@ -84,19 +85,51 @@ def torch_times(tf: Callable, jargs: Tuple[np.ndarray, ...], check,
     return plain, proj
 
 
+#: The table's columns: (header, format in the JSON table, format printed).
+#: Times are ns per instance, "compile" seconds, ratios peer / yasps.
+JAX_COLUMNS = [
+    ("energy", "", "{:34s}"),
+    ("compile", "{:.2f}s", "{:7.2f}s"),
+    ("yasps g+H", "{:.0f}ns", "{:10.0f}ns"),
+    ("+proj", "{:.0f}ns", "{:8.0f}ns"),
+    ("JAX g+H", "{:.0f}ns", "{:10.0f}ns"),
+    ("JAX/yasps", "{:.1f}x", "{:10.1f}x"),
+    ("JAX +proj", "{:.0f}ns", "{:9.0f}ns"),
+    ("JAX/yasps", "{:.1f}x", "{:10.1f}x"),
+]
+TORCH_COLUMNS = [
+    ("torch g+H", "{:.0f}ns", "{:10.0f}ns"),
+    ("torch/yasps", "{:.1f}x", "{:12.1f}x"),
+    ("torch +proj", "{:.0f}ns", "{:11.0f}ns"),
+    ("torch/yasps", "{:.1f}x", "{:12.1f}x"),
+]
+#: The Hessian kernel's static multiplications and additions, printed as
+#: one column "H mul/add".
+COUNT_COLUMNS = [
+    ("H mul", "{:d}", "{:7d}"),
+    ("H add", "{:d}", "/{:d}"),
+]
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--count", type=int, default=20000)
     parser.add_argument("--repeat", type=int, default=5)
+    add_json_argument(parser, "derivatives")
     args = parser.parse_args()
     n = args.count
+    results = Results("derivatives")
+    results.values.update(count=n, repeat=args.repeat,
+                          torch_skipped=TORCH_SKIPPED)
     if torch is not None:
         torch.set_num_threads(1)
         # torch.func scripts its decompositions with the deprecated
         # torch.jit.script on first use; that is PyTorch's business.
         warnings.filterwarnings("ignore", message="`torch.jit.script` is deprecated",
                                 category=FutureWarning)
-    print(f"{n} instances, one thread, median of {args.repeat}; times per instance")
+    columns = JAX_COLUMNS + ([] if torch is None else TORCH_COLUMNS) + COUNT_COLUMNS
+    title = f"{n} instances, one thread, median of {args.repeat}; times per instance"
+    print(title)
     if TORCH_SKIPPED is not None:
         print(f"PyTorch skipped: torch is not importable ({TORCH_SKIPPED})")
     torch_header = "" if torch is None else (
@@ -106,6 +139,7 @@ def main() -> None:
           f"{torch_header}{'H mul/add':>12s}")
     jax_ops = ArrayOps(jnp)
     torch_ops = None if torch is None else TorchOps()
+    rows = []
     for case in CASES:
         jargs = case.instances(n)
         energy = case.build(jargs)
@@ -136,16 +170,25 @@ def main() -> None:
                                    projected(*jx).block_until_ready()), args.repeat)
         per = 1e9 / n
         counts = library.op_counts(energy.path("hess"))
-        torch_cols = ""
+        row = [case.name, compile_time, gh * per, proj * per,
+               jax_time * per, jax_time / gh,
+               jax_proj * per, jax_proj / ours_proj]
         if torch is not None:
             t_plain, t_proj = torch_times(partial(case.formula, torch_ops), jargs,
                                           check, args.repeat)
-            torch_cols = (f"{t_plain * per:10.0f}ns{t_plain / gh:12.1f}x"
-                          f"{t_proj * per:11.0f}ns{t_proj / ours_proj:12.1f}x")
-        print(f"{case.name:34s}{compile_time:7.2f}s{gh * per:10.0f}ns{proj * per:8.0f}ns"
-              f"{jax_time * per:10.0f}ns{jax_time / gh:10.1f}x"
-              f"{jax_proj * per:9.0f}ns{jax_proj / ours_proj:10.1f}x"
-              f"{torch_cols}{counts['mul']:7d}/{counts['add']}", flush=True)
+            row += [t_plain * per, t_plain / gh, t_proj * per, t_proj / ours_proj]
+        row += [counts["mul"], counts["add"]]
+        rows.append(row)
+        print("".join(c[2].format(v) for c, v in zip(columns, row)), flush=True)
+    note = (f"{title}. \"compile\": yasps' differentiation and kernel "
+            "compilation, cold cache; ratios: peer / yasps; \"H mul\" and "
+            "\"H add\": the Hessian kernel's operations after CSE.")
+    if torch is None:
+        note += f" PyTorch skipped: {TORCH_SKIPPED}."
+    results.table("derivatives", [c[0] for c in columns], rows,
+                  [c[1] for c in columns], note)
+    path = results.write(args.json)
+    print(f"results: {path}")
 
 
 if __name__ == "__main__":

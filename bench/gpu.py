@@ -18,7 +18,10 @@ iteration. Needs a CUDA GPU; each part is checked before it is timed.
    the GPU backend (derivatives, indices, assembly, PCG), split into stages,
    against the CPU backend.
 
-    python3 bench/gpu.py [spmv] [derivatives] [newton] [--repeat 50]
+    python3 bench/gpu.py [spmv] [derivatives] [newton] [--repeat 50] [--json PATH]
+
+Each part run writes its table (``spmv``, ``derivatives``, ``newton``) to the
+JSON results.
 """
 
 from __future__ import annotations
@@ -45,10 +48,11 @@ from yasps.runtime import cpu_backend, gpu_backend  # noqa: E402
 from yasps.solve import assemble  # noqa: E402
 
 from benchlib.elastic_scenes import bunny_snh, bunny_snh_inputs  # noqa: E402
+from benchlib.results import Results, add_json_argument  # noqa: E402
 from benchlib.timing import median, per_call  # noqa: E402
 
 
-def spmv(repeat: int) -> None:
+def spmv(repeat: int, results: Results) -> None:
     import torch
     import scipy.sparse as sparse
 
@@ -73,7 +77,7 @@ def spmv(repeat: int) -> None:
     cuda = torch.device("cuda")
     xt = torch.from_numpy(x).to(cuda)
     sync = torch.cuda.synchronize
-    results = {}
+    peers = {}
     for name, matrix in (
             ("cuSPARSE BSR 3x3 (whole matrix)", torch.sparse_bsr_tensor(
                 torch.from_numpy(bsr.indptr), torch.from_numpy(bsr.indices),
@@ -85,10 +89,10 @@ def spmv(repeat: int) -> None:
             y = (matrix @ xt).cpu().numpy()
             np.testing.assert_allclose(y, want, rtol=1e-10,
                                        atol=1e-10 * np.abs(want).max())
-            results[name] = per_call(lambda: matrix @ xt, repeat,
-                                     lambda _: sync())
+            peers[name] = per_call(lambda: matrix @ xt, repeat,
+                                   lambda _: sync())
         except (RuntimeError, NotImplementedError) as err:
-            results[name] = f"not run: {type(err).__name__}: {err}"
+            peers[name] = f"not run: {type(err).__name__}: {err}"
 
     # Achievable bandwidth: a device-to-device copy of 1 GiB (read + write).
     src = torch.empty(1 << 27, dtype=torch.float64, device=cuda)
@@ -97,27 +101,50 @@ def spmv(repeat: int) -> None:
     bandwidth = 2 * src.numel() * 8 / copy
     bound = system.multiply_bytes / bandwidth
 
-    print(f"SpMV, bunny-19k Hessian ({n} DoFs, {system.stored_blocks} stored "
-          f"upper blocks, {nnz} scalar non-zeros), {torch.cuda.get_device_name()}")
-    print(f"  yasps (upper triangle, algorithm 7)  {ours * 1e3:8.4f} ms")
-    for name, t in results.items():
+    title = (f"SpMV, bunny-19k Hessian ({n} DoFs, {system.stored_blocks} "
+             f"stored upper blocks, {nnz} scalar non-zeros), "
+             f"{torch.cuda.get_device_name()}")
+    bound_line = (f"bandwidth bound: {system.multiply_bytes / 2**20:.1f} MiB at "
+                  f"{bandwidth / 1e9:.0f} GB/s (device copy) = "
+                  f"{bound * 1e3:.4f} ms; yasps reaches {100 * bound / ours:.0f}%")
+    # ms, and the time against yasps'; a peer that could not run has none.
+    rows = [["yasps (upper triangle, algorithm 7)", ours * 1e3, 1.0]]
+    not_run = []
+    for name, t in peers.items():
+        if isinstance(t, str):
+            rows.append([name, None, None])
+            not_run.append(f"{name}: {t}.")
+        else:
+            rows.append([name, t * 1e3, t / ours])
+    rows.append(["bandwidth bound (device copy speed)", bound * 1e3,
+                 bound / ours])
+    results.values["spmv"] = dict(
+        dofs=n, stored_blocks=system.stored_blocks, non_zeros=nnz,
+        device=torch.cuda.get_device_name(),
+        multiply_bytes=system.multiply_bytes, bandwidth=bandwidth,
+        bound_fraction=bound / ours)
+    results.table("spmv", ["SpMV", "time", "against yasps"], rows,
+                  ["", "{:.4f} ms", "{:.2f}x yasps"],
+                  " ".join([f"{title}. {bound_line}."] + not_run))
+
+    print(title)
+    print(f"  {rows[0][0]}  {rows[0][1]:8.4f} ms")
+    for name, t in peers.items():
         if isinstance(t, str):
             print(f"  {name:36s} {t}")
         else:
             print(f"  {name:36s} {t * 1e3:8.4f} ms  ({t / ours:.2f}x yasps)")
-    print(f"  bandwidth bound: {system.multiply_bytes / 2**20:.1f} MiB at "
-          f"{bandwidth / 1e9:.0f} GB/s (device copy) = {bound * 1e3:.4f} ms; "
-          f"yasps reaches {100 * bound / ours:.0f}%")
+    print(f"  {bound_line}")
 
 
-def derivatives(repeat: int) -> None:
+def derivatives(repeat: int, results: Results) -> None:
     import jax
     import jax.numpy as jnp
     import torch
     from torch.func import grad as torch_grad, hessian as torch_hessian, \
         vmap as torch_vmap
 
-    from energy_cases import CASES, ArrayOps, TorchOps, snh_positions
+    from benchlib.energy_cases import CASES, ArrayOps, TorchOps, snh_positions
     from yasps.runtime.gpu import session
 
     jax.config.update("jax_enable_x64", True)
@@ -171,33 +198,50 @@ def derivatives(repeat: int) -> None:
         jax_seconds[name] = median(lambda: fn(*jargs).block_until_ready(),
                                    repeat)
 
-    print(f"stable Neo-Hookean on positions, {count} bunny tets, float64, "
-          f"{torch.cuda.get_device_name()} (ms for all instances)")
-    print(f"  {'':10s}{'yasps':>10s}{'PyTorch':>12s}{'JAX':>10s}")
+    title = (f"stable Neo-Hookean on positions, {count} bunny tets, float64, "
+             f"{torch.cuda.get_device_name()} (ms for all instances)")
+    rows = []
     for name in names:
         y, t, j = yasps_seconds[name], torch_seconds[name], jax_seconds[name]
-        print(f"  {name:10s}{y * 1e3:10.3f}{t * 1e3:12.3f}{j * 1e3:10.3f}   "
-              f"PyTorch {t / y:.0f}x, JAX {j / y:.1f}x yasps")
+        rows.append([name, y * 1e3, t * 1e3, j * 1e3, t / y, j / y])
+    results.table("derivatives", ["", "yasps", "PyTorch", "JAX",
+                                  "PyTorch/yasps", "JAX/yasps"], rows,
+                  ["", "{:.3f} ms", "{:.3f} ms", "{:.3f} ms", "{:.0f}x",
+                   "{:.1f}x"], f"{title[0].upper()}{title[1:]}.")
+    print(title)
+    print(f"  {'':10s}{'yasps':>10s}{'PyTorch':>12s}{'JAX':>10s}")
+    for name, y, t, j, t_ratio, j_ratio in rows:
+        print(f"  {name:10s}{y:10.3f}{t:12.3f}{j:10.3f}   "
+              f"PyTorch {t_ratio:.0f}x, JAX {j_ratio:.1f}x yasps")
 
 
-def newton() -> None:
+def newton(results: Results) -> None:
     s = bunny_snh()
-    print("one Newton iteration, bunny-19k, stable Neo-Hookean + inertia "
-          "(second call: static structure reused)")
-    rows = {}
+    title = ("one Newton iteration, bunny-19k, stable Neo-Hookean + inertia "
+             "(second call: static structure reused)")
+    print(title)
+    runs = {}
     for where in ("cpu", "gpu"):
         yasps.config.backend = where
         s.minimizeEnergy(tolerance=1e-4)   # compiles, builds the structure
         s.minimizeEnergy(tolerance=1e-4)
-        rows[where] = dict(s.lastSolve["seconds"],
+        runs[where] = dict(s.lastSolve["seconds"],
                            iterations=s.lastSolve["iterations"])
-    print(f"  {'stage':12s}{'CPU (all cores)':>16s}{'GPU':>10s}")
+    # ms per stage on each backend, and CPU / GPU.
+    rows = []
     for stage in ("derivatives", "indices", "assembly", "solve"):
-        c, g = rows["cpu"][stage], rows["gpu"][stage]
-        print(f"  {stage:12s}{c * 1e3:13.1f} ms{g * 1e3:7.1f} ms   "
-              f"({c / g:.1f}x)")
-    print(f"  PCG iterations: CPU {rows['cpu']['iterations']}, "
-          f"GPU {rows['gpu']['iterations']}")
+        c, g = runs["cpu"][stage], runs["gpu"][stage]
+        rows.append([stage, c * 1e3, g * 1e3, c / g])
+    iterations = (f"PCG iterations: CPU {runs['cpu']['iterations']}, "
+                  f"GPU {runs['gpu']['iterations']}")
+    results.values["newton"] = runs
+    results.table("newton", ["stage", "CPU (all cores)", "GPU", "speed-up"],
+                  rows, ["", "{:.1f} ms", "{:.1f} ms", "{:.1f}x"],
+                  f"{title[0].upper()}{title[1:]}. {iterations}.")
+    print(f"  {'stage':12s}{'CPU (all cores)':>16s}{'GPU':>10s}")
+    for stage, c, g, ratio in rows:
+        print(f"  {stage:12s}{c:13.1f} ms{g:7.1f} ms   ({ratio:.1f}x)")
+    print(f"  {iterations}")
 
 
 def main() -> None:
@@ -205,14 +249,23 @@ def main() -> None:
     parser.add_argument("parts", nargs="*",
                         default=["spmv", "derivatives", "newton"])
     parser.add_argument("--repeat", type=int, default=50)
+    add_json_argument(parser, "gpu")
     args = parser.parse_args()
+    parts = {"spmv": lambda: spmv(args.repeat, results),
+             "derivatives": lambda: derivatives(args.repeat, results),
+             "newton": lambda: newton(results)}
+    unknown = [p for p in args.parts if p not in parts]
+    if unknown:
+        parser.error(f"unknown parts {unknown}: choose from {list(parts)}")
     status = yasps.gpu_status()
     if not status.usable:
         sys.exit(f"bench/gpu.py needs a GPU: {status.reason}")
+    results = Results("gpu")
+    results.values["repeat"] = args.repeat
     for part in args.parts:
-        {"spmv": lambda: spmv(args.repeat),
-         "derivatives": lambda: derivatives(args.repeat),
-         "newton": newton}[part]()
+        parts[part]()
+    path = results.write(args.json)
+    print(f"results: {path}")
 
 
 if __name__ == "__main__":

@@ -3,7 +3,7 @@
 comparison with yasps' kernels timed by yasps-kernel-bench.
 
     yasps-kernel-bench KIT > kernels.log
-    python3 bench/gpu_peers.py KIT [--yasps-log kernels.log] [--repeat 20]
+    python3 bench/gpu_peers.py KIT [--yasps-log kernels.log] [--repeat 20] [--json PATH]
 
 Takes the formula's inputs from the kit (bench/gpu_kit.py's peer_inputs:
 positions (N, 12) and inverse rest shapes (N, 9) of the bunny's tets),
@@ -13,7 +13,8 @@ formula with ``torch.func.vmap`` of ``grad`` / ``hessian`` and with JAX's
 ``jit(vmap(...))``, float64 on the default GPU, checks the first instances
 against the CPU kernels' values in the kit, and prints the time of each for
 all instances, with the ratios to yasps' times read from the kernel
-benchmark's log. ``--device cpu`` checks the script without a GPU.
+benchmark's log (and yasps' projected Hessian alone, where the log has
+it). ``--device cpu`` checks the script without a GPU.
 """
 
 from __future__ import annotations
@@ -34,6 +35,7 @@ benchlib.use_this_checkout()
 
 from benchlib.energy_cases import ArrayOps, TorchOps, snh_positions  # noqa: E402
 from benchlib.kit_files import peer_inputs  # noqa: E402
+from benchlib.results import Results, add_json_argument  # noqa: E402
 from benchlib.timing import per_call  # noqa: E402
 
 
@@ -42,6 +44,25 @@ from benchlib.timing import per_call  # noqa: E402
 #: do not.
 PAPER_RTX_4090 = {"grad": {"yasps": 0.197},
                   "hess": {"yasps": 0.59, "PyTorch": 216.9, "JAX": 10.7}}
+
+#: The kernels' labels (in yasps-kernel-bench's log) and their rows in the
+#: tables.
+ROWS = {"grad": "gradient", "hess": "Hessian", "hess_proj": "projected Hessian"}
+#: The tables' columns (after the first, which names the work) and formats.
+COLUMNS = ["yasps", "PyTorch (vmap)", "PyTorch vs yasps", "JAX (jit vmap)",
+           "JAX vs yasps"]
+FORMATS = ["", "{:.3f} ms", "{:.3f} ms", "{:.0f}x", "{:.3f} ms", "{:.0f}x"]
+
+
+def row(name: str, ms: dict) -> list:
+    """A table row of ``ms`` ({system: ms}, any missing): the times and
+    each peer's ratio to yasps'."""
+    y = ms.get("yasps")
+    cells = [ROWS[name], y]
+    for peer in ("PyTorch", "JAX"):
+        t = ms.get(peer)
+        cells += [t, t / y if t is not None and y is not None else None]
+    return cells
 
 
 def yasps_times(log: Path) -> dict:
@@ -67,7 +88,9 @@ def main() -> None:
     parser.add_argument("--yasps-log", type=Path, default=None)
     parser.add_argument("--repeat", type=int, default=20)
     parser.add_argument("--device", default="cuda")
+    add_json_argument(parser, "gpu_peers")
     args = parser.parse_args()
+    out = Results("gpu_peers")
     arrays = list(peer_inputs(args.kit))
     ours = yasps_times(args.yasps_log) if args.yasps_log else {}
     results = {}
@@ -99,25 +122,49 @@ def main() -> None:
                                           lambda r: r.block_until_ready())
 
     where = torch.cuda.get_device_name() if device.type == "cuda" else "CPU"
-    print(f"stable Neo-Hookean on positions, {len(arrays[0])} bunny tets, "
-          f"float64, {where}: ms for all instances")
-    for name in ("grad", "hess"):
-        row = [f"  {name:6s}"]
-        if name in ours:
-            row.append(f"yasps {ours[name] * 1e3:8.3f}")
-        for peer in ("PyTorch", "JAX"):
-            t = results[(peer, name)]
-            ratio = f" ({t / ours[name]:.0f}x)" if name in ours else ""
-            row.append(f"{peer} {t * 1e3:9.3f}{ratio}")
-        print("   ".join(row))
+    count = len(arrays[0])
+    title = (f"stable Neo-Hookean on positions, {count} bunny tets, "
+             f"float64, {where}: ms for all instances")
+    first = f"stable Neo-Hookean, {count:,} tets, f64"
+    measured = [row(name, {"yasps": ours[name] * 1e3 if name in ours else None,
+                           **{peer: results[(peer, name)] * 1e3
+                              for peer in ("PyTorch", "JAX")}})
+                for name in ("grad", "hess")]
+    if "hess_proj" in ours:
+        measured.append(row("hess_proj", {"yasps": ours["hess_proj"] * 1e3}))
+    out.values.update(instances=count, device=where, repeat=args.repeat,
+                      yasps_log=str(args.yasps_log) if args.yasps_log else None)
+    out.table("peers", [first] + COLUMNS, measured, FORMATS,
+              f"{title[0].upper()}{title[1:]}; yasps from "
+              "yasps-kernel-bench's log, ratios peer / yasps.")
+    paper = [row(name, times) for name, times in PAPER_RTX_4090.items()]
+    out.table("paper_rtx_4090", ["the paper's RTX 4090"] + COLUMNS, paper,
+              FORMATS, "The paper's figures for the same work (ms); the "
+              "ratios are what compare across GPUs.")
+
+    print(title)
+    for name, cells in zip(("grad", "hess", "hess_proj"), measured):
+        _, y, t_ms, t_ratio, j_ms, j_ratio = cells
+        line = [f"  {name:6s}"]
+        if y is not None:
+            line.append(f"yasps {y:8.3f}")
+        for peer, ms, ratio in (("PyTorch", t_ms, t_ratio),
+                                ("JAX", j_ms, j_ratio)):
+            if ms is not None:
+                line.append(f"{peer} {ms:9.3f}"
+                            + (f" ({ratio:.0f}x)" if ratio is not None else ""))
+        print("   ".join(line))
     print("the paper's RTX 4090 (ms; the ratios are what compare):")
-    for name, paper in PAPER_RTX_4090.items():
-        row = [f"  {name:6s}", f"yasps {paper['yasps']:8.3f}"]
-        for peer in ("PyTorch", "JAX"):
-            if peer in paper:
-                row.append(f"{peer} {paper[peer]:9.3f} "
-                           f"({paper[peer] / paper['yasps']:.0f}x)")
-        print("   ".join(row))
+    for name, cells in zip(PAPER_RTX_4090, paper):
+        _, y, t_ms, t_ratio, j_ms, j_ratio = cells
+        line = [f"  {name:6s}", f"yasps {y:8.3f}"]
+        for peer, ms, ratio in (("PyTorch", t_ms, t_ratio),
+                                ("JAX", j_ms, j_ratio)):
+            if ms is not None:
+                line.append(f"{peer} {ms:9.3f} ({ratio:.0f}x)")
+        print("   ".join(line))
+    path = out.write(args.json)
+    print(f"results: {path}")
 
 
 if __name__ == "__main__":

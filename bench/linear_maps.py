@@ -11,7 +11,7 @@ of the projected matrix each way, the time per instance of the Hessian and
 of the projected-Hessian kernel (one thread, median). It also checks what the two must share: the projected
 Hessians are PSD, and where the Hessian is PSD they agree.
 
-    python3 bench/linear_maps.py [--count 20000] [--repeat 7]
+    python3 bench/linear_maps.py [--count 20000] [--repeat 7] [--json PATH]
 """
 
 from __future__ import annotations
@@ -31,9 +31,11 @@ benchlib.use_this_checkout()
 import numpy as np  # noqa: E402
 
 from benchlib import energy_cases as cases  # noqa: E402
+from benchlib.results import Results, add_json_argument  # noqa: E402
 from benchlib.timing import median  # noqa: E402
 from yasps.compiler.cpu import compile_cpu  # noqa: E402
 from yasps.ir import emit_scene  # noqa: E402
+from yasps.runtime.cpu import launch as launch_cpu  # noqa: E402
 from yasps.runtime.inputs import host_input  # noqa: E402
 from yasps.compiler.params import ArgumentKind  # noqa: E402
 
@@ -57,7 +59,7 @@ def run(energy: cases.YaspsEnergy, linear_maps: bool, repeat: int):
                        dtype=kernel.out_dtype)
         buffers = [out if a.kind is ArgumentKind.out else host_input(energy.scene, a)
                    for a in kernel.arguments]
-        launch = partial(kernels.launch, path, energy.count, buffers, 1)
+        launch = partial(launch_cpu, kernels, path, energy.count, buffers, 1)
         launch()
         times.append(median(launch, repeat) / energy.count * 1e9)
         outputs.append(out.reshape(energy.count, kernel.rows, kernel.cols).copy())
@@ -75,15 +77,28 @@ def projected_size(energy: cases.YaspsEnergy, linear_maps: bool) -> int:
     return 0
 
 
+#: The table's columns and their formats; "proj off" and "proj on" (the
+#: size of the matrix each way) are printed as one column "proj", "off->on".
+#: Times are ns per instance.
+COLUMNS = ["energy", "proj off", "proj on", "hess", "+proj off", "+proj on",
+           "speed-up"]
+FORMATS = ["", "{:d}", "{:d}", "{:.0f}ns", "{:.0f}ns", "{:.0f}ns", "{:.2f}x"]
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--count", type=int, default=20000)
     parser.add_argument("--repeat", type=int, default=7)
+    add_json_argument(parser, "linear_maps")
     args = parser.parse_args()
-    print(f"{args.count} instances, one thread, median of {args.repeat}; "
-          "per instance")
+    results = Results("linear_maps")
+    results.values.update(count=args.count, repeat=args.repeat)
+    title = (f"{args.count} instances, one thread, median of {args.repeat}; "
+             "per instance")
+    print(title)
     print(f"{'energy':36s} {'proj':>7s} {'hess':>8s} {'+proj off':>10s} "
           f"{'+proj on':>9s} {'speed-up':>9s}")
+    rows = []
     for case in cases.CASES:
         energy = case.build(case.instances(args.count))
         off = run(energy, False, args.repeat)
@@ -97,9 +112,22 @@ def main() -> None:
         if psd.any():
             assert np.abs(P_on[psd] - P_off[psd]).max() <= 1e-9 * scale, \
                 f"{case.name}: PSD Hessians changed by the projection"
-        sizes = f"{projected_size(energy, False)}->{projected_size(energy, True)}"
-        print(f"{case.name:36s} {sizes:>7s} {off[0][0]:6.0f}ns {off[0][1]:8.0f}ns "
-              f"{on[0][1]:7.0f}ns {off[0][1] / on[0][1]:8.2f}x", flush=True)
+        row = [case.name, projected_size(energy, False),
+               projected_size(energy, True), off[0][0], off[0][1], on[0][1],
+               off[0][1] / on[0][1]]
+        rows.append(row)
+        name, size_off, size_on, hess, proj_off, proj_on, speed_up = row
+        sizes = f"{size_off}->{size_on}"
+        print(f"{name:36s} {sizes:>7s} {hess:6.0f}ns {proj_off:8.0f}ns "
+              f"{proj_on:7.0f}ns {speed_up:8.2f}x", flush=True)
+    results.table("linear_maps", COLUMNS, rows, FORMATS,
+                  f"{title}. \"proj off\" and \"proj on\": the size of the "
+                  "matrix the projection decomposes with linear-maps=false "
+                  "and true; \"hess\": the Hessian kernel; \"+proj off\" and "
+                  "\"+proj on\": the projected-Hessian kernel each way; "
+                  "speed-up: off / on.")
+    path = results.write(args.json)
+    print(f"results: {path}")
 
 
 if __name__ == "__main__":

@@ -8,7 +8,10 @@ second call, which reuses the static structure), the PCG
 iterations, and the block-sparse SpMV of the runtime against SciPy's CSR
 SpMV on the same matrix (one thread each; SciPy's is single-threaded).
 
-    python3 bench/newton_system.py [--repeat 20] [--threads 1]
+Writes the tables (``stages``, ``spmv``) to --json (default
+bench/results/newton_system.json).
+
+    python3 bench/newton_system.py [--repeat 20] [--threads 1] [--json PATH]
 """
 
 from __future__ import annotations
@@ -28,10 +31,23 @@ import numpy as np  # noqa: E402
 import scipy.sparse as sparse  # noqa: E402
 
 import yasps  # noqa: E402
+from benchlib.results import Results, add_json_argument  # noqa: E402
 from benchlib.timing import median  # noqa: E402
 from yasps.runtime import cpu_backend  # noqa: E402
 from yasps.solve import assemble  # noqa: E402
 from benchlib.elastic_scenes import bunny_snh  # noqa: E402
+
+
+STAGES = ("derivatives", "indices", "assembly", "solve")
+
+
+def at_new_point(s) -> None:
+    """Makes the next ``minimizeEnergy`` of ``s`` compute the local
+    derivatives again, as at a new point: the positions are written back
+    unchanged, which gives them a new version (an assembly at the point of
+    the last one reuses its derivatives)."""
+    for target in s.minimizeTargets:
+        target.updateValue(target.value)
 
 
 def main() -> None:
@@ -40,24 +56,42 @@ def main() -> None:
     parser.add_argument("--threads", type=int, default=1,
                         help="threads for the Newton iteration (the SpMV "
                         "comparison stays on one)")
+    add_json_argument(parser, "newton_system")
     args = parser.parse_args()
+    results = Results("newton_system")
     yasps.config.num_threads = args.threads
     s = bunny_snh()
     s.minimizeEnergy(tolerance=1e-4)          # compiles the kernels
     first_indices = s.lastSolve["seconds"]["indices"]
+    at_new_point(s)
     s.minimizeEnergy(tolerance=1e-4)
     info = s.lastSolve
     seconds = info["seconds"]
     total = sum(seconds.values())
     print("one Newton iteration, bunny-19k (19,193 vertices, 79,935 tets), "
           f"stable Neo-Hookean + inertia, {args.threads} thread(s)")
-    for stage in ("derivatives", "indices", "assembly", "solve"):
-        print(f"  {stage:12s}{seconds[stage] * 1e3:9.1f} ms  "
-              f"{100 * seconds[stage] / total:5.1f}%")
+    stages = results.table(
+        "stages", ["stage", "time (ms)", "share"],
+        [[stage, seconds[stage] * 1e3, 100 * seconds[stage] / total]
+         for stage in STAGES],
+        ["", "{:.1f}", "{:.1f}%"],
+        note=f"One Newton iteration (the second `minimizeEnergy`), bunny-19k "
+        f"(19,193 vertices, 79,935 tets), stable Neo-Hookean + inertia, "
+        f"{args.threads} thread(s). Indices of the first iteration, which "
+        f"builds the static structure: {first_indices * 1e3:.1f} ms; later "
+        f"ones reuse it. PCG: {info['iterations']} iterations to relative "
+        f"residual {info['relativeResidual']:.2e}.")
+    for stage, ms, share in stages.rows:
+        print(f"  {stage:12s}{ms:9.1f} ms  {share:5.1f}%")
     print(f"  (indices of the first iteration, which builds the static "
           f"structure: {first_indices * 1e3:.1f} ms; later ones reuse it)")
     print(f"  PCG: {info['iterations']} iterations to relative residual "
           f"{info['relativeResidual']:.2e}")
+    results.values.update({
+        "threads": args.threads, "repeat": args.repeat,
+        "seconds": dict(seconds), "first_indices_s": first_indices,
+        "pcg_iterations": info["iterations"],
+        "relative_residual": info["relativeResidual"]})
 
     system = assemble(s, cpu_backend(), threads=1).system
     nnz = system.non_zeros
@@ -71,11 +105,24 @@ def main() -> None:
     np.testing.assert_allclose(y, csr @ x, rtol=1e-10, atol=1e-10 * np.abs(y).max())
     ours = median(lambda: system.multiply(x, y, 1), args.repeat)
     scipy_time = median(lambda: csr @ x, args.repeat)
-    print(f"  SpMV ({system.size} DoFs, {system.stored_blocks} stored blocks, "
-          f"{nnz} scalar non-zeros):")
-    print(f"    yasps block-sparse  {ours * 1e3:7.2f} ms")
-    print(f"    SciPy CSR           {scipy_time * 1e3:7.2f} ms   "
-          f"({scipy_time / ours:.2f}x yasps)")
+    sizes = (f"{system.size} DoFs, {system.stored_blocks} stored blocks, "
+             f"{nnz} scalar non-zeros")
+    spmv = results.table(
+        "spmv", ["SpMV, one thread", "time (ms)", "time / yasps' time"],
+        [["yasps block-sparse", ours * 1e3, None],
+         ["SciPy CSR", scipy_time * 1e3, scipy_time / ours]],
+        ["", "{:.2f}", "{:.2f}x"],
+        note=f"The SpMV of the iteration's matrix ({sizes}), median of "
+        f"{args.repeat}.")
+    results.values.update({"dofs": system.size,
+                           "stored_blocks": system.stored_blocks,
+                           "non_zeros": nnz})
+    print(f"  SpMV ({sizes}):")
+    for name, ms, ratio in spmv.rows:
+        print(f"    {name:20s}{ms:7.2f} ms"
+              + (f"   ({ratio:.2f}x yasps)" if ratio is not None else ""))
+    path = results.write(args.json)
+    print(f"results: {path}")
 
 
 if __name__ == "__main__":

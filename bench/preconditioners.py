@@ -24,8 +24,14 @@ the GPU solver's kernels on the host, one thread after another): the GPU
 path's iteration counts, whose times mean nothing. On a machine with a GPU,
 ``--gpu`` times the GPU backend itself.
 
+``--tolerance`` takes several relative residuals (``--tolerance 1e-4
+1e-6``): every scene is then solved to each, and each gets its table. The
+tables go to --json (default bench/results/preconditioners.json), one per
+tolerance, named ``solves_<tolerance>`` (``solves_1e-4``), with every
+figure of every run in its values.
+
     python3 bench/preconditioners.py [--repeat 5] [--threads 1 2]
-        [--boxes 10 20 30] [--tolerance 1e-4] [--gpu] [--json FILE]
+        [--boxes 10 20 30] [--tolerance 1e-4 [1e-6 ...]] [--gpu] [--json FILE]
         [--stand-in build/runtime/test/libYaspsFakeCuda.so]
 """
 
@@ -52,6 +58,8 @@ import numpy as np  # noqa: E402
 import yasps  # noqa: E402
 from benchlib.elastic_scenes import MASS, snh_scene  # noqa: E402
 from benchlib.meshes import bunny  # noqa: E402
+from benchlib.results import Results, Table, add_json_argument  # noqa: E402
+from benchlib.tables import cell_text  # noqa: E402
 from yasps.sim import box_tet_mesh  # noqa: E402
 
 #: The CG relative residual (--tolerance).
@@ -105,6 +113,8 @@ def measure(s, repeat: int) -> Dict[str, dict]:
 STAND_IN = """
 import json, sys
 sys.path.insert(0, %r)
+import benchlib
+benchlib.use_this_checkout()
 import benchlib.elastic_scenes as scenes
 import preconditioners as bench
 import numpy as np, yasps
@@ -139,6 +149,51 @@ def stand_in(library: Path, verts, tets, dt2: float, mass: float) -> Dict[str, d
     return json.loads(result.stdout.splitlines()[-1])
 
 
+def tolerance_name(tolerance: float) -> str:
+    """1e-04 -> 1e-4, 1.5e-05 -> 1.5e-5: the tolerance in a table's name."""
+    mantissa, exponent = f"{tolerance:e}".split("e")
+    return f"{mantissa.rstrip('0').rstrip('.')}e{int(exponent)}"
+
+
+#: The table's columns and formats. A pair of cells "BJ / ML" is one cell
+#: {"BJ": value, "ML": value}: the JSON keeps both numbers.
+COLUMNS = (("scene", ""), ("DoFs", ""), ("threads", ""),
+           ("iterations BJ / ML", "{0[BJ]} / {0[ML]}"), ("levels", ""),
+           ("solve BJ / ML (ms)", "{0[BJ]:.1f} / {0[ML]:.1f}"),
+           ("setup BJ / ML (ms)", "{0[BJ]:.1f} / {0[ML]:.1f}"),
+           ("per iteration BJ / ML (ms)", "{0[BJ]:.3f} / {0[ML]:.3f}"),
+           ("iterations ratio", "{:.2f}x"), ("solve ratio", "{:.2f}x"))
+
+
+def pair(r: Dict[str, dict], key: str, scale: int = 1) -> dict:
+    """A "BJ / ML" cell: the figure ``key`` of both preconditioners."""
+    return {"BJ": r["block-jacobi"][key] * scale,
+            "ML": r["multilevel"][key] * scale}
+
+
+def row(name: str, dofs: int, key: str, r: Dict[str, dict]) -> list:
+    """A line of the table: a timed run, or the stand-in's counts alone."""
+    bj, ml = r["block-jacobi"], r["multilevel"]
+    timed = "solve_s" in bj
+    return [name, dofs, key, pair(r, "iterations"), ml["levels"],
+            pair(r, "solve_s", 1000) if timed else None,
+            pair(r, "setup_s", 1000) if timed else None,
+            pair(r, "per_iteration_s", 1000) if timed else None,
+            bj["iterations"] / ml["iterations"],
+            bj["solve_s"] / ml["solve_s"] if timed else None]
+
+
+def markdown(table: Table) -> str:
+    """The table as Markdown, its cells formatted as the documents show
+    them."""
+    lines = ["| " + " | ".join(table.columns) + " |",
+             "|" + "---|" * len(table.columns)]
+    lines += ["| " + " | ".join(cell_text(v, f) for v, f in
+                                zip(row, table.formats)) + " |"
+              for row in table.rows]
+    return "\n".join(lines)
+
+
 def main() -> None:
     global TOLERANCE
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
@@ -150,55 +205,59 @@ def main() -> None:
                              "path's iteration counts")
     parser.add_argument("--gpu", action="store_true",
                         help="also time the GPU backend (needs a GPU)")
-    parser.add_argument("--tolerance", type=float, default=TOLERANCE,
-                        help="CG relative residual")
-    parser.add_argument("--json", type=Path, default=None)
+    parser.add_argument("--tolerance", type=float, nargs="+",
+                        default=[TOLERANCE],
+                        help="CG relative residual(s): each scene is solved "
+                        "to each, and each has its table")
+    add_json_argument(parser, "preconditioners")
     args = parser.parse_args()
-    TOLERANCE = args.tolerance
+    results = Results("preconditioners")
+    results.values.update(repeat=args.repeat, threads=args.threads,
+                          boxes=args.boxes, tolerances=args.tolerance)
 
-    results: Dict[str, dict] = {}
-    lines = ["| scene | DoFs | threads | iterations BJ / ML | levels | "
-             "solve BJ / ML (ms) | setup BJ / ML (ms) | per iteration BJ / ML (ms) | "
-             "iterations ratio | solve ratio |", "|" + "---|" * 10]
+    # tolerance -> scene -> run ("cpu 1 thread(s)", "gpu", "gpu stand-in")
+    # -> preconditioner -> figures.
+    runs: Dict[float, Dict[str, dict]] = {t: {} for t in args.tolerance}
+    rows: Dict[float, List[list]] = {t: [] for t in args.tolerance}
     for name, (verts, tets, dt2, mass) in scenes(args.boxes).items():
         s = snh_scene(name.replace(" ", "_").replace("^", "").replace("-", "_"),
                   verts, tets, dt2, mass)
-        runs = {}
-        backends = [("cpu", t) for t in args.threads]
-        if args.gpu:
-            backends.append(("gpu", 0))
-        for backend, threads in backends:
-            yasps.config.backend = backend
-            yasps.config.num_threads = threads
-            key = f"{backend} {threads} thread(s)" if backend == "cpu" else "gpu"
-            print(f"{name}: {key}", flush=True)
-            runs[key] = r = measure(s, args.repeat)
-            bj, ml = r["block-jacobi"], r["multilevel"]
-            lines.append(
-                f"| {name} | {3 * len(verts)} | {key} | {bj['iterations']} / "
-                f"{ml['iterations']} | {ml['levels']} | {bj['solve_s'] * 1e3:.1f} / "
-                f"{ml['solve_s'] * 1e3:.1f} | {bj['setup_s'] * 1e3:.1f} / "
-                f"{ml['setup_s'] * 1e3:.1f} | {bj['per_iteration_s'] * 1e3:.3f} / "
-                f"{ml['per_iteration_s'] * 1e3:.3f} | "
-                f"{bj['iterations'] / ml['iterations']:.2f}x | "
-                f"{bj['solve_s'] / ml['solve_s']:.2f}x |")
-        yasps.config.backend = "cpu"
-        if args.stand_in:
-            print(f"{name}: GPU path (stand-in driver)", flush=True)
-            runs["gpu stand-in"] = r = stand_in(args.stand_in, verts, tets, dt2, mass)
-            bj, ml = r["block-jacobi"], r["multilevel"]
-            lines.append(
-                f"| {name} | {3 * len(verts)} | GPU path (stand-in) | "
-                f"{bj['iterations']} / {ml['iterations']} | {ml['levels']} | | | | "
-                f"{bj['iterations'] / ml['iterations']:.2f}x | |")
-        results[name] = runs
-    print()
-    print("\n".join(lines))
-    print(f"\nCG relative residual {TOLERANCE:g}. BJ: block-Jacobi, ML: "
-          "multilevel; ratios BJ / ML (above 1: the multilevel solve takes "
-          "fewer iterations or less time)")
-    if args.json:
-        args.json.write_text(json.dumps(results, indent=1))
+        for tolerance in args.tolerance:
+            TOLERANCE = tolerance
+            scene_runs = runs[tolerance][name] = {}
+            backends = [("cpu", t) for t in args.threads]
+            if args.gpu:
+                backends.append(("gpu", 0))
+            for backend, threads in backends:
+                yasps.config.backend = backend
+                yasps.config.num_threads = threads
+                key = f"{backend} {threads} thread(s)" if backend == "cpu" else "gpu"
+                label = key if len(args.tolerance) == 1 else \
+                    f"{key}, CG {tolerance_name(tolerance)}"
+                print(f"{name}: {label}", flush=True)
+                scene_runs[key] = r = measure(s, args.repeat)
+                rows[tolerance].append(row(name, 3 * len(verts), key, r))
+            yasps.config.backend = "cpu"
+            if args.stand_in:
+                print(f"{name}: GPU path (stand-in driver), CG "
+                      f"{tolerance_name(tolerance)}", flush=True)
+                scene_runs["gpu stand-in"] = r = stand_in(
+                    args.stand_in, verts, tets, dt2, mass)
+                rows[tolerance].append(row(name, 3 * len(verts),
+                                           "GPU path (stand-in)", r))
+    for tolerance in args.tolerance:
+        note = (f"CG relative residual {tolerance:g}. BJ: block-Jacobi, ML: "
+                "multilevel; ratios BJ / ML (above 1: the multilevel solve "
+                "takes fewer iterations or less time)")
+        table = results.table(f"solves_{tolerance_name(tolerance)}",
+                              [c for c, _ in COLUMNS], rows[tolerance],
+                              [f for _, f in COLUMNS], note)
+        print()
+        print(markdown(table))
+        print(f"\n{note}")
+    results.values["runs"] = {tolerance_name(t): runs[t] for t in args.tolerance}
+    path = results.write(args.json)
+    print(f"results: {path}")
 
 
 if __name__ == "__main__":

@@ -24,12 +24,15 @@ import subprocess
 import sys
 import tempfile
 import time
-from pathlib import Path
 from typing import Callable, Tuple
 
-REPO = Path(__file__).resolve().parents[1]
-sys.path[:0] = [str(REPO / "python"), str(REPO / "examples"),
-                str(REPO / "examples" / "paper")]
+import benchlib  # noqa: E402
+
+benchlib.use_this_checkout()
+from benchlib import ROOT  # noqa: E402
+from benchlib.results import Results, add_json_argument  # noqa: E402
+
+sys.path[1:1] = [str(ROOT / "examples"), str(ROOT / "examples" / "paper")]
 
 SCENES = ["demo", "three", "cloths_on_bunny", "many_bunnies",
           "caged_bunny_tet4", "caged_bunny_hex8", "mixed_materials",
@@ -96,13 +99,17 @@ def main() -> None:
     parser.add_argument("--repeat", type=int, default=2)
     parser.add_argument("--scenes", default=",".join(SCENES))
     parser.add_argument("--worker", help=argparse.SUPPRESS)
+    add_json_argument(parser, "scene_compile")
     args = parser.parse_args()
     if args.worker:
         print(json.dumps(worker(args.worker)))
         return
-    print("| scene | build, cold (s) | build, warm (s) | kernels | "
-          "compile, cold (s) | compile, warm (s) |")
-    print("| --- | --- | --- | --- | --- | --- |")
+    columns = ["scene", "build, cold (s)", "build, warm (s)", "kernels",
+               "compile, cold (s)", "compile, warm (s)"]
+    formats = ["", "{:.2f}", "{:.2f}", "", "{:.2f}", "{:.2f}"]
+    print("| " + " | ".join(columns) + " |")
+    print("|" + " --- |" * len(columns))
+    rows = []
     for name in args.scenes.split(","):
         cold, warm = [], []
         for _ in range(args.repeat):
@@ -114,10 +121,17 @@ def main() -> None:
         def median(runs, key):
             return statistics.median(r[key] for r in runs)
 
-        print(f"| {name} | {median(cold, 'build'):.2f} | "
-              f"{median(warm, 'build'):.2f} | {cold[0]['kernels']} | "
-              f"{median(cold, 'compile'):.2f} | "
-              f"{median(warm, 'compile'):.2f} |", flush=True)
+        rows.append([name, median(cold, "build"), median(warm, "build"),
+                     cold[0]["kernels"], median(cold, "compile"),
+                     median(warm, "compile")])
+        print("| " + " | ".join(f.format(v) if f else str(v)
+                                for v, f in zip(rows[-1], formats)) + " |",
+              flush=True)
+    results = Results("scene_compile")
+    results.table("scenes", columns, rows, formats,
+                  note=f"Medians of {args.repeat} runs, each in a process "
+                  "of its own.")
+    print(f"results: {results.write(args.json)}")
 
 
 if __name__ == "__main__":

@@ -62,12 +62,13 @@ import subprocess
 import sys
 import tempfile
 from pathlib import Path
-from typing import Dict, List, Optional
+from typing import Dict, List, Optional, Tuple
 
 HERE = Path(__file__).resolve().parent
 import benchlib  # noqa: E402
 
 benchlib.use_this_checkout()
+from benchlib.results import Results, add_json_argument  # noqa: E402
 
 import numpy as np  # noqa: E402
 
@@ -318,14 +319,15 @@ def cell(value) -> str:
     return str(value)
 
 
-def table(title: str, results: Dict[int, Dict[str, Dict]]) -> List[str]:
-    """The Markdown table of a scene: per thread count STARK, yasps and
-    STARK / yasps."""
+def scene_table(title: str, results: Dict[int, Dict[str, Dict]]
+                ) -> Tuple[List[str], List[List[str]]]:
+    """The table of a scene, columns and rows of cells: per thread count
+    STARK, yasps and STARK / yasps."""
     header = [title]
     for threads in results:
         header += [f"STARK {threads}T", f"yasps {threads}T",
                    f"STARK/yasps {threads}T"]
-    lines = ["| " + " | ".join(header) + " |", "|" + "---|" * len(header)]
+    rows = []
     first = next(iter(results.values()))
     keys = ["s/frame", "Newton/frame", "CG/Newton", "unconverged frames",
             "closest distance (m)", "intersecting frames"] + \
@@ -340,8 +342,35 @@ def table(title: str, results: Dict[int, Dict[str, Dict]]) -> List[str]:
             if key in ("s/frame", "Newton/frame", "CG/Newton"):
                 ratio = f"{values[0] / values[1]:.2f}x"
             cells.append(ratio)
-        lines.append("| " + " | ".join(cells) + " |")
-    return lines
+        rows.append(cells)
+    return header, rows
+
+
+def markdown(columns: List[str], rows: List[List[str]]) -> List[str]:
+    """A Markdown table of cells."""
+    return ["| " + " | ".join(columns) + " |", "|" + "---|" * len(columns)] + \
+        ["| " + " | ".join(r) + " |" for r in rows]
+
+
+def round_rows(key: str, results: Dict[int, Dict[str, Dict]]) -> List[List]:
+    """Each round's seconds per frame of both sides and their ratio."""
+    rows = []
+    for threads, sides in results.items():
+        pairs = zip(*(sides[s]["s/frame, each round"] for s in SIDES))
+        for number, (stark, ours) in enumerate(pairs, 1):
+            rows.append([key, threads, number, stark, ours, stark / ours])
+    return rows
+
+
+def split_rows(key: str, results: Dict[int, Dict[str, Dict]]) -> List[List]:
+    """Each side's shares of its time (one thread, else the fewest), the
+    largest first."""
+    sides = results[min(results)]
+    rows = []
+    for side in SIDES:
+        for stage, share in sides[side]["split"].items():
+            rows.append([key, side, stage, 100 * share])
+    return rows
 
 
 def notes(results: Dict[int, Dict[str, Dict]], gaps: Dict[int, float],
@@ -429,8 +458,7 @@ def main() -> None:
     parser.add_argument("--no-run", action="store_true",
                         help="build nothing, run nothing: summarise the "
                         "runs an earlier invocation left in --build-dir")
-    parser.add_argument("--json", type=Path, default=None,
-                        help="write every figure to this file")
+    add_json_argument(parser, "stark_peer")
     args = parser.parse_args()
     if args.quick:
         args.frames_a = args.frames_b = 5
@@ -447,6 +475,9 @@ def main() -> None:
           f"threads {args.threads}, {args.rounds} round(s); STARK's "
           f"OMP_WAIT_POLICY {args.stark_wait_policy}")
     everything: Dict[str, Dict] = {"versions": versions}
+    out = Results("stark_peer")
+    rounds: List[List] = []
+    shares: List[List] = []
     work = build / "runs"
     work.mkdir(exist_ok=True)
     for key in args.scenes:
@@ -479,6 +510,12 @@ def main() -> None:
                 runs["yasps"].append(run_yasps(name, frames[key], threads,
                                                wrapper, work, tag,
                                                args.yasps_newton_cap))
+            if args.no_run:
+                # The yasps commit those runs measured, where they say.
+                measured = {str(r["commit"]) if "commit" in r else "unknown"
+                            for r in runs["yasps"]}
+                out.meta["commit"] = ", ".join(sorted(measured))
+                out.meta["command"] += " (summarised from earlier runs)"
             results[threads] = {side: summarise(spec, runs[side], side,
                                                 checker) for side in SIDES}
             gaps[threads] = stark_scenes.trajectory_gap(
@@ -486,14 +523,26 @@ def main() -> None:
                 runs["yasps"][0]["positions"])
         leading = next(iter(results[args.threads[0]]["STARK"]["physics"]))
         print()
-        print("\n".join(table(f"scene {title}", results)))
+        columns, rows = scene_table(f"scene {title}", results)
+        print("\n".join(markdown(columns, rows)))
+        out.table(name, columns, rows)
+        rounds += round_rows(key, results)
+        shares += split_rows(key, results)
         print("\n".join(notes(results, gaps, leading)))
         if args.per_frame:
             print("\n".join(per_frame(results)))
         everything[key] = dict(constants=constants, gaps=gaps,
                                results=results)
-    if args.json:
-        args.json.write_text(json.dumps(everything, indent=1))
+    out.table("rounds", ["scene", "threads", "round", "STARK s/frame",
+                         "yasps s/frame", "STARK/yasps"], rounds,
+              ["", "", "", "{:.3f}", "{:.3f}", "{:.2f}x"])
+    out.table("split", ["scene", "side", "stage", "share of a frame (%)"],
+              shares, ["", "", "", "{:.0f}"],
+              note="STARK's timers nest (their shares may sum past 100%); "
+              "yasps' stages are disjoint, 'other' is Python around them.")
+    everything["STARK wait policy"] = args.stark_wait_policy
+    out.values = everything
+    print(f"\nresults: {out.write(args.json)}")
 
 
 if __name__ == "__main__":

@@ -18,6 +18,7 @@ import numpy as np
 import benchlib
 
 benchlib.use_this_checkout()
+from benchlib.results import commit
 from benchlib.stark_scenes import SCENES, run_yasps
 
 
@@ -31,8 +32,9 @@ def main() -> None:
                         "ImplicitEuler's)")
     parser.add_argument("--output", type=Path, required=True)
     args = parser.parse_args()
-    np.savez(args.output, **run_yasps(args.scene, args.frames, args.threads,
-                                      args.newton_cap))
+    run = run_yasps(args.scene, args.frames, args.threads, args.newton_cap)
+    # The commit measured, for summaries made later (stark_peer --no-run).
+    np.savez(args.output, commit=np.array(commit()), **run)
 
 
 if __name__ == "__main__":

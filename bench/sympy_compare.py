@@ -18,7 +18,7 @@ instances, against yasps' gradient and Hessian kernels on the same
 instances, one thread, after checking that both agree. SymPy sees the
 barrier's active branch only (every sampled pair is on it). Needs gcc.
 
-    python3 bench/sympy_compare.py [--count 20000] [--repeat 5]
+    python3 bench/sympy_compare.py [--count 20000] [--repeat 5] [--json PATH]
 """
 
 from __future__ import annotations
@@ -43,6 +43,7 @@ import numpy as np  # noqa: E402
 import sympy as sp  # noqa: E402
 
 from benchlib.energy_cases import CASES, Case, SympyOps, YaspsEnergy, check_agrees  # noqa: E402
+from benchlib.results import Results, add_json_argument  # noqa: E402
 from benchlib.timing import median  # noqa: E402
 from yasps import compiler  # noqa: E402
 from yasps.compiler.pipelines import DIFFERENTIATION_PIPELINE  # noqa: E402
@@ -168,19 +169,46 @@ def compare_code(case: Case, inputs: Inputs, cse: Cse, count: int, repeat: int,
     return c_compile, median(sympy_run, repeat), median(yasps_run, repeat)
 
 
+#: The table's columns: (header, format in the JSON table, format printed).
+#: Derivation and compile times in seconds, run times in ns per instance;
+#: each system's multiplications and additions are printed as one column
+#: "mul/add".
+COLUMNS = [
+    ("energy", "", "{:34s}"),
+    ("SymPy diff+cse", "{:.2f}s", "{:14.2f}s"),
+    ("yasps diff", "{:.2f}s", "{:10.2f}s"),
+    ("+codegen", "{:.2f}s", "{:8.2f}s"),
+    ("SymPy mul", "{:d}", "{:9d}"),
+    ("SymPy add", "{:d}", "/{:<5d}"),
+    ("yasps mul", "{:d}", "{:9d}"),
+    ("yasps add", "{:d}", "/{:<5d}"),
+    ("gcc", "{:.2f}s", "{:6.2f}s"),
+    ("SymPy C g+H", "{:.0f}ns", "{:11.0f}ns"),
+    ("yasps g+H", "{:.0f}ns", "{:9.0f}ns"),
+    ("SymPy/yasps", "{:.2f}x", "{:12.2f}x"),
+]
+FOOTNOTE = ("(yasps counts are of the Hessian kernel, which also computes the "
+            "energy; SymPy's cover the gradient and Hessian expressions)")
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--count", type=int, default=20000,
                         help="instances for the run-time comparison")
     parser.add_argument("--repeat", type=int, default=5)
+    add_json_argument(parser, "sympy_compare")
     args = parser.parse_args()
+    results = Results("sympy_compare")
+    results.values.update(count=args.count, repeat=args.repeat)
     ops = SympyOps()
-    print(f"run times: {args.count} instances, one thread, median of "
-          f"{args.repeat}; per instance")
+    title = (f"run times: {args.count} instances, one thread, median of "
+             f"{args.repeat}; per instance")
+    print(title)
     print(f"{'energy':34s}{'SymPy diff+cse':>15s}{'yasps diff':>11s}"
           f"{'+codegen':>9s}{'SymPy mul/add':>15s}{'yasps mul/add':>15s}"
           f"{'gcc':>7s}{'SymPy C g+H':>13s}{'yasps g+H':>11s}{'SymPy/yasps':>13s}")
     derived: Dict[object, Tuple[float, Cse]] = {}
+    rows = []
     with tempfile.TemporaryDirectory(prefix="yasps-sympy-") as tmp:
         for case in CASES:
             inputs = sympy_inputs(case)
@@ -195,12 +223,18 @@ def main() -> None:
             gcc, sympy_time, yasps_time = compare_code(
                 case, inputs, cse, args.count, args.repeat, tmp)
             per = 1e9 / args.count
-            print(f"{case.name:34s}{s_time:14.2f}s{y_sym:10.2f}s{y_total:8.2f}s"
-                  f"{s_mul:9d}/{s_add:<5d}{y_mul:9d}/{y_add:<5d}{gcc:6.2f}s"
-                  f"{sympy_time * per:11.0f}ns{yasps_time * per:9.0f}ns"
-                  f"{sympy_time / yasps_time:12.2f}x", flush=True)
-    print("(yasps counts are of the Hessian kernel, which also computes the "
-          "energy; SymPy's cover the gradient and Hessian expressions)")
+            row = [case.name, s_time, y_sym, y_total, s_mul, s_add, y_mul,
+                   y_add, gcc, sympy_time * per, yasps_time * per,
+                   sympy_time / yasps_time]
+            rows.append(row)
+            print("".join(c[2].format(v) for c, v in zip(COLUMNS, row)),
+                  flush=True)
+    print(FOOTNOTE)
+    results.table("sympy_compare", [c[0] for c in COLUMNS], rows,
+                  [c[1] for c in COLUMNS],
+                  f"{title[0].upper()}{title[1:]}. {FOOTNOTE}")
+    path = results.write(args.json)
+    print(f"results: {path}")
 
 
 if __name__ == "__main__":

@@ -33,6 +33,7 @@ from yasps.compiler.pipelines import DIFFERENTIATION_PIPELINE
 from yasps.ir import emit_scene
 from yasps.runtime.inputs import host_input
 from yasps.compiler.params import ArgumentKind
+from yasps.runtime.cpu import launch
 
 MU, LAM = 1.0, 10.0             # stable Neo-Hookean
 MASS = 2.0                      # inertia and gravity
@@ -508,7 +509,7 @@ class YaspsEnergy:
                            dtype=kernel.out_dtype)
             buffers = [out if a.kind is ArgumentKind.out else host_input(self.scene, a)
                        for a in kernel.arguments]
-            launches.append(partial(kernels.launch, path, self.count, buffers, 1))
+            launches.append(partial(launch, kernels, path, self.count, buffers, 1))
         return seconds, kernels.library, launches
 
     def derivatives(self):

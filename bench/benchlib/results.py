@@ -32,7 +32,10 @@ from benchlib import BENCH, ROOT
 #: Where results go unless a bench is told otherwise (--json).
 RESULTS = BENCH / "results"
 
-Cell = Any  # a number, a string, or None (shown as an empty cell)
+#: A number, a string, None (shown as an empty cell), or a dict of numbers
+#: for a cell that shows several (its column's format names them:
+#: ``"{0[BJ]} / {0[ML]}"``), so that the JSON keeps every number raw.
+Cell = Any
 
 
 @dataclass
