@@ -206,3 +206,157 @@ def test_a_state_that_is_not_a_minimiser_is_warned_about():
         warnings.simplefilter("error", yasps.diff.AdjointWarning)
         yasps.diff.equilibrium_gradient(s, {x: x.value}, [m["cloth_stretch"]],
                                         fixed=[pinned])
+
+
+# --- time stepping: ImplicitEuler(record=True).backward -------------------
+
+from yasps.contact import Contact  # noqa: E402
+from yasps.sim import ImplicitEuler, add_free_vertices  # noqa: E402
+from yasps.sim.checkpoint import scene_state  # noqa: E402
+
+DT = 0.01
+STEP_SETTINGS = NewtonSettings(max_iterations=300, cg_tolerance=1e-12)
+
+
+def swinging_cloth(record):
+    """A cloth of 4 x 4 free vertices hanging from two pinned corners."""
+    rest, faces = cloth_grid(4, 0.5)
+    s = yasps.scene("swing")
+    m = s.addMesh("cloth")
+    body = add_free_vertices(m, rest, np.linspace(0.01, 0.02, len(rest)))
+    add_cloth(m, body.x, rest, faces, 100.0, 50.0, 1e-3, scale=DT ** 2)
+    s.addMinimizeTarget([body.x])
+    pinned = np.zeros(len(rest), dtype=bool)
+    pinned[[0, 3]] = True
+    stepper = ImplicitEuler(s, body.x, body.x_hat, DT, settings=STEP_SETTINGS,
+                            fixed=pinned, velocity_tolerance=1e-10,
+                            record=record)
+    return s, {"stretch": m["cloth_stretch"], "bending": m["cloth_bending"],
+               "mass": body.primitive["mass"]}, body.x, stepper, None
+
+
+def landing_box(record):
+    """A soft box of 6 tets falling onto the ground, in contact (a fixed
+    barrier stiffness) for its last steps."""
+    rest, tets = box_tet_mesh(1, 0.1)
+    s = yasps.scene("landing")
+    m = s.addMesh("box")
+    body = add_free_vertices(m, rest + [0.0, 0.0, 0.0015], 0.05)
+    add_elastic_tets(m, body.x, rest, tets, 1e4, 2e4, scale=DT ** 2)
+    s.addMinimizeTarget([body.x])
+    contact = Contact(s, body.primitive, dhat=1e-3, kappa=1e3,
+                      halfspaces=[((0, 0, 0), (0, 0, 1))])
+    stepper = ImplicitEuler(s, body.x, body.x_hat, DT, settings=STEP_SETTINGS,
+                            contact=contact, velocity_tolerance=1e-9,
+                            record=record)
+    return s, {"mu": m["t_mu"], "lam": m["t_lam"],
+               "mass": body.primitive["mass"]}, body.x, stepper, contact
+
+
+def run_steps(build, record, start, velocity, steps, change=None):
+    """The run's scene, parameters, target, stepper and dynamic counts
+    after ``steps`` steps from (start, velocity), with ``change(params)``
+    applied first."""
+    s, params, x, stepper, contact = build(record)
+    if change is not None:
+        change(params)
+    x.updateValue(start)
+    stepper.velocities = [velocity]
+    for _ in range(steps):
+        stepper.step(warn=False)
+    counts = {k: int(v) for k, v in scene_state(s).items()
+              if k.startswith("count:")}
+    return s, params, x, stepper, counts
+
+
+def check_run_gradients(build, start, velocity, steps, checks, rtol=1e-4):
+    """backward's gradients against central differences of whole runs,
+    the dynamic pair counts the same in every perturbed run."""
+    _, params, x, stepper, counts = run_steps(build, True, start, velocity,
+                                              steps)
+    w = np.random.default_rng(0).normal(size=x.value.shape)
+    grads = stepper.backward({x: w}, list(params.values()))
+
+    def loss(change=None, dstart=0.0, dvelocity=0.0):
+        _, _, xs, _, perturbed = run_steps(build, False, start + dstart,
+                                           velocity + dvelocity, steps, change)
+        assert perturbed == counts, "the contact set changed"
+        return float((w * xs.value).sum())
+
+    for name, entry, h in checks:
+        if name in params:
+            value = params[name].value
+
+            def change(p, sign, name=name, entry=entry, h=h, value=value):
+                moved = value.copy()
+                moved.flat[entry] += sign * h
+                p[name].updateValue(moved)
+            want = (loss(change=lambda p: change(p, 1.0)) -
+                    loss(change=lambda p: change(p, -1.0))) / (2 * h)
+            got = grads[params[name]].flat[entry]
+        else:
+            e = np.zeros(start.shape)
+            e.flat[entry] = h
+            key = "dstart" if name == "x0" else "dvelocity"
+            want = (loss(**{key: e}) - loss(**{key: -e})) / (2 * h)
+            got = (grads.initial_positions if name == "x0"
+                   else grads.initial_velocities)[0].flat[entry]
+        assert got == pytest.approx(want, rel=rtol), (name, entry, got, want)
+    return grads
+
+
+def test_a_swinging_cloth_run_matches_differences_of_runs():
+    rest, _ = cloth_grid(4, 0.5)
+    start = rest[:, :, None]                       # the target's (N, 3, 1)
+    velocity = np.random.default_rng(2).normal(scale=0.1, size=start.shape)
+    velocity[[0, 3]] = 0.0
+    check_run_gradients(swinging_cloth, start, velocity, 8, [
+        ("stretch", 0, 1e-3), ("bending", 0, 1e-7), ("mass", 5, 1e-6),
+        ("x0", 17, 1e-6), ("v0", 17, 1e-6), ("x0", 30, 1e-6),
+        ("v0", 30, 1e-6),
+        # A pinned vertex: it stays where it starts, pulling the cloth.
+        ("x0", 1, 1e-6)])
+
+
+def test_a_box_landing_in_contact_matches_differences_of_runs():
+    rest, _ = box_tet_mesh(1, 0.1)
+    start = (rest + [0.0, 0.0, 0.0015])[:, :, None]
+    velocity = np.zeros_like(start)
+    velocity[:, 2] = -0.2
+    _, _, x, stepper, counts = run_steps(landing_box, False, start, velocity, 10)
+    assert any(counts.values()), "the box never reached the ground"
+    check_run_gradients(landing_box, start, velocity, 10, [
+        # Steps of 1e-3 of the moduli: their gradients are small against
+        # the loss, and smaller steps drown in Newton's own tolerance.
+        ("mu", 0, 10.0), ("lam", 0, 20.0), ("mass", 3, 1e-6),
+        ("x0", 16, 1e-7), ("v0", 15, 1e-7), ("x0", 13, 1e-7)])
+
+
+def test_backward_needs_a_recording_and_refuses_predictions():
+    s, params, x, stepper, _ = swinging_cloth(False)
+    stepper.step(warn=False)
+    with pytest.raises(yasps.SceneError, match="record=True"):
+        stepper.backward({x: x.value})
+    s, params, x, stepper, _ = swinging_cloth(True)
+    with pytest.raises(yasps.SceneError, match="no step"):
+        stepper.backward({x: x.value})
+    stepper.step(warn=False)
+    with pytest.raises(yasps.ArgumentError, match="prediction"):
+        stepper.backward({x: x.value}, [stepper.predicted[0]])
+    # The scene is left in the run's last state.
+    last = x.value.copy()
+    stepper.backward({x: x.value}, [params["stretch"]])
+    np.testing.assert_array_equal(x.value, last)
+
+
+def test_the_tape_keeps_a_constant_once():
+    s, params, x, stepper, _ = swinging_cloth(True)
+    for _ in range(3):
+        stepper.step(warn=False)
+    tape = stepper.tape
+    assert tape.length == 4
+    kept = tape._history["value:cloth/cloth:uv_inv"][1]
+    assert len(kept) == 1
+    assert len(tape._history["value:cloth/v:position"][1]) == 4
+    np.testing.assert_array_equal(tape.state(2)["value:cloth/cloth:uv_inv"],
+                                  kept[0])

@@ -11,7 +11,8 @@ from __future__ import annotations
 
 import time
 import warnings
-from typing import (Any, Callable, Dict, List, Optional, Sequence, Tuple, Union,
+from typing import (Any, Callable, Dict, List, Mapping, Optional, Sequence,
+                    Tuple, Union,
                     overload)
 
 import numpy as np
@@ -26,6 +27,8 @@ from ..solve import SolverError, minimize_energy
 from ..solve.minimize import checked_fixed_mask
 from ..solve.prepare import compile_scene
 from . import checkpoint
+from .adjoint import (SimulationGradients, Tape, backward, record_masks,
+                      start_recording)
 from .newton_report import NewtonNotConverged, NewtonReport
 from .newton_settings import (NewtonSettings, add_settings_attributes,
                               settings_with_keywords)
@@ -392,7 +395,7 @@ class ImplicitEuler:
                  warm_start: bool = True, velocities=None, world=None,
                  world_velocities=None,
                  world_gravity=(0.0, 0.0, -9.81), normalize=None,
-                 **deprecated: Any):
+                 record: bool = False, **deprecated: Any):
         x: Optional[Targets] = renamed_argument(
             "ImplicitEuler", "x", "targets", targets, deprecated)
         x_hat: Optional[Predictions] = renamed_argument(
@@ -481,6 +484,9 @@ class ImplicitEuler:
         self.velocities = initial_velocities(self.targets, velocities,
                                              single)
         self._warned = False
+        #: with ``record``: what backward() reads, from the first step on
+        self.record = bool(record)
+        self.tape: Optional[Tape] = None
 
     def run(self, frames: int, on_frame: Optional[Callable[[int, NewtonReport],
                                                           None]] = None,
@@ -516,6 +522,27 @@ class ImplicitEuler:
                 "max_iterations, or see docs/contact.md on convergence",
                 NewtonNotConverged, stacklevel=2)
         return total
+
+    def backward(self, dloss: Mapping[Attribute, Any],
+                 parameters: Sequence[Attribute] = (),
+                 dloss_velocities: Optional[Mapping[Attribute, Any]] = None,
+                 tolerance: float = 1e-6,
+                 threads: Optional[int] = None) -> SimulationGradients:
+        """The gradient of a loss L of the recorded run's last state (the
+        stepper made with ``record=True``): ``dloss`` gives dL/dq per target
+        at the last step (shaped like its value; ``dloss_velocities`` dL/dv
+        likewise), ``parameters`` the stored attributes to differentiate
+        with respect to (materials, rest-shape constants, masses; not the
+        targets or predictions). One solve per step with the step's exact
+        Hessian, the collision set held at each step's solution and
+        friction's lags held fixed (docs/diff.md). Returns
+        :class:`yasps.sim.adjoint.SimulationGradients`: parameter -> array
+        shaped like its value, with ``initial_positions`` and
+        ``initial_velocities`` (one array per target). Warns
+        (AdjointWarning) when a step's free gradient exceeds
+        ``tolerance``. Leaves the scene in the run's last state."""
+        return backward(self, dloss, parameters, current_backend(),
+                        dloss_velocities, tolerance, threads)
 
     def save(self, path) -> None:
         """Writes what the next step reads to ``path`` (.npz): the scene's
@@ -605,6 +632,8 @@ class ImplicitEuler:
         # Before friction's lag, which computes world positions: no stage
         # but ``compile`` includes compiling.
         compile_seconds = compile_kernels(self.scene, self.contact, False)
+        if self.record and self.tape is None:
+            self.tape = start_recording(self)
         if self.contact is not None:
             self.contact.forget_candidates()
         previous = [t.value for t in self.targets]
@@ -682,6 +711,9 @@ class ImplicitEuler:
             if fn is not None:
                 t.updateValue(fn(t.value))
         self.time += self.dt
+        if self.tape is not None:
+            self.tape.masks.append(record_masks(self, fixed))
+            self.tape.append(checkpoint.scene_state(self.scene))
         assert report is not None  # friction_iterations >= 1: one solve
         report.prescribed_lag = lagging
         report.seconds["compile"] += compile_seconds
