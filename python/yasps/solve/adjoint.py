@@ -141,7 +141,8 @@ def _group_index(scene: Scene, slot: ParamSlot, count: int,
             return variables.offset[id(base)] + gathered[:, None] * size + \
                 np.arange(size)[None, :]
     return np.array([[variables.index(loc) for loc in slot.locations(i)]
-                     for i in range(count)], dtype=np.int64).reshape(count, -1)
+                     for i in range(count)],
+                    dtype=np.int64).reshape(count, slot.width)
 
 
 def adjoint_terms(scene: Scene, variables: Variables, backend: Backend,
