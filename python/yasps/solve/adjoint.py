@@ -42,7 +42,7 @@ from ..ir import kernel_ir, resolve, symbol_path
 from ..runtime import Backend
 from .assembly import DofLayout
 from .minimize import fixed_dof_mask
-from .params import Location, ParamResolver, ParamSlot
+from .params import ParamResolver, ParamSlot
 
 #: Exact Hessians, never factored or projected: the adjoint needs H itself.
 EXACT_PIPELINE = (f"{DIFFERENTIATION_PIPELINE}{{hessian-factors=never "
@@ -76,13 +76,6 @@ class Variables:
     def contains(self, attr: Attribute) -> bool:
         return id(attr) in self.offset
 
-    def index(self, location: Location) -> int:
-        """The variable of a local parameter's location (-1: padding)."""
-        if location is None:
-            return -1
-        attr, instance, entry = location
-        return self.offset[id(attr)] + instance * attr.rows * attr.cols + entry
-
     def split(self, vector: np.ndarray, attr: Attribute) -> np.ndarray:
         """``attr``'s part of a vector over the variables, shaped like its
         value, (N, rows, cols)."""
@@ -90,22 +83,6 @@ class Variables:
         n = owner_of(attr).numInstances * attr.rows * attr.cols
         return from_column_major(vector[start:start + n].copy(), attr.rows,
                                  attr.cols)
-
-
-class _Resolver(ParamResolver):
-    """Parameters behind JOINs and UNIONs, where the parameters of the
-    adjoint count as targets."""
-
-    def __init__(self, scene: Scene, ir: str, variables: Variables):
-        super().__init__(scene, ir)
-        self.variables = variables
-
-    def expand(self, attr: Attribute, instance: int) -> List[Location]:
-        if attr.kind in STORED_KINDS:
-            if self.variables.contains(attr):
-                return [(attr, instance, e) for e in range(attr.rows * attr.cols)]
-            return []
-        return super().expand(attr, instance)
 
 
 @dataclass
@@ -119,30 +96,68 @@ class EnergyTerm:
     hessian: np.ndarray
 
 
-def _group_index(scene: Scene, slot: ParamSlot, count: int,
-                 variables: Variables) -> np.ndarray:
-    """The variables of one parameter group for every instance (count,
-    width): arrays for reads and JOINs of a stored variable, else
-    instance by instance through the group's locations."""
-    param = slot.param
-    if isinstance(param, ReadParam):
-        target = resolve(scene, param.target)
-        size = target.rows * target.cols
-        instances = np.arange(count) if target.owner is slot.owner \
-            else np.zeros(count, dtype=np.int64)
-        return variables.offset[id(target)] + instances[:, None] * size + \
+class _Indexer:
+    """The variables of every local parameter, as (instances, width)
+    tables of global indices (-1: padding or not a variable), built from
+    the compiler's parameter groups with array operations: an attribute's
+    table is that of each of its groups side by side; a read of a stored
+    attribute is its own entries; a JOIN gathers the rows of its base's
+    table; a UNION stacks its members' tables. Tables are kept per
+    attribute, so a source read by many energies is indexed once."""
+
+    def __init__(self, scene: Scene, resolver: ParamResolver,
+                 variables: Variables):
+        self.scene, self.resolver, self.variables = scene, resolver, variables
+        self._tables: Dict[int, np.ndarray] = {}
+
+    def stored(self, attr: Attribute, instances: np.ndarray) -> np.ndarray:
+        size = attr.rows * attr.cols
+        if not self.variables.contains(attr):
+            return np.full((len(instances), 0), -1, dtype=np.int64)
+        return self.variables.offset[id(attr)] + \
+            np.asarray(instances, dtype=np.int64)[:, None] * size + \
             np.arange(size)[None, :]
-    if isinstance(param, JoinParam):
-        base = resolve(scene, param.base)
-        if base.kind in STORED_KINDS and variables.contains(base):
-            size = base.rows * base.cols
+
+    def attribute(self, attr: Attribute) -> np.ndarray:
+        """The table of every instance of ``attr``'s owner."""
+        key = id(attr)
+        if key not in self._tables:
+            count = owner_of(attr).numInstances
+            if attr.kind in STORED_KINDS:
+                table = self.stored(attr, np.arange(count))
+            else:
+                table = self.groups(self.resolver.slots(attr), count)
+            self._tables[key] = table
+        return self._tables[key]
+
+    def groups(self, slots: Sequence[ParamSlot], count: int) -> np.ndarray:
+        parts = [self.group(slot, count) for slot in slots]
+        return np.concatenate(parts, axis=1) if parts else \
+            np.zeros((count, 0), dtype=np.int64)
+
+    def group(self, slot: ParamSlot, count: int) -> np.ndarray:
+        param, scene = slot.param, self.scene
+        if isinstance(param, ReadParam):
+            target = resolve(scene, param.target)
+            instances = np.arange(count) if target.owner is slot.owner \
+                else np.zeros(count, dtype=np.int64)
+            return self.stored(target, instances)
+        out = np.full((count, slot.width), -1, dtype=np.int64)
+        if isinstance(param, JoinParam):
             conn = introspect.symbols(slot.owner)[param.connectivity.lstrip("@")]
-            gathered = np.asarray(conn.indices[:, param.slot], dtype=np.int64)
-            return variables.offset[id(base)] + gathered[:, None] * size + \
-                np.arange(size)[None, :]
-    return np.array([[variables.index(loc) for loc in slot.locations(i)]
-                     for i in range(count)],
-                    dtype=np.int64).reshape(count, slot.width)
+            table = self.attribute(resolve(scene, param.base))
+            gathered = table[np.asarray(conn.indices[:, param.slot],
+                                        dtype=np.int64)]
+            out[:, :gathered.shape[1]] = gathered
+            return out
+        union = resolve(scene, param.union)
+        offsets = union.offsets
+        for m, member in enumerate(union.members):
+            table = self.attribute(
+                introspect.named_attributes(member)[param.attribute])
+            start = int(offsets[m])
+            out[start:start + len(table), :table.shape[1]] = table
+        return out
 
 
 def adjoint_terms(scene: Scene, variables: Variables, backend: Backend,
@@ -152,7 +167,8 @@ def adjoint_terms(scene: Scene, variables: Variables, backend: Backend,
     collision pairs it holds included), evaluated on ``backend``'s host."""
     host = backend.host
     ir = kernel_ir(scene, differentiated=variables.parameters)
-    resolver = _Resolver(scene, ir, variables)
+    resolver = ParamResolver(scene, ir)
+    indexer = _Indexer(scene, resolver, variables)
     terms = []
     for energy in scene.energies:
         base = symbol_path(energy)
@@ -163,10 +179,8 @@ def adjoint_terms(scene: Scene, variables: Variables, backend: Backend,
             continue  # reads neither a target nor a parameter
         owner = owner_of(energy)
         count = owner.numInstances
-        groups = [ParamSlot(p, owner, resolver) for p in kernels.params(paths[0])]
-        index = np.concatenate(
-            [_group_index(scene, g, count, variables) for g in groups], axis=1) \
-            if groups else np.zeros((count, 0), dtype=np.int64)
+        index = indexer.groups([ParamSlot(p, owner, resolver) for p in
+                                kernels.params(paths[0])], count)
         n = index.shape[1]
         gradient = host.to_host(host.run(kernels, scene, paths[0], count,
                                          threads), (count, n, 1))[:, :, 0]
