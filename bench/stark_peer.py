@@ -458,6 +458,10 @@ def main() -> None:
     parser.add_argument("--no-run", action="store_true",
                         help="build nothing, run nothing: summarise the "
                         "runs an earlier invocation left in --build-dir")
+    parser.add_argument("--measured-at", default="unknown",
+                        help="with --no-run: the yasps commit the runs "
+                        "measured, where they do not record it (runs "
+                        "before they did)")
     add_json_argument(parser, "stark_peer")
     args = parser.parse_args()
     if args.quick:
@@ -476,6 +480,7 @@ def main() -> None:
           f"OMP_WAIT_POLICY {args.stark_wait_policy}")
     everything: Dict[str, Dict] = {"versions": versions}
     out = Results("stark_peer")
+    measured: set = set()
     rounds: List[List] = []
     shares: List[List] = []
     work = build / "runs"
@@ -512,10 +517,8 @@ def main() -> None:
                                                args.yasps_newton_cap))
             if args.no_run:
                 # The yasps commit those runs measured, where they say.
-                measured = {str(r["commit"]) if "commit" in r else "unknown"
-                            for r in runs["yasps"]}
-                out.meta["commit"] = ", ".join(sorted(measured))
-                out.meta["command"] += " (summarised from earlier runs)"
+                measured.update(str(r["commit"]) if "commit" in r
+                                else args.measured_at for r in runs["yasps"])
             results[threads] = {side: summarise(spec, runs[side], side,
                                                 checker) for side in SIDES}
             gaps[threads] = stark_scenes.trajectory_gap(
@@ -540,6 +543,9 @@ def main() -> None:
               shares, ["", "", "", "{:.0f}"],
               note="STARK's timers nest (their shares may sum past 100%); "
               "yasps' stages are disjoint, 'other' is Python around them.")
+    if args.no_run:
+        out.meta["commit"] = ", ".join(sorted(measured))
+        out.meta["command"] += " (summarised from earlier runs)"
     everything["STARK wait policy"] = args.stark_wait_policy
     out.values = everything
     print(f"\nresults: {out.write(args.json)}")
