@@ -439,3 +439,55 @@ def test_three_bodies_in_one_union_in_contact_match_differences_of_runs():
         ("x0", 0, 38, 1e-5),                    # a cloth vertex
         ("v0", 1, 5, 1e-5),                     # the soft box
         ("x0", 2, 4, 1e-5), ("v0", 3, 2, 1e-5)])  # A, and t
+
+
+def test_young_and_poisson_gradients_follow_lame():
+    from yasps.sim import lame
+
+    for young, poisson, d_mu, d_lam in [(1e5, 0.3, 2.0, -1.0),
+                                         (3e4, 0.45, -0.5, 0.25)]:
+        got = yasps.diff.young_poisson_gradient(young, poisson, d_mu, d_lam)
+
+        def loss(e, nu):
+            mu, lam = lame(e, nu)
+            return d_mu * mu + d_lam * lam
+        h_e, h_nu = 1e-3 * young, 1e-6
+        want = ((loss(young + h_e, poisson) - loss(young - h_e, poisson)) / (2 * h_e),
+                (loss(young, poisson + h_nu) - loss(young, poisson - h_nu)) / (2 * h_nu))
+        np.testing.assert_allclose(got, want, rtol=1e-7)
+    with pytest.raises(yasps.ArgumentError):
+        yasps.diff.young_poisson_gradient(1e5, 0.5, 1.0, 1.0)
+
+
+def test_a_landing_box_gives_its_youngs_modulus_and_poisson_ratio():
+    from yasps.sim import lame
+
+    rest, _ = box_tet_mesh(1, 0.1)
+    start = (rest + [0.0, 0.0, 0.0015])[:, :, None]
+    velocity = np.zeros_like(start)
+    velocity[:, 2] = -0.2
+    young, poisson = 2.5e4, 0.3
+
+    def run(e, nu, record=False):
+        def change(p):
+            mu, lam = lame(e, nu)
+            p["mu"].updateValue([mu])
+            p["lam"].updateValue([lam])
+        return run_steps(landing_box, record, [start], [velocity], 10, change)
+
+    stepper, params, counts = run(young, poisson, record=True)
+    assert any(counts.values())
+    w = np.random.default_rng(5).normal(size=start.shape)
+    x = stepper.targets[0]
+    grads = stepper.backward({x: w}, [params["mu"], params["lam"]])
+    got = yasps.diff.young_poisson_gradient(
+        young, poisson, grads[params["mu"]], grads[params["lam"]])
+
+    def loss(e, nu):
+        done, _, perturbed = run(e, nu)
+        assert perturbed == counts
+        return float((w * done.targets[0].value).sum())
+    h_e, h_nu = 1e-3 * young, 1e-4
+    want = ((loss(young + h_e, poisson) - loss(young - h_e, poisson)) / (2 * h_e),
+            (loss(young, poisson + h_nu) - loss(young, poisson - h_nu)) / (2 * h_nu))
+    np.testing.assert_allclose(got, want, rtol=1e-4)

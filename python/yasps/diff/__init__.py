@@ -18,15 +18,19 @@ constants, masses, predictions.
 
 from __future__ import annotations
 
-from typing import Mapping, Optional, Sequence
+from typing import Mapping, Optional, Sequence, Tuple
+
+import numpy as np
 
 from .. import runtime
 from ..frontend.attribute import Attribute
+from ..sim.bodies import lame
 from ..frontend.scene import Scene
 from ..solve.adjoint import AdjointWarning, Gradients
 from ..solve.adjoint import equilibrium_gradient as _equilibrium_gradient
 
-__all__ = ["AdjointWarning", "Gradients", "equilibrium_gradient"]
+__all__ = ["AdjointWarning", "Gradients", "equilibrium_gradient",
+           "young_poisson_gradient"]
 
 
 def equilibrium_gradient(scene: Scene, dloss: Mapping[Attribute, object],
@@ -45,3 +49,18 @@ def equilibrium_gradient(scene: Scene, dloss: Mapping[Attribute, object],
     return _equilibrium_gradient(scene, dloss, parameters, runtime.current(),
                                  fixed=fixed, threads=threads,
                                  tolerance=tolerance)
+
+
+def young_poisson_gradient(young: float, poisson: float, d_mu, d_lam
+                           ) -> Tuple[float, float]:
+    """dL/dE and dL/dnu from dL/dmu and dL/dlambda (the gradients of the
+    Lame constants that :func:`yasps.sim.lame` makes of Young's modulus E
+    and Poisson's ratio nu; arrays of one entry, as Gradients gives them,
+    or numbers), by the chain rule through ``lame``."""
+    lame(young, poisson)                  # refuses what lame refuses
+    d_mu, d_lam = float(np.sum(d_mu)), float(np.sum(d_lam))
+    a, b = 1.0 + poisson, 1.0 - 2.0 * poisson
+    d_young = d_mu / (2.0 * a) + d_lam * poisson / (a * b)
+    d_poisson = (-d_mu * young / (2.0 * a * a) +
+                 d_lam * young * (1.0 + 2.0 * poisson ** 2) / (a * a * b * b))
+    return d_young, d_poisson
