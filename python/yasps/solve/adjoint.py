@@ -171,14 +171,16 @@ def adjoint_terms(scene: Scene, variables: Variables, backend: Backend,
     indexer = _Indexer(scene, resolver, variables)
     terms = []
     for energy in scene.energies:
+        owner = owner_of(energy)
+        count = owner.numInstances
+        if count == 0:
+            continue  # no pairs of this kind now: nothing to compile
         base = symbol_path(energy)
         paths = [base + "__grad", base + "__hess"]
         try:
             kernels = host.compile(ir, paths, scene.name, EXACT_PIPELINE)
         except MissingAttributeError:
             continue  # reads neither a target nor a parameter
-        owner = owner_of(energy)
-        count = owner.numInstances
         index = indexer.groups([ParamSlot(p, owner, resolver) for p in
                                 kernels.params(paths[0])], count)
         n = index.shape[1]
