@@ -491,3 +491,62 @@ def test_a_landing_box_gives_its_youngs_modulus_and_poisson_ratio():
     want = ((loss(young + h_e, poisson) - loss(young - h_e, poisson)) / (2 * h_e),
             (loss(young, poisson + h_nu) - loss(young, poisson - h_nu)) / (2 * h_nu))
     np.testing.assert_allclose(got, want, rtol=1e-4)
+
+
+def test_the_rest_chain_matches_differences_of_inverse_and_volume():
+    rest, tets = box_tet_mesh(1, 0.1)
+    rest = rest + np.random.default_rng(4).normal(scale=0.005, size=rest.shape)
+    rng = np.random.default_rng(6)
+    d_inv = rng.normal(size=(len(tets), 3, 3))
+    d_vol = rng.normal(size=(len(tets), 1, 1))
+
+    def loss(r):
+        edges = np.stack([r[tets][:, k] - r[tets][:, 0] for k in (1, 2, 3)],
+                         axis=2)
+        return float((d_inv * np.linalg.inv(edges)).sum() +
+                     (d_vol[:, 0, 0] * np.abs(np.linalg.det(edges)) / 6).sum())
+    got = yasps.diff.tet_rest_gradient(rest, tets, d_inv, d_vol)
+    want = np.zeros_like(rest)
+    for i in range(rest.size):
+        e = np.zeros(rest.size)
+        e[i] = 1e-7
+        want.flat[i] = (loss(rest + e.reshape(rest.shape)) -
+                        loss(rest - e.reshape(rest.shape))) / 2e-7
+    np.testing.assert_allclose(got, want, rtol=1e-6, atol=1e-6 * np.abs(want).max())
+
+
+def test_a_compressed_box_gives_its_rest_positions():
+    rest, tets = box_tet_mesh(2, 0.1)
+
+    def build(shape):
+        s = yasps.scene("rest")
+        m = s.addMesh("box")
+        v = m.addPrimitive("v", numInstances=len(rest))
+        x = v.addAttribute("x", rows=3)
+        start = rest.copy()
+        start[rest[:, 2] > 0.1 - 1e-9, 2] *= 0.9
+        x.updateValue(start)
+        add_elastic_tets(m, x, shape, tets, 3e4, 5e4)
+        s.addMinimizeTarget([x])
+        held = (rest[:, 2] > 0.1 - 1e-9) | (rest[:, 2] < 1e-9)
+        solve(s, x, held)
+        return s, m, x, held
+
+    s, m, x, held = build(rest)
+    w = loss_weights(x)
+    t = m.t
+    grads = yasps.diff.equilibrium_gradient(s, {x: w}, [t["inv"], t["vol"]],
+                                            fixed=[held])
+    d_rest = yasps.diff.tet_rest_gradient(rest, tets, grads[t["inv"]],
+                                          grads[t["vol"]])
+    # The rest positions of the free vertices matter most.
+    for entry in np.argsort(-np.abs(d_rest).reshape(-1))[:2]:
+        h = 1e-6
+        sides = []
+        for sign in (1.0, -1.0):
+            shape = rest.copy()
+            shape.flat[entry] += sign * h
+            _, _, xs, _ = build(shape)
+            sides.append(float((w * xs.value).sum()))
+        want = (sides[0] - sides[1]) / (2 * h)
+        assert d_rest.flat[entry] == pytest.approx(want, rel=1e-4), entry

@@ -28,9 +28,10 @@ from ..sim.bodies import lame
 from ..frontend.scene import Scene
 from ..solve.adjoint import AdjointWarning, Gradients
 from ..solve.adjoint import equilibrium_gradient as _equilibrium_gradient
+from .rest import tet_rest_gradient
 
 __all__ = ["AdjointWarning", "Gradients", "equilibrium_gradient",
-           "young_poisson_gradient"]
+           "tet_rest_gradient", "young_poisson_gradient"]
 
 
 def equilibrium_gradient(scene: Scene, dloss: Mapping[Attribute, object],
