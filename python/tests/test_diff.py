@@ -550,3 +550,23 @@ def test_a_compressed_box_gives_its_rest_positions():
             sides.append(float((w * xs.value).sum()))
         want = (sides[0] - sides[1]) / (2 * h)
         assert d_rest.flat[entry] == pytest.approx(want, rel=1e-4), entry
+
+
+def test_projected_blocks_clamp_the_target_block_only():
+    from yasps.solve.adjoint import projected_blocks
+
+    rng = np.random.default_rng(8)
+    a = rng.normal(size=(5, 4, 4))
+    hessian = a + np.transpose(a, (0, 2, 1))
+    index = np.array([[0, 1, 2, 9]] * 5)           # the last: a parameter
+    out = projected_blocks(hessian, index, num_dofs=3)
+    assert np.all(out[:, 3, :] == 0) and np.all(out[:, :, 3] == 0)
+    assert np.linalg.eigvalsh(out).min() > -1e-12
+    psd = a @ np.transpose(a, (0, 2, 1))
+    np.testing.assert_allclose(projected_blocks(psd, np.array([[0, 1, 2, 3]] * 5), 4),
+                               psd, atol=1e-12)
+    s, m, x, held = compressed_box()
+    solve(s, x, held)
+    with pytest.raises(yasps.ArgumentError, match="exact, projected"):
+        yasps.diff.equilibrium_gradient(s, {x: x.value}, [m["t_mu"]],
+                                        fixed=[held], hessian="approximate")

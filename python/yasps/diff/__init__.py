@@ -37,7 +37,8 @@ __all__ = ["AdjointWarning", "Gradients", "equilibrium_gradient",
 def equilibrium_gradient(scene: Scene, dloss: Mapping[Attribute, object],
                          parameters: Sequence[Attribute], fixed=None,
                          tolerance: float = 1e-6,
-                         threads: Optional[int] = None) -> Gradients:
+                         threads: Optional[int] = None,
+                         hessian: str = "exact") -> Gradients:
     """dL/dtheta at the minimiser the scene holds, for each of
     ``parameters``, given ``dloss`` (dL/dx* per target, each shaped like the
     target's value; targets left out contribute nothing). ``fixed`` is
@@ -46,10 +47,13 @@ def equilibrium_gradient(scene: Scene, dloss: Mapping[Attribute, object],
     projected), solved directly on the free DoFs; warns with
     AdjointWarning when the free gradient's largest entry exceeds
     ``tolerance`` (the adjoint holds at a minimiser only). Returns a
-    :class:`Gradients`: parameter -> array shaped like its value."""
+    :class:`Gradients`: parameter -> array shaped like its value.
+    ``hessian="projected"`` solves with each instance's block
+    PSD-projected instead: another, approximate gradient, for measuring
+    what projection would cost."""
     return _equilibrium_gradient(scene, dloss, parameters, runtime.current(),
                                  fixed=fixed, threads=threads,
-                                 tolerance=tolerance)
+                                 tolerance=tolerance, hessian=hessian)
 
 
 def young_poisson_gradient(young: float, poisson: float, d_mu, d_lam

@@ -105,7 +105,8 @@ def backward(stepper, dloss: Mapping[Attribute, object],
              parameters: Sequence[Attribute], backend: Backend,
              dloss_velocities: Optional[Mapping[Attribute, object]] = None,
              tolerance: float = 1e-6,
-             threads: Optional[int] = None) -> SimulationGradients:
+             threads: Optional[int] = None,
+             hessian: str = "exact") -> SimulationGradients:
     """The gradients of a loss of the recorded run's last state (see
     ImplicitEuler.backward). Leaves the scene in the run's last state."""
     tape: Optional[Tape] = stepper.tape
@@ -148,7 +149,7 @@ def backward(stepper, dloss: Mapping[Attribute, object],
             restore_scene_state(scene, tape.state(n + 1))
             held, fixed = tape.masks[n]
             system = AdjointSystem(variables, adjoint_terms(
-                scene, variables, backend, threads), held)
+                scene, variables, backend, threads), held, hessian)
             if system.free_gradient_norm() > tolerance:
                 unconverged += 1
             b = q_bar + v_bar / dt

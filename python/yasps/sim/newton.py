@@ -527,7 +527,8 @@ class ImplicitEuler:
                  parameters: Sequence[Attribute] = (),
                  dloss_velocities: Optional[Mapping[Attribute, Any]] = None,
                  tolerance: float = 1e-6,
-                 threads: Optional[int] = None) -> SimulationGradients:
+                 threads: Optional[int] = None,
+                 hessian: str = "exact") -> SimulationGradients:
         """The gradient of a loss L of the recorded run's last state (the
         stepper made with ``record=True``): ``dloss`` gives dL/dq per target
         at the last step (shaped like its value; ``dloss_velocities`` dL/dv
@@ -540,9 +541,13 @@ class ImplicitEuler:
         shaped like its value, with ``initial_positions`` and
         ``initial_velocities`` (one array per target). Warns
         (AdjointWarning) when a step's free gradient exceeds
-        ``tolerance``. Leaves the scene in the run's last state."""
+        ``tolerance``. Leaves the scene in the run's last state.
+        ``hessian="projected"`` solves with each instance's block
+        PSD-projected instead of the exact Hessian: another, approximate
+        gradient, for measuring what projection would cost
+        (docs/diff.md)."""
         return backward(self, dloss, parameters, current_backend(),
-                        dloss_velocities, tolerance, threads)
+                        dloss_velocities, tolerance, threads, hessian)
 
     def save(self, path) -> None:
         """Writes what the next step reads to ``path`` (.npz): the scene's

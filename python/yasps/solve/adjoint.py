@@ -193,13 +193,35 @@ def adjoint_terms(scene: Scene, variables: Variables, backend: Backend,
     return terms
 
 
+#: The Hessians an adjoint may solve with: the exact one (the gradient's
+#: own), or each instance's block PSD-projected (eigenvalues clamped at 0),
+#: as projected Newton steps with, for measuring what that costs.
+HESSIANS = ("exact", "projected")
+
+
+def projected_blocks(hessian: np.ndarray, index: np.ndarray,
+                     num_dofs: int) -> np.ndarray:
+    """Each instance's Hessian block in its target DoFs (``index`` below
+    ``num_dofs``), eigenvalues clamped at 0; the rest zero."""
+    is_dof = (index >= 0) & (index < num_dofs)
+    block = hessian * (is_dof[:, :, None] & is_dof[:, None, :])
+    values, vectors = np.linalg.eigh(block)
+    return (vectors * np.maximum(values, 0.0)[:, None, :]) @ \
+        np.transpose(vectors, (0, 2, 1))
+
+
 class AdjointSystem:
-    """The exact Hessian of the targets' free DoFs and the mixed
-    derivatives in the parameters, assembled from :func:`adjoint_terms`."""
+    """The Hessian of the targets' free DoFs (exact, or projected:
+    HESSIANS) and the mixed derivatives in the parameters, assembled from
+    :func:`adjoint_terms`."""
 
     def __init__(self, variables: Variables, terms: Sequence[EnergyTerm],
-                 fixed: Optional[np.ndarray] = None):
+                 fixed: Optional[np.ndarray] = None, hessian: str = "exact"):
         from scipy import sparse
+
+        if hessian not in HESSIANS:
+            raise ArgumentError(f"the adjoint's hessian must be one of "
+                                f"{', '.join(HESSIANS)}, got {hessian!r}")
 
         self.variables = variables
         self.terms = list(terms)
@@ -213,9 +235,11 @@ class AdjointSystem:
             j = term.index[:, None, :]
             both = (i >= 0) & (i < nx) & (j >= 0) & (j < nx)
             both = np.broadcast_to(both, term.hessian.shape)
+            local = term.hessian if hessian == "exact" else \
+                projected_blocks(term.hessian, term.index, nx)
             rows.append(np.broadcast_to(i, term.hessian.shape)[both])
             cols.append(np.broadcast_to(j, term.hessian.shape)[both])
-            values.append(term.hessian[both])
+            values.append(local[both])
             own = (term.index >= 0) & (term.index < nx)
             gradient += np.bincount(term.index[own], term.gradient[own],
                                     minlength=nx)
@@ -322,14 +346,16 @@ class Gradients(dict):
 def equilibrium_gradient(scene: Scene, dloss: Mapping[Attribute, object],
                          parameters: Sequence[Attribute], backend: Backend,
                          fixed=None, threads: Optional[int] = None,
-                         tolerance: float = 1e-6) -> Gradients:
+                         tolerance: float = 1e-6,
+                         hessian: str = "exact") -> Gradients:
     """The gradient of a loss L(x*) with respect to ``parameters`` at the
     minimiser x* the scene holds (after a converged solve), given
     dL/dx* as ``dloss`` (target -> array shaped like its value). ``fixed``
     is minimizeEnergy's (one mask or None per target): fixed DoFs do not
     move with the parameters. Warns (AdjointWarning) when the free
     gradient's largest entry exceeds ``tolerance``: the adjoint holds at a
-    minimiser only."""
+    minimiser only. ``hessian``: HESSIANS ("projected" gives another,
+    approximate gradient: for measuring what projecting costs)."""
     what = "equilibrium_gradient"
     if not scene.minimizeTargets:
         raise SceneError(f"{what}: scene {scene.name!r} has no "
@@ -339,7 +365,7 @@ def equilibrium_gradient(scene: Scene, dloss: Mapping[Attribute, object],
     rhs = loss_vector(variables, dloss, what)
     mask = fixed_dof_mask(variables.layout, fixed)
     system = AdjointSystem(variables, adjoint_terms(scene, variables, backend,
-                                                    threads), mask)
+                                                    threads), mask, hessian)
     residual = system.free_gradient_norm()
     if residual > tolerance:
         warnings.warn(f"{what}: the free gradient's largest entry is "
