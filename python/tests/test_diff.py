@@ -218,7 +218,7 @@ DT = 0.01
 STEP_SETTINGS = NewtonSettings(max_iterations=300, cg_tolerance=1e-12)
 
 
-def swinging_cloth(record):
+def swinging_cloth(record, checkpoint_every=None):
     """A cloth of 4 x 4 free vertices hanging from two pinned corners."""
     rest, faces = cloth_grid(4, 0.5)
     s = yasps.scene("swing")
@@ -230,7 +230,7 @@ def swinging_cloth(record):
     pinned[[0, 3]] = True
     stepper = ImplicitEuler(s, body.x, body.x_hat, DT, settings=STEP_SETTINGS,
                             fixed=pinned, velocity_tolerance=1e-10,
-                            record=record)
+                            record=record, checkpoint_every=checkpoint_every)
     return s, {"stretch": m["cloth_stretch"], "bending": m["cloth_bending"],
                "mass": body.primitive["mass"]}, stepper
 
@@ -570,3 +570,36 @@ def test_projected_blocks_clamp_the_target_block_only():
     with pytest.raises(yasps.ArgumentError, match="exact, projected"):
         yasps.diff.equilibrium_gradient(s, {x: x.value}, [m["t_mu"]],
                                         fixed=[held], hessian="approximate")
+
+
+def test_checkpoints_give_the_dense_tapes_gradients():
+    rest, _ = cloth_grid(4, 0.5)
+    start = rest[:, :, None]
+    velocity = np.random.default_rng(2).normal(scale=0.1, size=start.shape)
+    velocity[[0, 3]] = 0.0
+
+    def run(every):
+        s, params, stepper = swinging_cloth(True, every)
+        stepper.targets[0].updateValue(start)
+        stepper.velocities = [velocity.copy()]
+        for _ in range(8):
+            stepper.step(warn=False)
+        x = stepper.targets[0]
+        end, time = x.value.copy(), stepper.time
+        w = np.random.default_rng(0).normal(size=end.shape)
+        grads = stepper.backward({x: w}, list(params.values()))
+        # The stepper is left where the run ended.
+        np.testing.assert_array_equal(x.value, end)
+        assert stepper.time == time
+        return stepper.tape, grads, params
+    dense, want, params = run(None)
+    tape, got, other = run(3)
+    assert sorted(tape.checkpoints) == [0, 3, 6] and tape.length == 0
+    for a, b in zip(params.values(), other.values()):
+        np.testing.assert_allclose(got[b], want[a], rtol=1e-12)
+    np.testing.assert_allclose(got.initial_velocities[0],
+                               want.initial_velocities[0], rtol=1e-12,
+                               atol=1e-14)
+    for record, every in ((False, 2), (True, 0), (True, 1.5)):
+        with pytest.raises(yasps.SceneError, match="checkpoint_every"):
+            swinging_cloth(record, every)

@@ -24,7 +24,8 @@ from __future__ import annotations
 
 import bisect
 import warnings
-from typing import Dict, List, Mapping, Optional, Sequence, Tuple
+from typing import (Any, Dict, Generator, List, Mapping, Optional, Sequence,
+                    Tuple)
 
 import numpy as np
 
@@ -35,21 +36,44 @@ from ..runtime import Backend
 from ..solve.adjoint import (AdjointSystem, AdjointWarning, Gradients,
                              Variables, adjoint_terms, checked_parameters)
 from ..solve.minimize import fixed_dof_mask
-from .checkpoint import restore_scene_state, scene_state
+from .checkpoint import (restore_scene_state, restore_stepper_state,
+                         scene_state, stepper_state)
 
 
 class Tape:
     """The states a run went through, keeping of each stored value (and
     dynamic count and connectivity) only the versions that differ from the
     previous state's: state 0 is the run's start, state n + 1 the solution
-    of step n."""
+    of step n.
 
-    def __init__(self) -> None:
+    With ``every`` (checkpointing, for long runs), it keeps instead the
+    stepper's whole state (:func:`checkpoint.stepper_state`) at the start
+    of every ``every``-th step only; the backward pass runs each stretch
+    between checkpoints again, recording it densely, before going back
+    over it: memory for N / every checkpoints and one stretch, at the cost
+    of a second forward run."""
+
+    def __init__(self, every: Optional[int] = None) -> None:
         self._history: Dict[str, Tuple[List[int], List[np.ndarray]]] = {}
         self.length = 0
         #: per step: the solve's held DoF mask and the fixed one (held
         #: DoFs that keep their values, not prescribed)
         self.masks: List[Tuple[np.ndarray, np.ndarray]] = []
+        self.every = every
+        #: with ``every``: the stepper's state at the start of step n, by n
+        self.checkpoints: Dict[int, Dict[str, Any]] = {}
+        #: the steps recorded
+        self.steps = 0
+
+    def record_step(self, stepper, fixed) -> None:
+        """Records the step ``stepper`` just took (``fixed``: its solve's
+        held entries, one mask or None per target)."""
+        self.masks.append(record_masks(stepper, fixed))
+        self.steps += 1
+        if self.every is None:
+            self.append(scene_state(stepper.scene))
+        elif self.steps % self.every == 0:
+            self.checkpoints[self.steps] = stepper_state(stepper)
 
     def append(self, state: Dict[str, np.ndarray]) -> None:
         for key, value in state.items():
@@ -75,7 +99,34 @@ class Tape:
     def nbytes(self) -> int:
         """The memory the recorded values take."""
         return sum(v.nbytes for _, values in self._history.values()
-                   for v in values)
+                   for v in values) + \
+            sum(np.asarray(v).nbytes for state in self.checkpoints.values()
+                for v in state.values())
+
+    def stretches(self, stepper) -> Generator[Tuple[int, "Tape"], None, None]:
+        """(first step, a dense tape of the stretch) from the last stretch
+        to the first: the whole tape at once, or, with checkpoints, each
+        stretch run again from its checkpoint. Leaves the stepper in the
+        state it had."""
+        if self.every is None:
+            yield 0, self
+            return
+        final = stepper_state(stepper)
+        try:
+            for start in reversed(range(0, self.steps, self.every)):
+                stop = min(start + self.every, self.steps)
+                restore_stepper_state(stepper, self.checkpoints[start])
+                stretch = Tape()
+                stretch.append(scene_state(stepper.scene))
+                kept, stepper.tape = stepper.tape, stretch
+                try:
+                    for _ in range(stop - start):
+                        stepper.step(warn=False)
+                finally:
+                    stepper.tape = kept
+                yield start, stretch
+        finally:
+            restore_stepper_state(stepper, final)
 
 
 class SimulationGradients(Gradients):
@@ -114,7 +165,7 @@ def backward(stepper, dloss: Mapping[Attribute, object],
     if not stepper.record:
         raise SceneError(f"{what}: the stepper records nothing; make it with "
                          "record=True")
-    if tape is None or tape.length < 2:
+    if tape is None or tape.steps == 0:
         raise SceneError(f"{what}: no step was recorded")
     scene, dt = stepper.scene, stepper.dt
     params = checked_parameters(scene, parameters, what)
@@ -142,12 +193,15 @@ def backward(stepper, dloss: Mapping[Attribute, object],
         size = owner_of(hat).numInstances * hat.rows * hat.cols
         prediction_slices.append((slice(start, start + size),
                                   variables.offset[id(target)]))
-    last = tape.length - 1
     unconverged = 0
+    final = scene_state(scene)
+    stretches = tape.stretches(stepper)
+    steps = ((stretch, n) for _, stretch in stretches
+             for n in range(stretch.steps - 1, -1, -1))
     try:
-        for n in range(last - 1, -1, -1):
-            restore_scene_state(scene, tape.state(n + 1))
-            held, fixed = tape.masks[n]
+        for stretch, n in steps:
+            restore_scene_state(scene, stretch.state(n + 1))
+            held, fixed = stretch.masks[n]
             system = AdjointSystem(variables, adjoint_terms(
                 scene, variables, backend, threads), held, hessian)
             if system.free_gradient_norm() > tolerance:
@@ -170,9 +224,10 @@ def backward(stepper, dloss: Mapping[Attribute, object],
             q_prev[fixed] += b[fixed] - coupled[fixed]
             q_bar, v_bar = q_prev, dt * hat_bar
     finally:
-        restore_scene_state(scene, tape.state(last))
+        stretches.close()          # a stepper run again is put back
+        restore_scene_state(scene, final)
     if unconverged:
-        warnings.warn(f"{what}: {unconverged} of {last} recorded steps end "
+        warnings.warn(f"{what}: {unconverged} of {tape.steps} recorded steps end "
                       f"with a free gradient above {tolerance:g}: not at a "
                       "converged minimiser, so their adjoint is that of a "
                       "point the solve did not reach (tighten the stepper's "
@@ -199,9 +254,9 @@ def record_masks(stepper, fixed) -> Tuple[np.ndarray, np.ndarray]:
             empty if kept is None else kept.astype(bool))
 
 
-def start_recording(stepper) -> Tape:
-    """A tape holding the stepper's state now, refusing what the adjoint
-    does not cover."""
+def start_recording(stepper, every: Optional[int] = None) -> Tape:
+    """A tape holding the stepper's state now (checkpoints every ``every``
+    steps, or every state), refusing what the adjoint does not cover."""
     if stepper.world:
         raise SceneError("ImplicitEuler(record=True): world-space inertias "
                          "are not differentiated yet")
@@ -211,6 +266,9 @@ def start_recording(stepper) -> Tape:
     if stepper.friction_iterations > 1:
         raise SceneError("ImplicitEuler(record=True): friction_iterations "
                          "> 1 is not differentiated (lags are held fixed)")
-    tape = Tape()
-    tape.append(scene_state(stepper.scene))
+    tape = Tape(every)
+    if every is None:
+        tape.append(scene_state(stepper.scene))
+    else:
+        tape.checkpoints[0] = stepper_state(stepper)
     return tape

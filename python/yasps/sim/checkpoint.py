@@ -124,6 +124,13 @@ def restore_scene_state(scene, state: Dict[str, np.ndarray]) -> None:
 
 def save(stepper, path: Union[str, PathLike]) -> None:
     """Writes ``stepper``'s state (an ImplicitEuler) to ``path`` (.npz)."""
+    np.savez(path, **stepper_state(stepper))
+
+
+def stepper_state(stepper) -> Dict[str, Any]:
+    """What the next step of ``stepper`` (an ImplicitEuler) reads, as
+    arrays by name: :func:`save` writes them, :func:`restore_stepper_state`
+    reads them back."""
     # Any: np.savez's keywords also include allow_pickle, a bool.
     arrays: Dict[str, Any] = {
         f"scene|{k}": v for k, v in scene_state(stepper.scene).items()}
@@ -143,7 +150,7 @@ def save(stepper, path: Union[str, PathLike]) -> None:
     choice = preconditioner_choice.state(stepper.scene)
     if choice is not None:
         arrays["preconditioner_choice"] = choice
-    np.savez(path, **arrays)
+    return arrays
 
 
 def restore(stepper, path: Union[str, PathLike]) -> None:
@@ -151,6 +158,13 @@ def restore(stepper, path: Union[str, PathLike]) -> None:
     of the same scene structure and time step."""
     with np.load(path) as data:
         arrays = {k: data[k] for k in data.files}
+    restore_stepper_state(stepper, arrays, str(path))
+
+
+def restore_stepper_state(stepper, arrays: Dict[str, Any],
+                          path: str = "the state") -> None:
+    """Writes ``arrays`` (:func:`stepper_state`'s, or a file's) into
+    ``stepper``; ``path`` names them in errors."""
     if int(arrays.get("version", -1)) != VERSION:
         raise SceneError(f"restore: {path} is not a yasps checkpoint of "
                          f"format {VERSION}")

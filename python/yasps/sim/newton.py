@@ -27,8 +27,7 @@ from ..solve import SolverError, minimize_energy
 from ..solve.minimize import checked_fixed_mask
 from ..solve.prepare import compile_scene
 from . import checkpoint
-from .adjoint import (SimulationGradients, Tape, backward, record_masks,
-                      start_recording)
+from .adjoint import SimulationGradients, Tape, backward, start_recording
 from .newton_report import NewtonNotConverged, NewtonReport
 from .newton_settings import (NewtonSettings, add_settings_attributes,
                               settings_with_keywords)
@@ -395,7 +394,9 @@ class ImplicitEuler:
                  warm_start: bool = True, velocities=None, world=None,
                  world_velocities=None,
                  world_gravity=(0.0, 0.0, -9.81), normalize=None,
-                 record: bool = False, **deprecated: Any):
+                 record: bool = False,
+                 checkpoint_every: Optional[int] = None,
+                 **deprecated: Any):
         x: Optional[Targets] = renamed_argument(
             "ImplicitEuler", "x", "targets", targets, deprecated)
         x_hat: Optional[Predictions] = renamed_argument(
@@ -487,6 +488,14 @@ class ImplicitEuler:
         #: with ``record``: what backward() reads, from the first step on
         self.record = bool(record)
         self.tape: Optional[Tape] = None
+        if checkpoint_every is not None and (
+                int(checkpoint_every) != checkpoint_every or
+                checkpoint_every < 1 or not record):
+            raise SceneError(f"ImplicitEuler: checkpoint_every must be a "
+                             f"whole number >= 1 with record=True, got "
+                             f"{checkpoint_every!r}")
+        self.checkpoint_every = None if checkpoint_every is None \
+            else int(checkpoint_every)
 
     def run(self, frames: int, on_frame: Optional[Callable[[int, NewtonReport],
                                                           None]] = None,
@@ -638,7 +647,7 @@ class ImplicitEuler:
         # but ``compile`` includes compiling.
         compile_seconds = compile_kernels(self.scene, self.contact, False)
         if self.record and self.tape is None:
-            self.tape = start_recording(self)
+            self.tape = start_recording(self, self.checkpoint_every)
         if self.contact is not None:
             self.contact.forget_candidates()
         previous = [t.value for t in self.targets]
@@ -717,8 +726,7 @@ class ImplicitEuler:
                 t.updateValue(fn(t.value))
         self.time += self.dt
         if self.tape is not None:
-            self.tape.masks.append(record_masks(self, fixed))
-            self.tape.append(checkpoint.scene_state(self.scene))
+            self.tape.record_step(self, fixed)
         assert report is not None  # friction_iterations >= 1: one solve
         report.prescribed_lag = lagging
         report.seconds["compile"] += compile_seconds
