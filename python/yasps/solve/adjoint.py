@@ -33,6 +33,7 @@ import numpy as np
 from ..compiler import MissingAttributeError
 from ..compiler.params import JoinParam, ReadParam
 from ..compiler.pipelines import DIFFERENTIATION_PIPELINE
+from ..compiler.specs import scene_params
 from ..frontend import introspect
 from ..frontend.attribute import STORED_KINDS, Attribute, owner_of
 from ..frontend.errors import ArgumentError, ArgumentTypeError, SceneError
@@ -44,8 +45,13 @@ from .assembly import DofLayout
 from .minimize import fixed_dof_mask
 from .params import ParamResolver, ParamSlot
 
-#: Exact Hessians, never factored or projected: the adjoint needs H itself.
-EXACT_PIPELINE = (f"{DIFFERENTIATION_PIPELINE}{{hessian-factors=never "
+#: Exact Hessians, never projected: the adjoint needs H itself. Where an
+#: energy's parameters reach it through a linear map J (JOINs of affine
+#: bodies, cages, UNIONs of them), the compiler keeps H = J^T H_inner J as
+#: its factors when they are the smaller (hessian-factors=auto), as the
+#: Newton system does: a contact pair of caged points has 96 parameters, a
+#: dense exact Hessian past the kernels' size limit, and 12 inner ones.
+EXACT_PIPELINE = (f"{DIFFERENTIATION_PIPELINE}{{hessian-factors=auto "
                   "linear-maps=false}")
 
 
@@ -167,6 +173,7 @@ def adjoint_terms(scene: Scene, variables: Variables, backend: Backend,
     collision pairs it holds included), evaluated on ``backend``'s host."""
     host = backend.host
     ir = kernel_ir(scene, differentiated=variables.parameters)
+    factored = scene_params(scene, ir, EXACT_PIPELINE).factored
     resolver = ParamResolver(scene, ir)
     indexer = _Indexer(scene, resolver, variables)
     terms = []
@@ -176,20 +183,28 @@ def adjoint_terms(scene: Scene, variables: Variables, backend: Backend,
         if count == 0:
             continue  # no pairs of this kind now: nothing to compile
         base = symbol_path(energy)
-        paths = [base + "__grad", base + "__hess"]
+        paths = [base + "__grad"] + (
+            [base + "__ij", base + "__hess_inner"] if base in factored
+            else [base + "__hess"])
         try:
             kernels = host.compile(ir, paths, scene.name, EXACT_PIPELINE)
         except MissingAttributeError:
             continue  # reads neither a target nor a parameter
         index = indexer.groups([ParamSlot(p, owner, resolver) for p in
                                 kernels.params(paths[0])], count)
-        n = index.shape[1]
-        gradient = host.to_host(host.run(kernels, scene, paths[0], count,
-                                         threads), (count, n, 1))[:, :, 0]
-        hessian = host.to_host(host.run(kernels, scene, paths[1], count,
-                                        threads), (count, n, n))
-        terms.append(EnergyTerm(energy, index, np.array(gradient),
-                                np.array(hessian)))
+
+        def output(path: str) -> np.ndarray:
+            kernel = kernels.kernel(path)
+            return np.array(host.to_host(
+                host.run(kernels, scene, path, count, threads),
+                (count, kernel.rows, kernel.cols)))
+        gradient = output(paths[0])[:, :, 0]
+        if base in factored:
+            J, inner = output(paths[1]), output(paths[2])
+            hessian = np.einsum("nki,nkl,nlj->nij", J, inner, J)
+        else:
+            hessian = output(paths[1])
+        terms.append(EnergyTerm(energy, index, gradient, hessian))
     return terms
 
 
