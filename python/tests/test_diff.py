@@ -432,6 +432,7 @@ def four_bodies(record):
         fixed=[pinned, None, None, None, None], contact=contact,
         settings=STEP_SETTINGS, velocity_tolerance=1e-9, record=record)
     return s, {"stretch": cloth["cloth_stretch"], "mu": soft["t_mu"],
+               "lam": soft["t_lam"], "rest shape": soft.t["inv"],
                "cloth mass": c.primitive["mass"],
                "caged mu": caged["gauss_mu"]}, stepper
 
@@ -448,8 +449,9 @@ def test_four_bodies_in_one_union_in_contact_match_differences_of_runs():
     check_run_gradients(four_bodies, starts, velocities, 6, [
         # (The affine body's orthogonality stiffness moves this loss too
         # little for differences to resolve: its gradient is 1e-6.)
-        ("stretch", 0, 2.0), ("mu", 0, 20.0), ("caged mu", 0, 20.0),
-        ("cloth mass", 12, 1e-5),
+        ("stretch", 0, 2.0), ("mu", 0, 20.0), ("lam", 0, 50.0),
+        ("caged mu", 0, 20.0), ("cloth mass", 12, 1e-5),
+        ("rest shape", 4, 1e-3),                # a tet's inverse rest edges
         # Positions moved by 1e-5 m, velocities by 1e-4 m/s: by less, the
         # line search's round-off shows in the differences, by more their
         # own truncation.
