@@ -315,7 +315,7 @@ def check_run_gradients(build, starts, velocities, steps, checks, rtol=1e-4):
                     loss(velocities=moved(velocities, k, entry, -h))) / (2 * h)
             got = grads.initial_velocities[k].flat[entry]
         assert got == pytest.approx(want, rel=rtol), (check, got, want)
-    return grads
+    return grads, params, weights
 
 
 def test_a_swinging_cloth_run_matches_differences_of_runs():
@@ -377,7 +377,14 @@ def test_the_tape_keeps_a_constant_once():
                                   kept[0])
 
 
-def four_bodies(record):
+#: The soft box of four_bodies: its rest positions and tets, and its Lame
+#: constants as Young's modulus and Poisson's ratio.
+SOFT_REST = box_tet_mesh(1, size=0.1)[0] + [-0.2, -0.05, 0.004]
+SOFT_YOUNG, SOFT_POISSON = 2e4 * (3 * 5e4 + 2 * 2e4) / (5e4 + 2e4), \
+    5e4 / (2 * (5e4 + 2e4))
+
+
+def four_bodies(record, rest=None):
     """A soft box, an affine box and a caged box fall onto a cloth pinned
     at its corners: free cloth vertices, free soft-body vertices, an affine
     body's A rest + t and the points a cage's trilinear cell carries, in
@@ -402,7 +409,8 @@ def four_bodies(record):
     soft = s.addMesh("soft")
     start = bv + [-0.2, -0.05, 0.004]
     b = add_free_vertices(soft, start, masses)
-    add_elastic_tets(soft, b.x, start, bt, 2e4, 5e4, scale=DT * DT)
+    add_elastic_tets(soft, b.x, SOFT_REST if rest is None else rest, bt,
+                     2e4, 5e4, scale=DT * DT)
     rigid = s.addMesh("rigid")
     body = add_affine_body(rigid, bv - 0.05, masses,
                            stiffness=1e5 * 0.1 ** 3, scale=DT * DT,
@@ -433,6 +441,7 @@ def four_bodies(record):
         settings=STEP_SETTINGS, velocity_tolerance=1e-9, record=record)
     return s, {"stretch": cloth["cloth_stretch"], "mu": soft["t_mu"],
                "lam": soft["t_lam"], "rest shape": soft.t["inv"],
+               "rest volume": soft.t["vol"],
                "cloth mass": c.primitive["mass"],
                "caged mu": caged["gauss_mu"]}, stepper
 
@@ -446,7 +455,8 @@ def test_four_bodies_in_one_union_in_contact_match_differences_of_runs():
     velocities[3][0, 2] = -0.6                  # the affine one's t
     _, _, counts = run_steps(four_bodies, False, starts, velocities, 6)
     assert any(counts.values()), "nothing touched"
-    check_run_gradients(four_bodies, starts, velocities, 6, [
+    grads, params, weights = check_run_gradients(four_bodies, starts,
+                                                 velocities, 6, [
         # (The affine body's orthogonality stiffness moves this loss too
         # little for differences to resolve: its gradient is 1e-6.)
         ("stretch", 0, 2.0), ("mu", 0, 20.0), ("lam", 0, 50.0),
@@ -459,6 +469,48 @@ def test_four_bodies_in_one_union_in_contact_match_differences_of_runs():
         ("v0", 1, 5, 1e-4),                     # the soft box
         ("x0", 2, 4, 1e-5), ("v0", 3, 2, 1e-4),  # A, and t
         ("x0", 4, 2, 1e-5), ("v0", 4, 23, 1e-4)])  # the cage's corners
+
+    # Young's modulus and Poisson's ratio, and the rest positions, by the
+    # chains through lame and through the tets' inverse edges and volumes.
+    from functools import partial
+
+    from yasps.sim import lame
+
+    def loss(build=four_bodies, change=None):
+        run, _, perturbed = run_steps(build, False, starts, velocities, 6,
+                                      change)
+        assert perturbed == counts, "the contact set changed"
+        return sum(float((w * t.value).sum())
+                   for w, t in zip(weights, run.targets))
+
+    def elastic(young, poisson):
+        def change(p):
+            mu, lam = lame(young, poisson)
+            p["mu"].updateValue([mu])
+            p["lam"].updateValue([lam])
+        return change
+    got = yasps.diff.young_poisson_gradient(
+        SOFT_YOUNG, SOFT_POISSON, grads[params["mu"]], grads[params["lam"]])
+    h = 1e-3 * SOFT_YOUNG
+    want = (loss(change=elastic(SOFT_YOUNG + h, SOFT_POISSON)) -
+            loss(change=elastic(SOFT_YOUNG - h, SOFT_POISSON))) / (2 * h)
+    assert got[0] == pytest.approx(want, rel=1e-4)
+    h = 1e-3                # by less, Newton's tolerance shows
+    want = (loss(change=elastic(SOFT_YOUNG, SOFT_POISSON + h)) -
+            loss(change=elastic(SOFT_YOUNG, SOFT_POISSON - h))) / (2 * h)
+    assert got[1] == pytest.approx(want, rel=1e-4)
+    tets = box_tet_mesh(1, size=0.1)[1]
+    d_rest = yasps.diff.tet_rest_gradient(
+        SOFT_REST, tets, grads[params["rest shape"]],
+        grads[params["rest volume"]])
+    entry = int(np.argmax(np.abs(d_rest)))
+    h = 1e-5
+    moved = [SOFT_REST.copy(), SOFT_REST.copy()]
+    moved[0].flat[entry] += h
+    moved[1].flat[entry] -= h
+    want = (loss(partial(four_bodies, rest=moved[0])) -
+            loss(partial(four_bodies, rest=moved[1]))) / (2 * h)
+    assert d_rest.flat[entry] == pytest.approx(want, rel=1e-4)
 
 
 def test_young_and_poisson_gradients_follow_lame():
