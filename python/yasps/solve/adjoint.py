@@ -10,10 +10,11 @@ L(x*) the implicit function theorem gives
 The mixed derivatives d(grad_x E)/dtheta come from the compiler: the scene
 is emitted with the constants theta written as variables and minimised
 over after the targets (``kernel_ir(differentiated=...)``), so each
-energy's generated ``__hess`` kernel is the exact Hessian in (x, theta),
-through JOINs, UNIONs and any parameterisation; its (x, x) block is the
-Hessian the adjoint solves with and its (x, theta) block the mixed
-derivatives. Scenes that differentiate no constant compile nothing more.
+energy's generated ``__hess`` kernel (or its exact factors J^T H_inner J,
+EXACT_PIPELINE) is the exact Hessian in (x, theta), through JOINs, UNIONs
+and any parameterisation; its (x, x) block is the Hessian the adjoint
+solves with and its (x, theta) block the mixed derivatives. Scenes that
+differentiate no constant compile nothing more.
 
 :func:`adjoint_terms` evaluates those per-instance Hessians with the
 global index of each local variable; :class:`AdjointSystem` assembles them
