@@ -9,7 +9,9 @@ reused those would give another gradient. For each example: dL/dlog E of
 youngs_modulus.py (a soft box dropped on a cloth) and dL/dv0 of bounce.py
 (an affine box off a wall), by ``backward(hessian="exact")`` and
 ``backward(hessian="projected")``, and the relative error of each against
-central differences (relative steps 1e-4).
+central differences (relative steps 1e-4). A third case shows what holding
+friction's lags fixed costs: a soft box landing on the ground while
+sliding (friction 0.3), dL/dv0 (steps 1e-4 m/s).
 
     python3 bench/diff_hessians.py [--json bench/results/diff_hessians.json]
 """
@@ -79,13 +81,63 @@ def bounce_case():
     return got, want
 
 
+def friction_case():
+    """(adjoint gradient per hessian, central differences) of L(v0) for a
+    soft box landing while it slides, friction's lags held fixed."""
+    import yasps
+    from yasps.contact import Contact
+    from yasps.sim import (ImplicitEuler, NewtonSettings, add_elastic_tets,
+                           add_free_vertices, box_tet_mesh)
+
+    dt, frames = 0.01, 10
+    rest, tets = box_tet_mesh(1, 0.1)
+    start = rest + [0.0, 0.0, 0.0015]
+
+    def run(velocity, record=False):
+        s = yasps.scene("sliding")
+        m = s.addMesh("box")
+        body = add_free_vertices(m, start, 0.05)
+        add_elastic_tets(m, body.x, rest, tets, 1e4, 2e4, scale=dt * dt)
+        s.addMinimizeTarget([body.x])
+        contact = Contact(s, body.primitive, dhat=1e-3, kappa=1e3,
+                          friction=0.3, halfspaces=[((0, 0, 0), (0, 0, 1))])
+        stepper = ImplicitEuler(
+            s, body.x, body.x_hat, dt, contact=contact, record=record,
+            settings=NewtonSettings(max_iterations=300, cg_tolerance=1e-12),
+            velocity_tolerance=1e-9)
+        stepper.velocities = [velocity.reshape(-1, 3, 1).copy()]
+        for _ in range(frames):
+            stepper.step(warn=False)
+        return stepper, body.x
+    velocity = np.zeros_like(start)
+    velocity[:, 2], velocity[:, 0] = -0.2, 0.3
+    stepper, x = run(velocity, record=True)
+    w = np.random.default_rng(0).normal(size=x.value.shape)
+    got = {hessian: stepper.backward({x: w}, hessian=hessian)
+           .initial_velocities[0].reshape(-1)[:3]
+           for hessian in ("exact", "projected")}
+
+    def loss(v):
+        _, xs = run(v)
+        return float((w * xs.value).sum())
+    want = np.zeros(3)
+    for k in range(3):
+        e = np.zeros(velocity.size)
+        e[k] = 1e-4
+        e = e.reshape(velocity.shape)
+        want[k] = (loss(velocity + e) - loss(velocity - e)) / 2e-4
+    return got, want
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     add_json_argument(parser, "diff_hessians")
     args = parser.parse_args()
     rows = []
     for name, case in (("youngs_modulus.py: dL/dlog E", youngs_case),
-                       ("bounce.py: dL/dv0", bounce_case)):
+                       ("bounce.py: dL/dv0", bounce_case),
+                       ("sliding with friction 0.3, lags held: dL/dv0 "
+                        "(one vertex)", friction_case)):
         got, want = case()
         errors = [float(np.linalg.norm(got[h] - want) / np.linalg.norm(want))
                   for h in ("exact", "projected")]
