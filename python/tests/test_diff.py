@@ -23,9 +23,10 @@ SETTINGS = NewtonSettings(max_iterations=200, cg_tolerance=1e-12)
 GRAVITY = np.array([[0.0], [0.0], [-9.81]])
 
 
-def hanging_cloth(n: int = 4):
+def hanging_cloth(n: int = 4, shape=None):
     """A cloth of n x n vertices pinned at its corners, sagging under its
-    weight."""
+    weight (its rest shape ``shape``, by default the flat grid it starts
+    as)."""
     rest, faces = cloth_grid(n, 0.5)
     s = yasps.scene("hanging")
     m = s.addMesh("cloth")
@@ -34,7 +35,8 @@ def hanging_cloth(n: int = 4):
     x.updateValue(rest)
     mass = v.addConstant("mass", rows=1)
     mass.updateValue(np.linspace(0.008, 0.012, len(rest))[:, None])
-    add_cloth(m, x, rest, faces, 100.0, 50.0, 1e-3)
+    add_cloth(m, x, rest if shape is None else shape, faces, 100.0, 50.0,
+              1e-3)
     s.addEnergy(v.addAttribute("weight", computed_attribute=-(
         mass * (yasps.constant(GRAVITY).T * x))))
     s.addMinimizeTarget([x])
@@ -675,3 +677,55 @@ def test_checkpoints_give_the_dense_tapes_gradients():
     for record, every in ((False, 2), (True, 0), (True, 1.5)):
         with pytest.raises(yasps.SceneError, match="checkpoint_every"):
             swinging_cloth(record, every)
+
+
+def test_the_cloth_rest_chain_matches_differences_of_its_frames():
+    from yasps.sim.bodies import _triangle_rest_frames
+    from yasps.sim.meshes import hinges_of
+
+    rest, faces = cloth_grid(3, 0.5)
+    rest = rest + np.random.default_rng(9).normal(scale=0.02, size=rest.shape)
+    hinges = hinges_of(faces)
+    rng = np.random.default_rng(10)
+    d_inv = rng.normal(size=(len(faces), 2, 2))
+    d_area = rng.normal(size=(len(faces), 1, 1))
+    d_length = rng.normal(size=(len(hinges), 1, 1))
+
+    def loss(r):
+        inverse, areas = _triangle_rest_frames(r, faces)
+        lengths = np.linalg.norm(r[hinges[:, 1]] - r[hinges[:, 0]], axis=1)
+        return float((d_inv * inverse).sum() + (d_area[:, 0, 0] * areas).sum()
+                     + (d_length[:, 0, 0] * lengths).sum())
+    got = yasps.diff.cloth_rest_gradient(rest, faces, d_inv, d_area, d_length)
+    want = np.zeros_like(rest)
+    for i in range(rest.size):
+        e = np.zeros(rest.size)
+        e[i] = 1e-7
+        want.flat[i] = (loss(rest + e.reshape(rest.shape)) -
+                        loss(rest - e.reshape(rest.shape))) / 2e-7
+    np.testing.assert_allclose(got, want, rtol=1e-6, atol=1e-6 * np.abs(want).max())
+
+
+def test_a_hanging_cloth_gives_its_rest_positions():
+    rest, faces = cloth_grid(4, 0.5)
+    s, m, v, x, pinned = hanging_cloth()
+    solve(s, x, pinned)
+    w = loss_weights(x)
+    tri, hinges = m.cloth, m.cloth_hinges
+    grads = yasps.diff.equilibrium_gradient(
+        s, {x: w}, [tri["uv_inv"], tri["area"], hinges["length"]],
+        fixed=[pinned])
+    d_rest = yasps.diff.cloth_rest_gradient(
+        rest, faces, grads[tri["uv_inv"]], grads[tri["area"]],
+        grads[hinges["length"]])
+    for entry in np.argsort(-np.abs(d_rest).reshape(-1))[:2]:
+        h = 1e-6
+        sides = []
+        for sign in (1.0, -1.0):
+            shape = rest.copy()
+            shape.flat[entry] += sign * h
+            s2, _, _, x2, _ = hanging_cloth(shape=shape)
+            solve(s2, x2, pinned)
+            sides.append(float((w * x2.value).sum()))
+        want = (sides[0] - sides[1]) / (2 * h)
+        assert d_rest.flat[entry] == pytest.approx(want, rel=1e-4), entry

@@ -28,10 +28,11 @@ from ..sim.bodies import lame
 from ..frontend.scene import Scene
 from ..solve.adjoint import AdjointWarning, Gradients
 from ..solve.adjoint import equilibrium_gradient as _equilibrium_gradient
-from .rest import tet_rest_gradient
+from .rest import cloth_rest_gradient, tet_rest_gradient
 
-__all__ = ["AdjointWarning", "Gradients", "equilibrium_gradient",
-           "tet_rest_gradient", "young_poisson_gradient"]
+__all__ = ["AdjointWarning", "Gradients", "cloth_rest_gradient",
+           "equilibrium_gradient", "tet_rest_gradient",
+           "young_poisson_gradient"]
 
 
 def equilibrium_gradient(scene: Scene, dloss: Mapping[Attribute, object],
