@@ -49,6 +49,7 @@ import numpy as np  # noqa: E402
 
 import yasps  # noqa: E402
 from benchlib.meshes import bunny  # noqa: E402
+from benchlib.timing import at_new_point  # noqa: E402
 from benchlib.results import Results, Table, add_json_argument  # noqa: E402
 from benchlib.tables import cell_text  # noqa: E402
 from benchlib.elastic_scenes import bunny_snh, snh_scene  # noqa: E402
@@ -166,15 +167,6 @@ def main() -> None:
         print(markdown(speedup))
     path = results.write(args.json)
     print(f"results: {path}")
-
-
-def at_new_point(s) -> None:
-    """Makes the next ``minimizeEnergy`` of ``s`` compute the local
-    derivatives again, as at a new point: the positions are written back
-    unchanged, which gives them a new version (an assembly at the point of
-    the last one reuses its derivatives)."""
-    for target in s.minimizeTargets:
-        target.updateValue(target.value)
 
 
 def timed_call(s, threads: int) -> list[float]:

@@ -32,22 +32,13 @@ import scipy.sparse as sparse  # noqa: E402
 
 import yasps  # noqa: E402
 from benchlib.results import Results, add_json_argument  # noqa: E402
-from benchlib.timing import median  # noqa: E402
+from benchlib.timing import at_new_point, median  # noqa: E402
 from yasps.runtime import cpu_backend  # noqa: E402
 from yasps.solve import assemble  # noqa: E402
 from benchlib.elastic_scenes import bunny_snh  # noqa: E402
 
 
 STAGES = ("derivatives", "indices", "assembly", "solve")
-
-
-def at_new_point(s) -> None:
-    """Makes the next ``minimizeEnergy`` of ``s`` compute the local
-    derivatives again, as at a new point: the positions are written back
-    unchanged, which gives them a new version (an assembly at the point of
-    the last one reuses its derivatives)."""
-    for target in s.minimizeTargets:
-        target.updateValue(target.value)
 
 
 def main() -> None:

@@ -40,6 +40,7 @@ import numpy as np  # noqa: E402
 
 import yasps  # noqa: E402
 from benchlib.energy_cases import CASES  # noqa: E402
+from benchlib.timing import at_new_point  # noqa: E402
 from benchlib.results import Results, add_json_argument  # noqa: E402
 from benchlib.elastic_scenes import bunny_snh as bunny_scene  # noqa: E402
 
@@ -136,15 +137,6 @@ STAGES = ("derivatives", "indices", "assembly", "solve")
 #: (name, kernels' precision, Hessian storage of the solve's products)
 NEWTON_SETTINGS = (("f64", "f64", "f64"), ("f32", "f32", "f64"),
                    ("mixed", "f32", "f32"))
-
-
-def at_new_point(s) -> None:
-    """Makes the next ``minimizeEnergy`` of ``s`` compute the local
-    derivatives again, as at a new point: the positions are written back
-    unchanged, which gives them a new version (an assembly at the point of
-    the last one reuses its derivatives)."""
-    for target in s.minimizeTargets:
-        target.updateValue(target.value)
 
 
 def newton(repeat: int, results: Results) -> None:
