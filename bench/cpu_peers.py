@@ -67,8 +67,8 @@ import numpy as np  # noqa: E402
 
 import yasps  # noqa: E402
 from benchlib.meshes import bunny  # noqa: E402
-from benchlib.results import Results, Table, add_json_argument  # noqa: E402
-from benchlib.tables import cell_text  # noqa: E402
+from benchlib.results import Results, add_json_argument  # noqa: E402
+from benchlib.tables import markdown  # noqa: E402
 from benchlib.timing import median  # noqa: E402
 from yasps import energies as E  # noqa: E402
 from yasps.compiler.cpu import compile_cpu  # noqa: E402
@@ -309,17 +309,6 @@ def comparison(results: Dict[str, ToolResults], count: int
         rows.append(cells)
     formats = [""] + [TOOL_CELL] * (len(peers) + 1) + ["{:.2f}x"] * len(peers)
     return columns, rows, formats
-
-
-def markdown(table: Table) -> str:
-    """The table as Markdown, its cells formatted as the documents show
-    them."""
-    lines = ["| " + " | ".join(table.columns) + " |",
-             "|" + "---|" * len(table.columns)]
-    lines += ["| " + " | ".join(cell_text(v, f) for v, f in
-                                zip(row, table.formats)) + " |"
-              for row in table.rows]
-    return "\n".join(lines)
 
 
 def plain(r: ToolResults) -> Dict[str, Any]:

@@ -50,8 +50,8 @@ import numpy as np  # noqa: E402
 import yasps  # noqa: E402
 from benchlib.meshes import bunny  # noqa: E402
 from benchlib.timing import at_new_point  # noqa: E402
-from benchlib.results import Results, Table, add_json_argument  # noqa: E402
-from benchlib.tables import cell_text  # noqa: E402
+from benchlib.results import Results, add_json_argument  # noqa: E402
+from benchlib.tables import markdown  # noqa: E402
 from benchlib.elastic_scenes import bunny_snh, snh_scene  # noqa: E402
 
 STAGES = ("derivatives", "indices", "assembly", "solve")
@@ -63,17 +63,6 @@ MEASURES = (("total (ms)", "total"),) + tuple(
 
 def threads_label(threads: int) -> str:
     return f"{threads} thread" + ("" if threads == 1 else "s")
-
-
-def markdown(table: Table) -> str:
-    """The table as Markdown, its cells formatted as the documents show
-    them."""
-    lines = ["| " + " | ".join(table.columns) + " |",
-             "|" + "---|" * len(table.columns)]
-    lines += ["| " + " | ".join(cell_text(v, f) for v, f in
-                                zip(row, table.formats)) + " |"
-              for row in table.rows]
-    return "\n".join(lines)
 
 
 def main() -> None:

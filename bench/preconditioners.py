@@ -58,8 +58,8 @@ import numpy as np  # noqa: E402
 import yasps  # noqa: E402
 from benchlib.elastic_scenes import MASS, snh_scene  # noqa: E402
 from benchlib.meshes import bunny  # noqa: E402
-from benchlib.results import Results, Table, add_json_argument  # noqa: E402
-from benchlib.tables import cell_text  # noqa: E402
+from benchlib.results import Results, add_json_argument  # noqa: E402
+from benchlib.tables import markdown  # noqa: E402
 from yasps.sim import box_tet_mesh  # noqa: E402
 
 #: The CG relative residual (--tolerance).
@@ -181,17 +181,6 @@ def row(name: str, dofs: int, key: str, r: Dict[str, dict]) -> list:
             pair(r, "per_iteration_s", 1000) if timed else None,
             bj["iterations"] / ml["iterations"],
             bj["solve_s"] / ml["solve_s"] if timed else None]
-
-
-def markdown(table: Table) -> str:
-    """The table as Markdown, its cells formatted as the documents show
-    them."""
-    lines = ["| " + " | ".join(table.columns) + " |",
-             "|" + "---|" * len(table.columns)]
-    lines += ["| " + " | ".join(cell_text(v, f) for v, f in
-                                zip(row, table.formats)) + " |"
-              for row in table.rows]
-    return "\n".join(lines)
 
 
 def main() -> None:

@@ -18,7 +18,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Dict, List, Tuple
 
-from benchlib.results import load
+from benchlib.results import Table, load
 
 START = re.compile(r"^<!-- bench-table: (\S+) (\S+) -->$")
 END = "<!-- /bench-table -->"
@@ -118,3 +118,14 @@ def update(text: str, results: Path, name: str = "document") -> Tuple[str, List[
         lines[marker.start + 1:marker.end] = [""] + body + [""]
         used.append(f"{marker.bench} {marker.table}")
     return "\n".join(lines), used[::-1]
+
+
+def markdown(table: Table) -> str:
+    """A results table as Markdown, its cells formatted as the documents
+    show them (for a bench's own printout)."""
+    lines = ["| " + " | ".join(table.columns) + " |",
+             "|" + "---|" * len(table.columns)]
+    lines += ["| " + " | ".join(cell_text(v, f) for v, f in
+                                zip(row, table.formats)) + " |"
+              for row in table.rows]
+    return "\n".join(lines)
