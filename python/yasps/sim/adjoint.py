@@ -30,7 +30,7 @@ from typing import (Any, Dict, Generator, List, Mapping, Optional, Sequence,
 import numpy as np
 
 from ..frontend.attribute import Attribute, owner_of
-from ..frontend.errors import ArgumentError, SceneError
+from ..frontend.errors import ArgumentError, IndexRangeError, SceneError
 from ..frontend.values import to_column_major
 from ..runtime import Backend
 from ..solve.adjoint import (AdjointSystem, AdjointWarning, Gradients,
@@ -88,7 +88,7 @@ class Tape:
     def state(self, n: int) -> Dict[str, np.ndarray]:
         """State ``n`` (0 <= n < length)."""
         if not 0 <= n < self.length:
-            raise IndexError(f"the tape holds states 0..{self.length - 1}")
+            raise IndexRangeError(f"the tape holds states 0..{self.length - 1}")
         out = {}
         for key, (steps, values) in self._history.items():
             k = bisect.bisect_right(steps, n) - 1
