@@ -185,6 +185,11 @@ LogicalResult LaneBatch::emit(scf::ParallelOp loop, Value out, Value end) {
   if (!staged)
     return failure();
 
+  int64_t entries = type.getNumElements();
+  bool transposable = llvm::isPowerOf2_64(lanes) && entries >= lanes;
+  if (transposable)
+    prefetchNextTile(b, out, tile, end, entries);
+
   // 2. The arithmetic, once for all lanes.
   FailureOr<ScalarMatrix> value = evaluateLanes(b, decl);
   if (failed(value))
@@ -194,8 +199,6 @@ LogicalResult LaneBatch::emit(scf::ParallelOp loop, Value out, Value end) {
   // consecutive entries are transposed in registers (entry-major vectors to
   // instance-major ones) and stored contiguously; otherwise (the last,
   // partial tile) lane by lane from the staged results.
-  int64_t entries = type.getNumElements();
-  bool transposable = llvm::isPowerOf2_64(lanes) && entries >= lanes;
   Value full = arith::CmpIOp::create(b, loc, arith::CmpIPredicate::eq, count,
                                      index(b, lanes));
   auto ifFull = scf::IfOp::create(
@@ -223,6 +226,32 @@ LogicalResult LaneBatch::emit(scf::ParallelOp loop, Value out, Value end) {
     });
   }
   return success();
+}
+
+void LaneBatch::prefetchNextTile(OpBuilder &b, Value out, Value tile, Value end,
+                                 int64_t entries) {
+  Location loc = decl.getLoc();
+  auto memref = cast<MemRefType>(out.getType());
+  int64_t bytes = memref.getElementType().getIntOrFloatBitWidth() / 8;
+  constexpr int64_t kLineBytes = 64;
+  int64_t perLine = std::max<int64_t>(1, kLineBytes / bytes);
+  // Only where the next tile is full: its lines lie inside `out`.
+  Value nextEnd = arith::AddIOp::create(b, loc, tile, index(b, 2 * lanes));
+  Value inside =
+      arith::CmpIOp::create(b, loc, arith::CmpIPredicate::ule, nextEnd, end);
+  auto ifInside = scf::IfOp::create(b, loc, inside, /*withElseRegion=*/false);
+  OpBuilder::InsertionGuard guard(b);
+  b.setInsertionPoint(ifInside.thenBlock()->getTerminator());
+  Value first = arith::MulIOp::create(
+      b, loc, arith::AddIOp::create(b, loc, tile, index(b, lanes)),
+      index(b, entries));
+  auto lines = scf::ForOp::create(b, loc, index(b, 0),
+                                  index(b, lanes * entries), index(b, perLine));
+  OpBuilder inner = OpBuilder::atBlockTerminator(lines.getBody());
+  Value at = arith::AddIOp::create(inner, loc, first, lines.getInductionVar());
+  memref::PrefetchOp::create(inner, loc, out, ValueRange{at},
+                             /*isWrite=*/true, /*localityHint=*/3,
+                             /*isDataCache=*/true);
 }
 
 void LaneBatch::storeTransposed(OpBuilder &b, ArrayRef<Value> rows, Value out,

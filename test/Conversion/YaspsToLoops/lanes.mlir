@@ -20,6 +20,13 @@
 // CHECK: memref.store {{.*}}, %[[STAGE]][{{.*}}, %[[LANE]]] : memref<9x4xf64>
 // CHECK-NOT: memref.store {{.*}} : memref<?xf64>
 // CHECK: }
+// While the arithmetic runs, the lines of the next tile's results are
+// fetched for writing (a full next tile only: 9 x 4 f64 entries, 8 per line).
+// CHECK: %[[NEXT:.*]] = arith.addi %[[TILE]], %c8
+// CHECK: %[[INSIDE:.*]] = arith.cmpi ule, %[[NEXT]], %[[END]]
+// CHECK: scf.if %[[INSIDE]] {
+// CHECK: scf.for %[[LINE:.*]] = %c0 to %c36 step %c8 {
+// CHECK: memref.prefetch %{{.*}}[%{{.*}}], write, locality<3>, data : memref<?xf64>
 // CHECK: vector.load %[[STAGE]]{{.*}} : memref<9x4xf64>, vector<4xf64>
 // CHECK: vector.reduction <and>
 // CHECK: math.sqrt {{.*}} : vector<4xf64>
