@@ -25,11 +25,12 @@ parameterisations it follows the curved motion in straight pieces.
 
 from __future__ import annotations
 
-from typing import Dict, Optional, Sequence, Tuple, Union
+from typing import Dict, List, Optional, Sequence, Tuple, Union
 
 import ipctk
 import numpy as np
 
+from ..compiler.specs import KernelRequest
 from ..deprecation import add_renamed_members
 from ..frontend.attribute import Attribute
 from ..frontend.errors import SceneError
@@ -450,6 +451,15 @@ class Contact:
         found = self._forces.forces(kind) / self.energy_scale
         return found if per == "vertex" else \
             member_sums(self.vertices, found)
+
+    def kernel_requests(self) -> List[KernelRequest]:
+        """The compiler requests of this contact's own scenes, beyond the
+        simulated scene's: the kernels of :meth:`forces`. The stepper
+        compiles them with the scene's (``yasps.compile(scene,
+        contact=...)``), so that reading forces compiles nothing."""
+        if self._forces is None:
+            self._forces = ContactForces(self)
+        return self._forces.kernel_requests()
 
     def has_intersections(self) -> bool:
         """Whether some edge crosses some triangle (ipctk), or some vertex

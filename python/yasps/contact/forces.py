@@ -10,18 +10,22 @@ the vertices' world positions and whose contact energies are built by the
 same code (:func:`.model.add_contact_energies`); at each call it copies
 the contact's state onto it (world positions, stiffness, pairs and their
 constants, lagged friction) and scatters the compiled local gradients of
-its energies onto the vertices. Its kernels compile once, at the first
-call (cached on disk like every scene's).
+its energies onto the vertices. Its kernels (local gradients only)
+compile with the stepper's (``kernel_requests``), or else at the first
+call, and are cached on disk like every scene's.
 """
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, List
 
 import numpy as np
 
 from ..frontend.attribute import STORED_KINDS, Attribute
 from ..frontend.scene import Primitive, PrimitiveUnion, Scene
+from ..compiler.specs import KernelRequest
+from ..runtime import current
+from ..solve.derivatives import gradient_request, local_gradients
 from .model import ContactModel, add_contact_energies
 from ..frontend.errors import ArgumentError
 
@@ -68,6 +72,13 @@ class ContactForces:
                                 source.dynamic_primitives()):
             _copy_primitive(theirs, mine)
 
+    def kernel_requests(self) -> List[KernelRequest]:
+        """The compiler requests :meth:`forces` makes, for compiling them
+        ahead (``yasps.compile``)."""
+        return [gradient_request(self.scene, energy)
+                for energy in (self.model.normal_energies +
+                               self.model.friction_energies)]
+
     def forces(self, kind: str = "all") -> np.ndarray:
         """The (N, 3) forces on the contact's vertices at their current
         positions (see :meth:`Contact.forces`)."""
@@ -102,10 +113,9 @@ def _copy_primitive(source: Primitive, target: Primitive) -> None:
 def _scatter(scene: Scene, energy: Attribute, gradient: np.ndarray) -> None:
     """Adds ``energy``'s local gradients onto the global ``gradient`` at
     their DoFs."""
-    local = scene.energyDerivatives(energy)
-    dofs = local.dofs()
+    local, dofs = local_gradients(scene, energy, current())
     used = dofs >= 0
-    np.add.at(gradient, dofs[used], local.gradient[used])
+    np.add.at(gradient, dofs[used], local[used])
 
 
 def member_sums(vertices, forces: np.ndarray) -> np.ndarray:

@@ -44,9 +44,11 @@ Predictions = Union[Attribute, Sequence[Optional[Attribute]]]
 
 def compile_kernels(scene, contact, progress: bool) -> float:
     """Compiles (or loads) every kernel a Newton step of ``scene`` needs,
-    the world positions of ``contact`` included; returns the seconds."""
+    the world positions and force queries of ``contact`` included; returns
+    the seconds."""
     also = [contact.positions] if contact is not None else []
-    return compile_scene(scene, also=also, progress=progress).seconds
+    return compile_scene(scene, also=also, progress=progress,
+                         contact=contact).seconds
 
 
 # Typed per use: a list of targets, or of predictions (None: world inertia).

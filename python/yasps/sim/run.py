@@ -106,7 +106,7 @@ def simulate(stepper: ImplicitEuler, bodies: Mapping[str, Body], frames: int,
     compile_seconds = compile_scene(
         stepper.scene, also=shown + ([stepper.contact.positions]
                                      if stepper.contact is not None else []),
-        progress=progress).seconds
+        progress=progress, contact=stepper.contact).seconds
     first = now()
     planes = contact.halfspaces.planes() if contact is not None else []
     if bounds is None:

@@ -1,16 +1,19 @@
 """Local Hessians compressed before their projection (paper 7.2): the rows
 and columns of parameters that share a DoF are merged and UNION padding is
 dropped, so each instance is projected as the k x k matrix it adds to the
-global system, by a kernel compiled for that size when it is first met.
-Runs on the host."""
+global system, by a kernel for that size: compiled ahead for the sizes a
+scene can meet (``yasps.compile``), else when it is first met. Runs on
+the host."""
 
 from __future__ import annotations
 
+import functools
 from typing import Dict, Tuple
 
 import numpy as np
 
 from ..compiler.params import ArgumentKind
+from ..compiler.specs import KernelRequest
 from ..frontend.scene import Scene
 from ..ir import emit_scene
 from ..runtime import cpu_backend
@@ -18,6 +21,8 @@ from ..runtime.cpu import launch
 from ..runtime.native import native
 
 _projectors: Dict[Tuple[int, str, str], tuple] = {}
+#: The projected attribute of a projector's scene.
+PROJECTOR_PATH = "@m::@p::@proj"
 
 
 def compressed_sizes(dofs: np.ndarray) -> np.ndarray:
@@ -26,18 +31,28 @@ def compressed_sizes(dofs: np.ndarray) -> np.ndarray:
                                                           dtype=np.int64))
 
 
+@functools.lru_cache(maxsize=None)
+def projector_request(k: int, method: str, precision: str) -> KernelRequest:
+    """The compiler request for the kernel projecting k x k symmetric
+    matrices by ``method`` in ``precision`` (a scene of its own), which
+    :func:`project_compressed` makes when it first meets size k: compiled
+    ahead (``yasps.compile``), that request is served from memory."""
+    s = Scene(f"yasps_project_{k}_{method}", precision)
+    p = s.addMesh("m").addPrimitive("p", numInstances=1)
+    h = p.addAttribute("h", rows=k, cols=k)
+    p.addAttribute("proj", computed_attribute=h.project(method))
+    return KernelRequest(emit_scene(s), (PROJECTOR_PATH,), s.name, "")
+
+
 def _projector(k: int, method: str, precision: str):
     """A kernel projecting k x k symmetric matrices by ``method`` in
-    ``precision``, compiled the first time this size is met (paper 7.2) and
-    cached."""
+    ``precision``, compiled the first time this size is met (paper 7.2),
+    unless compiled ahead, and cached."""
     key = (k, method, precision)
     if key not in _projectors:
-        s = Scene(f"yasps_project_{k}_{method}", precision)
-        p = s.addMesh("m").addPrimitive("p", numInstances=1)
-        h = p.addAttribute("h", rows=k, cols=k)
-        p.addAttribute("proj", computed_attribute=h.project(method))
-        path = "@m::@p::@proj"
-        _projectors[key] = (cpu_backend().compile(emit_scene(s), [path], s.name), path)
+        request = projector_request(k, method, precision)
+        _projectors[key] = (cpu_backend().compile(
+            request.ir, request.paths, request.name), PROJECTOR_PATH)
     return _projectors[key]
 
 

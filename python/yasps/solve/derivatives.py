@@ -5,8 +5,9 @@ backend's memory for assembly (:func:`assembly_inputs`)."""
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
-from typing import Callable, Dict, List, Optional, Tuple, cast
+from typing import Callable, Dict, List, Optional, Set, Tuple, cast
 
 import numpy as np
 
@@ -22,7 +23,8 @@ from ..frontend.scene import Scene
 from ..ir import kernel_ir, symbol_path
 from ..runtime import (Backend, DenseInputs, FactoredInputs, LocalInputs,
                        SlotFactoredInputs, compute)
-from .compression import compressed_sizes, project_compressed
+from .compression import (compressed_sizes, project_compressed,
+                          projector_request)
 from .params import ParamResolver, ParamSlot
 from .slots import SlotInputs, SlotPlan, slot_plan
 
@@ -116,11 +118,49 @@ def assembly_requests(scene: Scene, backend: Backend) -> List[KernelRequest]:
     """The compiler requests that assembling ``scene`` on ``backend`` makes
     (one per energy with derivatives), for compiling them up front."""
     ir = kernel_ir(scene)
+    return [_request(scene, energy, True, ir, _takes_tables(backend))[2]
+            for energy in _differentiated(scene)]
+
+
+def projector_requests(scene: Scene, backend: Backend) -> List[KernelRequest]:
+    """The compiler requests of the k x k projection kernels that
+    progressive projection and compression (:mod:`.compression`) can need
+    on ``scene``: per energy projected from its exact local Hessians (not
+    factored, on a backend that differentiates on the host), every size k
+    up to its local Hessian's n in steps of the targets' common instance
+    size (a merged or dropped parameter removes a whole instance's DoFs).
+    Call after the energies' derivative kernels are compiled: n is read off
+    them."""
+    if backend.derivatives is not backend.host or not scene.minimizeTargets:
+        return []
+    step = 0
+    for target in scene.minimizeTargets:
+        step = math.gcd(step, target.rows * target.cols)
+    methods = {id(e): m for e, _, m in introspect.energy_records(scene)}
+    precision = config.resolve_precision(scene.precision)
+    sizes: Set[Tuple[int, str]] = set()
+    for request, energy in zip(assembly_requests(scene, backend),
+                               _differentiated(scene)):
+        spec = derivative_kernels(scene, energy, True, request.ir)
+        method = methods[id(energy)]
+        if spec.separate or method == "none":
+            continue
+        kernels = backend.compile(request.ir, request.paths, request.name,
+                                  request.pipeline)
+        n = kernels.kernel(spec.path("hess")).rows
+        sizes.update((k, method) for k in range(step, n + 1, step))
+    return [projector_request(k, method, precision)
+            for k, method in sorted(sizes)]
+
+
+def _differentiated(scene: Scene) -> List[Attribute]:
+    """The scene's energies that depend on a minimisation target, in the
+    order of :func:`assembly_requests`."""
     if not scene.minimizeTargets:
         return []
+    ir = kernel_ir(scene)
     gradients = scene_params(scene, ir, differentiation_pipeline()).gradients
-    return [_request(scene, energy, True, ir, _takes_tables(backend))[2]
-            for energy in scene.energies if gradients[symbol_path(energy)]]
+    return [e for e in scene.energies if gradients[symbol_path(e)]]
 
 
 class _Outputs:
@@ -449,6 +489,35 @@ def assembly_inputs(scene: Scene, energy: Attribute, backend: Backend,
     contribution = assembly_contribution(scene, energy, backend, threads, ir,
                                          tables)
     return contribution.projected(), contribution.dofs
+
+
+def gradient_request(scene: Scene, energy: Attribute) -> KernelRequest:
+    """The compiler request of :func:`local_gradients`: the energy's local
+    gradient and placement indices only."""
+    spec = derivative_kernels(scene, energy, True)
+    return KernelRequest(spec.ir, (spec.path("grad"), spec.path("dofs")),
+                         scene.name, spec.pipeline)
+
+
+def local_gradients(scene: Scene, energy: Attribute, backend: Backend,
+                    threads: Optional[int] = None
+                    ) -> Tuple[np.ndarray, np.ndarray]:
+    """A registered energy's local gradients (N, n) and their DoFs (N, n),
+    -1 for padding, as host arrays: what a force needs, without the
+    Hessians and values :func:`energy_derivatives` computes."""
+    request = gradient_request(scene, energy)
+    kernels = backend.compile(request.ir, request.paths, request.name,
+                              request.pipeline)
+    count = owner_of(energy).numInstances
+    out = []
+    for path in request.paths:
+        kernel = kernels.kernel(path)
+        shape = (count, kernel.rows, kernel.cols)
+        out.append(np.array(backend.to_host(
+            backend.run(kernels, scene, path, count, threads), shape)))
+    gradient, dofs = out
+    # 1-based in the kernel, 0 for padding; exact integers in f64.
+    return gradient[:, :, 0], dofs[:, :, 0].astype(np.int64) - 1
 
 
 def energy_derivatives(scene: Scene, energy: Attribute, backend: Backend,

@@ -14,15 +14,15 @@ from __future__ import annotations
 import sys
 import time
 from dataclasses import dataclass
-from typing import Optional, Sequence
+from typing import Any, Optional, Sequence
 
-from ..compiler.specs import grouped_requests
+from ..compiler.specs import KernelRequest, grouped_requests
 from ..frontend.attribute import Attribute
 from ..frontend.errors import SceneError
 from ..frontend.scene import Scene
 from ..runtime import Backend, current
 from ..runtime.evaluate import compute_request
-from .derivatives import assembly_requests
+from .derivatives import assembly_requests, projector_requests
 
 
 @dataclass(frozen=True)
@@ -57,27 +57,36 @@ def _check_also(scene: Scene, also: Sequence[Attribute]) -> None:
 
 def compile_scene(scene: Scene, also: Sequence[Attribute] = (),
                   progress: bool = True,
-                  backend: Optional[Backend] = None) -> CompileSummary:
+                  backend: Optional[Backend] = None,
+                  contact: Any = None) -> CompileSummary:
     """Compiles (or loads from the caches) every kernel that evaluating
-    ``scene``'s energy and assembling its Newton system need, and those of
-    the attributes ``also`` (world positions, say), on ``backend``
-    (default: the current one). With ``progress``, a progress bar over
-    kernels while it works and a summary line on stderr when anything was
-    compiled. Raises IRError for an energy the compiler cannot
-    differentiate."""
+    ``scene``'s energy and assembling its Newton system need (progressive
+    projection's per-size projections included), and those of the
+    attributes ``also`` (world positions, say) and of ``contact`` (a
+    :class:`yasps.contact.Contact`: its force queries), on ``backend``
+    (default: the current one). After it, stepping the scene makes no
+    compiler request. With ``progress``, a progress bar over kernels while
+    it works and a summary line on stderr when anything was compiled.
+    Raises IRError for an energy the compiler cannot differentiate."""
     start = time.perf_counter()
     _check_also(scene, also)
     backend = backend or current()
     # kernel_ir keeps the scene's IR: the named attributes' requests share
     # one emission.
     values = [compute_request(a) for a in list(scene.energies) + list(also)]
-    derivatives = assembly_requests(scene, backend.derivatives)
-    total = sum(len({p for paths in groups for p in paths})
-                for requests in (values, derivatives)
-                for groups in grouped_requests(requests).values())
+    derivatives = assembly_requests(scene, backend)
+    extra = list(contact.kernel_requests()) if contact is not None else []
+    total = sum(_kernel_count(requests)
+                for requests in (values, derivatives, extra))
     with _progress_bar(total, f"compiling {scene.name}", progress) as bar:
         compiled = backend.derivatives.compile_ahead(derivatives, bar.update)
+        # Their sizes are read off the derivative kernels compiled above.
+        projectors = projector_requests(scene, backend)
+        total += len(projectors)
+        bar.total = total
+        compiled += backend.host.compile_ahead(projectors, bar.update)
         compiled += backend.compile_ahead(values, bar.update)
+        compiled += backend.compile_ahead(extra, bar.update)
     summary = CompileSummary(scene.name, total, compiled,
                              time.perf_counter() - start)
     if progress and compiled:
@@ -85,7 +94,15 @@ def compile_scene(scene: Scene, also: Sequence[Attribute] = (),
     return summary
 
 
+def _kernel_count(requests: Sequence[KernelRequest]) -> int:
+    """Distinct kernels of ``requests`` (per scene IR and pipeline)."""
+    return sum(len({p for paths in groups for p in paths})
+               for groups in grouped_requests(requests).values())
+
+
 class _NoBar:
+    total = 0
+
     def __enter__(self) -> "_NoBar":
         return self
 
