@@ -36,7 +36,7 @@ def f64_default():
     that sets them."""
     yield
     yasps.config.precision = "f64"
-    yasps.config.hessian_storage = "f64"
+    yasps.config.hessian_storage = "auto"
 
 
 def relative(got, want) -> float:
@@ -246,6 +246,29 @@ def test_f32_hessian_storage_solves_near_the_f64_system(f64_default):
     assert 0 < relative(p32, p64) <= 1e-5
     with pytest.raises(ValueError, match="hessian_storage must be one of"):
         yasps.config.hessian_storage = "f16"
+
+
+def test_auto_hessian_storage_rounds_the_blocks_of_large_systems_only(
+        f64_default, monkeypatch):
+    """hessian_storage="auto" (the default) has the products read f32
+    blocks from F32_PRODUCT_MIN_DOFS DoFs (here lowered to the tet
+    scene's 192), f64 below: the direction of the same system is then that
+    of "f32" or of "f64", bit for bit."""
+    yasps.config.hessian_storage = "f64"
+    p64 = tet_scene("f64", count=16).minimizeEnergy(tolerance=1e-10)[0]
+    yasps.config.hessian_storage = "f32"
+    p32 = tet_scene("f64", count=16).minimizeEnergy(tolerance=1e-10)[0]
+    assert not np.array_equal(p32, p64)
+    yasps.config.hessian_storage = "auto"
+    assert yasps.config.resolve_hessian_storage(192) == "f64"
+    np.testing.assert_array_equal(
+        tet_scene("f64", count=16).minimizeEnergy(tolerance=1e-10)[0], p64)
+    monkeypatch.setattr(yasps.config, "F32_PRODUCT_MIN_DOFS", 192)
+    assert yasps.config.resolve_hessian_storage(192) == "f32"
+    assert yasps.config.resolve_hessian_storage(191) == "f64"
+    assert yasps.config.resolve_hessian_storage() == "f64"
+    np.testing.assert_array_equal(
+        tet_scene("f64", count=16).minimizeEnergy(tolerance=1e-10)[0], p32)
 
 
 def test_too_many_dofs_for_f32_indices_is_an_error(monkeypatch):

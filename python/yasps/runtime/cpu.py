@@ -157,11 +157,11 @@ class CpuBackend:
                                 _f64(hessians))
 
     def finish_assembly(self, system) -> None:
-        """Ends an assembly. With ``config.hessian_storage`` "f32" the
-        solve's products read the Hessian's blocks rounded to f32 (f64
-        vectors and arithmetic)."""
+        """Ends an assembly. Where ``config.hessian_storage`` resolves to
+        "f32" for the system's size, the solve's products read the
+        Hessian's blocks rounded to f32 (f64 vectors and arithmetic)."""
         system.single_product = (
-            config.resolve_hessian_storage() == "f32")
+            config.resolve_hessian_storage(system.size) == "f32")
         system.finish_assembly()
 
     def synchronize(self, system=None) -> None:

@@ -270,7 +270,7 @@ class GpuBackend:
 
     def finish_assembly(self, system) -> None:
         """Ends an assembly. The device keeps f64 blocks: with
-        ``config.hessian_storage`` "f32" it warns, once."""
+        ``config.hessian_storage`` "f32" (not "auto") it warns, once."""
         if (config.resolve_hessian_storage() == "f32"
                 and not self._warned_storage):
             self._warned_storage = True
