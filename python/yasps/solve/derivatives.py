@@ -145,8 +145,8 @@ def projector_requests(scene: Scene, backend: Backend) -> List[KernelRequest]:
         method = methods[id(energy)]
         if spec.separate or method == "none":
             continue
-        kernels = backend.compile(request.ir, request.paths, request.name,
-                                  request.pipeline)
+        kernels = backend.derivatives.compile(request.ir, request.paths,
+                                              request.name, request.pipeline)
         n = kernels.kernel(spec.path("hess")).rows
         sizes.update((k, method) for k in range(step, n + 1, step))
     return [projector_request(k, method, precision)
