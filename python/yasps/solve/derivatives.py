@@ -20,6 +20,7 @@ from ..frontend import introspect
 from ..frontend.attribute import Attribute, owner_of
 from ..frontend.errors import SceneError
 from ..frontend.scene import Scene
+from ..frontend.state import StateKey
 from ..ir import kernel_ir, symbol_path
 from ..runtime import (Backend, DenseInputs, FactoredInputs, LocalInputs,
                        SlotFactoredInputs, compute)
@@ -133,6 +134,23 @@ def projector_requests(scene: Scene, backend: Backend) -> List[KernelRequest]:
     them."""
     if backend.derivatives is not backend.host or not scene.minimizeTargets:
         return []
+    # Asked again at every step's compile check: kept while the scene's
+    # structure, the backend and the settings stay.
+    key = (kernel_ir(scene), id(backend), config.snapshot())
+    kept = scene.state.get(_PROJECTOR_REQUESTS)
+    if kept is None or kept[0] != key:
+        kept = scene.state.set(_PROJECTOR_REQUESTS, (
+            key, _projector_requests_of(scene, backend)))
+    return list(kept[1])
+
+
+#: projector_requests' answer, with what it depends on.
+_PROJECTOR_REQUESTS: StateKey[Tuple[tuple, List[KernelRequest]]] = \
+    StateKey("the projections compiled ahead")
+
+
+def _projector_requests_of(scene: Scene, backend: Backend
+                           ) -> List[KernelRequest]:
     step = 0
     for target in scene.minimizeTargets:
         step = math.gcd(step, target.rows * target.cols)
@@ -207,9 +225,8 @@ class _Outputs:
     def dofs(self) -> np.ndarray:
         """The (count, n) DoF map, -1 for padding (computed once)."""
         if self._dofs is None:
-            # 1-based in the kernel, 0 for padding; exact integers in f64.
-            host = self.backend.to_host(self.run("dofs"), self.shape("dofs"))
-            self._dofs = host[:, :, 0].astype(np.int64) - 1
+            self._dofs = _zero_based(self.backend.to_host(
+                self.run("dofs"), self.shape("dofs")))
         return self._dofs
 
     def needs_compression(self) -> bool:
@@ -516,8 +533,14 @@ def local_gradients(scene: Scene, energy: Attribute, backend: Backend,
         out.append(np.array(backend.to_host(
             backend.run(kernels, scene, path, count, threads), shape)))
     gradient, dofs = out
-    # 1-based in the kernel, 0 for padding; exact integers in f64.
-    return gradient[:, :, 0], dofs[:, :, 0].astype(np.int64) - 1
+    return gradient[:, :, 0], _zero_based(dofs)
+
+
+def _zero_based(dofs: np.ndarray) -> np.ndarray:
+    """The (count, n) DoF map from a ``__dofs`` kernel's (count, n, 1)
+    output: 1-based there, 0 for padding (exact integers in f64); here
+    0-based, -1 for padding."""
+    return dofs[:, :, 0].astype(np.int64) - 1
 
 
 def energy_derivatives(scene: Scene, energy: Attribute, backend: Backend,
