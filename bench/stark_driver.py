@@ -34,6 +34,7 @@ import gc
 import json
 import math
 import re
+import resource
 import sys
 import time
 from pathlib import Path
@@ -287,6 +288,9 @@ def main() -> None:
     result = run(spec, arrays, args.frames, args.threads, args.codegen,
                  args.output.parent / f"stark-{spec['name']}",
                  args.output.stem)
+    # The process's peak resident memory (kB): mesh, matrices and code.
+    result["peak_rss_kb"] = np.array(
+        resource.getrusage(resource.RUSAGE_SELF).ru_maxrss)
     np.savez(args.output, **result)
 
 

@@ -75,7 +75,13 @@ import numpy as np  # noqa: E402
 from benchlib import stark_scenes  # noqa: E402
 
 SCENES = {"A": ("twist", "A, twisting cloth"),
-          "B": ("bunny", "B, bunny on pinned cloth")}
+          "B": ("bunny", "B, bunny on pinned cloth"),
+          "B-4.3k": ("bunny-4.3k", "B at 4,270 vertices"),
+          "B-28.6k": ("bunny-28.6k", "B at 28,602 vertices"),
+          "B-56k": ("bunny-56k", "B at 56,442 vertices")}
+#: The scale series (--series): scene B grown from 2,494 to 56,442 vertices
+#: (bench/benchlib/stark_scenes.py, BUNNY_SIZES).
+SERIES = ("B", "B-4.3k", "B-28.6k", "B-56k")
 SIDES = ("STARK", "yasps")
 Run = Dict[str, np.ndarray]
 
@@ -296,6 +302,16 @@ def summarise(spec: stark_scenes.Spec, runs: List[Run], side: str,
         "split": dict(sorted(split.items(), key=lambda item: -item[1])),
     }
     figures["retried solves"] = int(run["solves"].sum() - directions)
+    figures["peak memory (MB)"] = float(run["peak_rss_kb"]) / 1024 \
+        if "peak_rss_kb" in run else float("nan")
+    # The linear solves' time over their CG iterations (STARK's
+    # linear_system_solve timer; yasps' pcg stage, preconditioner setup
+    # included on both sides).
+    solve_timer = "linear_system_solve" if side == "STARK" else "pcg"
+    solve_seconds = {str(k): float(v) for k, v in
+                     zip(run["timer_names"], run["timer_seconds"])}
+    figures["ms/CG iteration"] = 1e3 * solve_seconds.get(
+        solve_timer, float("nan")) / max(float(run["cg"].sum()), 1.0)
     if side == "STARK":
         figures["time steps"] = int(run["steps"].sum())
         figures["failed attempts"] = int(run["failed"].sum())
@@ -427,6 +443,81 @@ def per_frame(results: Dict[int, Dict[str, Dict]]) -> List[str]:
     return lines
 
 
+#: The scale series' columns: (figure of summarise(), its header, format).
+SERIES_FIGURES = (("s/frame", "s/frame", "{:.3f}"),
+                  ("Newton/frame", "Newton/frame", "{:.1f}"),
+                  ("CG/Newton", "CG/Newton", "{:.0f}"),
+                  ("ms/CG iteration", "ms/CG iteration", "{:.3f}"),
+                  ("peak memory (MB)", "peak memory (MB)", "{:.0f}"))
+
+
+def series_table(measured: Dict[str, Dict]
+                 ) -> Tuple[List[str], List[List], List[str]]:
+    """The scale series: per size and thread count, both sides' figures
+    side by side, the ratio STARK / yasps of the seconds per frame, and
+    each side's three largest stages."""
+    columns = ["vertices", "threads"]
+    formats = ["{:,}", "{}"]
+    for _, header, form in SERIES_FIGURES:
+        columns += [f"{header} STARK", f"{header} yasps"]
+        formats += [form, form]
+    columns += ["STARK/yasps s/frame", "unconverged STARK / yasps",
+                "intersecting frames", "STARK's stages", "yasps' stages"]
+    formats += ["{:.2f}x", "{}", "{}", "{}", "{}"]
+    rows = []
+    for entry in measured.values():
+        for threads, sides in entry["results"].items():
+            row: List = [entry["vertices"], threads]
+            for figure, _, _ in SERIES_FIGURES:
+                row += [sides[side][figure] for side in SIDES]
+            row.append(sides["STARK"]["s/frame"] / sides["yasps"]["s/frame"])
+            row.append(" / ".join(str(len(sides[side]["unconverged frames"]))
+                                  for side in SIDES))
+            row.append(sum(len(sides[side]["intersecting frames"])
+                           for side in SIDES))
+            for side in SIDES:
+                top = list(sides[side]["split"].items())[:3]
+                row.append(", ".join(f"{k} {100 * v:.0f}%" for k, v in top))
+            rows.append(row)
+    return columns, rows, formats
+
+
+def plot_series(measured: Dict[str, Dict], path: Path) -> Path:
+    """Seconds per frame and CG iterations per Newton iteration against
+    the vertices, both sides, one line per side and thread count, on log
+    axes: what a user of each pays as the scene grows."""
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    vertices = [entry["vertices"] for entry in measured.values()]
+    threads = sorted({t for entry in measured.values()
+                      for t in entry["results"]})
+    figure, axes = plt.subplots(1, 2, figsize=(10, 4))
+    for side, colour in zip(SIDES, ("tab:grey", "tab:blue")):
+        for count, style in zip(threads, ("-", "--", ":")):
+            for axis, key in zip(axes, ("s/frame", "CG/Newton")):
+                axis.plot(vertices, [entry["results"][count][side][key]
+                                     for entry in measured.values()],
+                          style, marker="o", color=colour,
+                          label=f"{side}, {count} thread(s)")
+    for axis, label in zip(axes, ("seconds per frame",
+                                  "CG iterations per Newton iteration")):
+        axis.set_xscale("log")
+        axis.set_yscale("log")
+        axis.set_xlabel("vertices")
+        axis.set_ylabel(label)
+        axis.grid(True, which="both", alpha=0.3)
+    axes[0].legend(fontsize=8)
+    figure.suptitle("Bunny on a pinned cloth, grown (bench/stark_peer.py "
+                    "--series)")
+    figure.tight_layout()
+    path.parent.mkdir(parents=True, exist_ok=True)
+    figure.savefig(path, dpi=110)
+    plt.close(figure)
+    return path
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--stark", type=Path, required=True, help="STARK checkout")
@@ -434,6 +525,15 @@ def main() -> None:
                         default=sorted(SCENES))
     parser.add_argument("--frames-a", type=int, default=100)
     parser.add_argument("--frames-b", type=int, default=60)
+    parser.add_argument("--series", action="store_true",
+                        help="the scale series: scene B at 2,494, 4,270, "
+                        "28,602 and 56,442 vertices (--frames-series each), "
+                        "its table and its plot (--plot)")
+    parser.add_argument("--frames-series", type=int, default=30)
+    parser.add_argument("--plot", type=Path,
+                        default=HERE.parent / "docs" / "benchmarks" /
+                        "stark_series.png",
+                        help="where --series draws cost against vertices")
     parser.add_argument("--threads", type=int, nargs="+", default=[1, 2])
     parser.add_argument("--rounds", type=int, default=1,
                         help="runs of each side per thread count, in turn; "
@@ -465,7 +565,9 @@ def main() -> None:
     add_json_argument(parser, "stark_peer")
     args = parser.parse_args()
     if args.quick:
-        args.frames_a = args.frames_b = 5
+        args.frames_a = args.frames_b = args.frames_series = 5
+    if args.series:
+        args.scenes = list(SERIES)
     wrapper = shlex.split(args.build_wrapper)
     build = args.build_dir.resolve()
     # yasps' kernels are kept between runs too.
@@ -473,7 +575,9 @@ def main() -> None:
     python = build / "python" if args.no_run else \
         build_stark(args.stark.resolve(), build, wrapper, args.jobs)
 
-    frames = {"A": args.frames_a, "B": args.frames_b}
+    frames = {key: args.frames_series for key in SERIES[1:]}
+    frames.update(A=args.frames_a,
+                  B=args.frames_series if args.series else args.frames_b)
     versions = {"yasps": commit(HERE.parent), "STARK": commit(args.stark)}
     print(f"yasps at {versions['yasps']}, STARK at {versions['STARK']}; "
           f"threads {args.threads}, {args.rounds} round(s); STARK's "
@@ -535,7 +639,19 @@ def main() -> None:
         if args.per_frame:
             print("\n".join(per_frame(results)))
         everything[key] = dict(constants=constants, gaps=gaps,
-                               results=results)
+                               results=results,
+                               vertices=len(spec.vertices))
+    series = [key for key in SERIES if key in everything]
+    if args.series and series:
+        columns, rows, formats = series_table(
+            {key: everything[key] for key in series})
+        print("\n" + "\n".join(markdown(columns, [
+            [f.format(c) if c is not None else "" for f, c in zip(formats, r)]
+            for r in rows])))
+        out.table("series", columns, rows, formats,
+                  note="Scene B grown: bunny-1.8k on 25 x 25 and 49 x 49 "
+                  "cloths, bunny-19k on 97 x 97 and 193 x 193.")
+        print(f"plot: {plot_series({key: everything[key] for key in series}, args.plot)}")
     out.table("rounds", ["scene", "threads", "round", "STARK s/frame",
                          "yasps s/frame", "STARK/yasps"], rounds,
               ["", "", "", "{:.3f}", "{:.3f}", "{:.2f}x"])

@@ -11,6 +11,7 @@ loads the kernels). bench/stark_peer.py starts it:
 from __future__ import annotations
 
 import argparse
+import resource
 from pathlib import Path
 
 import numpy as np
@@ -34,6 +35,9 @@ def main() -> None:
     args = parser.parse_args()
     run = run_yasps(args.scene, args.frames, args.threads, args.newton_cap)
     # The commit measured, for summaries made later (stark_peer --no-run).
+    # The process's peak resident memory (kB): mesh, matrices and code.
+    run["peak_rss_kb"] = np.array(
+        resource.getrusage(resource.RUSAGE_SELF).ru_maxrss)
     np.savez(args.output, commit=np.array(commit()), **run)
 
 

@@ -23,6 +23,7 @@ bench/stark_driver.py.
 
 from __future__ import annotations
 
+import functools
 import json
 import sys
 import time
@@ -114,19 +115,33 @@ def build_twist() -> YaspsScene:
     return YaspsScene(stepper, contact, lambda: None, spec, edges)
 
 
-def build_bunny() -> YaspsScene:
+#: The scale series of the bunny on the pinned cloth: the bunny's mesh
+#: (../shared/data) and the cloth's cells per side, by scene name. "bunny"
+#: is scene B; the rest grow it to the field's sizes (vertices in all:
+#: 2,494, 4,270, 28,602, 56,442).
+BUNNY_SIZES: Dict[str, Tuple[str, int]] = {
+    "bunny": ("bunny-1.8k.msh", 24),
+    "bunny-4.3k": ("bunny-1.8k.msh", 48),
+    "bunny-28.6k": ("bunny-19k.msh", 96),
+    "bunny-56k": ("bunny-19k.msh", 192),
+}
+
+
+def build_bunny(name: str = "bunny") -> YaspsScene:
     """The tet bunny on the pinned cloth, as many_bunnies.py builds its
-    soft bunnies (one, centred, no friction)."""
+    soft bunnies (one, centred, no friction), at the size BUNNY_SIZES[name]
+    gives."""
     import yasps
-    from common import CLOTH_CELLS, GRAVITY, bunny, lame, pinned_cloth
+    from common import GRAVITY, bunny, lame, pinned_cloth
     from many_bunnies import CLOTH, CLOTH_DENSITY
     from yasps.contact import Contact
     from yasps.sim import (ImplicitEuler, add_elastic_tets, add_free_vertices,
                            lumped_masses)
 
+    mesh_file, n = BUNNY_SIZES[name]
     s = yasps.scene("stark_bunny_on_cloth")
-    cloth, cloth_faces, pinned = pinned_cloth(s, "small", CLOTH, CLOTH_DENSITY)
-    verts, tets, surface = bunny("small", BUNNY_HEIGHT)
+    cloth, cloth_faces, pinned = pinned_cloth(s, n, CLOTH, CLOTH_DENSITY)
+    verts, tets, surface = bunny(mesh_file, BUNNY_HEIGHT)
     verts = verts + [0.0, 0.0, BUNNY_DROP]
     volume = lumped_masses(verts, tets, 1.0).sum()
     density = BUNNY_MASS / volume
@@ -139,7 +154,6 @@ def build_bunny() -> YaspsScene:
     union.addAttribute("position")
     count = cloth.primitive.numInstances
     faces = np.concatenate([cloth_faces, surface + count]).astype(np.int64)
-    n = CLOTH_CELLS["small"]
     # The bunny's inner vertices take no part (STARK's contact is between
     # surfaces too).
     contact = Contact(s, union, faces=faces, dhat=DHAT,
@@ -149,7 +163,7 @@ def build_bunny() -> YaspsScene:
     stepper = ImplicitEuler(s, targets, [cloth.x_hat, soft.x_hat], dt=DT,
                             gravity=[GRAVITY, GRAVITY], fixed=[pinned, None],
                             contact=contact)
-    spec = Spec("bunny", contact.world(), faces,
+    spec = Spec(name, contact.world(), faces,
                 np.asarray(cloth_faces, dtype=np.int64),
                 dict(CLOTH, density=CLOTH_DENSITY), tuple(GRAVITY),
                 tets=np.asarray(tets, dtype=np.int64),
@@ -158,8 +172,9 @@ def build_bunny() -> YaspsScene:
     return YaspsScene(stepper, contact, lambda: None, spec)
 
 
-SCENES: Dict[str, Callable[[], YaspsScene]] = {"twist": build_twist,
-                                               "bunny": build_bunny}
+SCENES: Dict[str, Callable[[], YaspsScene]] = {"twist": build_twist}
+SCENES.update({name: functools.partial(build_bunny, name)
+               for name in BUNNY_SIZES})
 
 
 def run_yasps(name: str, frames: int, threads: int,
@@ -296,7 +311,8 @@ def stark_constants(spec: Spec) -> Dict:
                cg_tolerance=CG_TOLERANCE, cloth=cloth,
                cloth_vertices=spec.cloth_vertices,
                contact=dict(thickness=DHAT / 2,
-                            min_stiffness=CONTACT_STIFFNESS[spec.name]),
+                            min_stiffness=CONTACT_STIFFNESS[
+                                "twist" if spec.name == "twist" else "bunny"]),
                pin_stiffness=PIN_STIFFNESS, twist_speed=spec.twist_speed)
     if spec.tets is not None:
         young, poisson = stark_snh(spec.bunny["mu"], spec.bunny["lam"])

@@ -43,10 +43,12 @@ def arguments(description: str, frames: int,
     return parser.parse_args()
 
 
-def bunny(scale: str, height: float) -> Tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """The tet bunny of ``scale`` standing on z = 0, centred in x and y,
-    ``height`` tall: (vertices, tets, surface triangles)."""
-    path = DATA / BUNNY[scale]
+def bunny(scale: str, height: float
+          ) -> Tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The tet bunny of ``scale`` ("small", "paper"; or a mesh's file name
+    in ../shared/data) standing on z = 0, centred in x and y, ``height``
+    tall: (vertices, tets, surface triangles)."""
+    path = DATA / BUNNY.get(scale, scale)
     if not path.exists():
         raise SystemExit(f"{path} is missing: the paper's scenes read the "
                          f"bunny meshes from ../shared/data")
@@ -57,14 +59,14 @@ def bunny(scale: str, height: float) -> Tuple[np.ndarray, np.ndarray, np.ndarray
     return verts, tets, surface_of(tets)
 
 
-def pinned_cloth(scene, scale: str, material: dict, density: float,
+def pinned_cloth(scene, scale, material: dict, density: float,
                  size: float = 1.0
                  ) -> Tuple[FreeVertices, np.ndarray, np.ndarray]:
     """The scenes' bottom cloth: a ``size`` m square at z = 0 of
-    CLOTH_CELLS[scale] cells (``material``: add_cloth's stretch, shear and
-    bending; ``density`` per area), its four corners pinned: (vertices,
-    triangles, pinned mask)."""
-    n = CLOTH_CELLS[scale]
+    CLOTH_CELLS[scale] cells (or ``scale`` cells where it is a number;
+    ``material``: add_cloth's stretch, shear and bending; ``density`` per
+    area), its four corners pinned: (vertices, triangles, pinned mask)."""
+    n = scale if isinstance(scale, int) else CLOTH_CELLS[scale]
     verts, faces = cloth_grid(n, size=size)
     mesh = scene.addMesh("cloth")
     cloth = add_free_vertices(mesh, verts, lumped_masses(verts, faces, density))
