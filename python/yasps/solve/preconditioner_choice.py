@@ -1,14 +1,13 @@
 """``config.preconditioner = "auto"``: per scene, the preconditioner whose
 solves cost less, chosen by trials whose cost is bounded.
 
-The multilevel preconditioner needs several times fewer CG iterations than
-block-Jacobi, but each of its iterations costs about four of block-Jacobi's
-and its setup (the levels' values, every solve) about thirty
-(``docs/benchmarks.md``, "Preconditioners"). Whether it pays depends on how
-many iterations block-Jacobi needs, which changes during a simulation: the
-paper-scale cloths-on-bunny needs 180 per solve while falling, where the
-multilevel one needs 16, and about 150 against 45 once in contact, where
-block-Jacobi is the cheaper.
+The multilevel preconditioner needs fewer CG iterations than block-Jacobi
+(1.2-1.8x fewer on soft bodies, 3-4x on the stiff cloth and contact
+systems of the larger scenes), but each of its iterations costs about one
+and a half of block-Jacobi's and its setup (the levels' values, every
+solve) about a dozen (``docs/benchmarks.md``, "Preconditioners"). Whether
+it pays depends on how many iterations block-Jacobi needs, which changes
+during a simulation and with the scene's size.
 
 The choice is made from iteration counts and a fixed cost model, never from
 clocks, so that a run repeats bit for bit (and resumes so from a
@@ -16,8 +15,8 @@ checkpoint: :func:`state` and :func:`restore` carry it). The cost of a solve
 in units of one block-Jacobi iteration is ``SETUP[p] + ITERATION[p] * k``
 for k iterations of preconditioner p. Every ``period`` solves the other
 preconditioner is tried with an iteration cap that stops it as soon as it
-would have cost more than the current one's solves (a moving average of
-their costs): a trial that
+would have cost more than MARGIN of the current one's solves (a moving
+average of their costs): a trial that
 converges within it is the solve, and the choice switches; one that does
 not is redone with the current preconditioner (about twice a solve's cost
 once per period) and the period doubles, up to ``MAX_PERIOD`` (at once
@@ -42,14 +41,24 @@ MULTILEVEL = "multilevel"
 
 #: Cost of a solve's setup, in block-Jacobi iterations: the preconditioner's
 #: construction and the residual's finiteness checks (bench/preconditioners.py
-#: on this project's 2-core machine: 3.8-8.6 ms against 0.8-1.1 ms per
-#: iteration for block-Jacobi; 21-38 ms for multilevel, whose levels'
-#: values, damping estimates and coarse factor are computed every solve).
-SETUP = {BLOCK_JACOBI: 5.0, MULTILEVEL: 35.0}
-#: Cost of one CG iteration, in block-Jacobi iterations (the V-cycle's two
-#: smoothing products and its levels: 3.2-3.7x on one thread, 2.8-5.9x on
-#: two, the most on the smallest systems).
-ITERATION = {BLOCK_JACOBI: 1.0, MULTILEVEL: 4.0}
+#: on this project's 2-core machine, one thread: 0.2-6.8 ms, 4-5 of its
+#: iterations, for block-Jacobi; 9.5-12.5 iterations for multilevel, whose
+#: coarse levels' values, damping estimates and coarse factor are computed
+#: every solve).
+SETUP = {BLOCK_JACOBI: 5.0, MULTILEVEL: 12.0}
+#: Cost of one CG iteration, in block-Jacobi iterations (the fine level's
+#: block-Jacobi added to the coarse levels' V-cycle: 1.44-1.47x on one
+#: thread, from 4k to 86k DoFs).
+ITERATION = {BLOCK_JACOBI: 1.0, MULTILEVEL: 1.5}
+#: A trial wins only where it costs at most this share of the current
+#: preconditioner's solves. Near break-even the two differ by less than a
+#: switch costs elsewhere: their directions, solved to a forcing term's
+#: loose tolerance, differ, and Newton's iterations with them (on the
+#: STARK bench's bunny on a pinned cloth, 2,494 vertices, where their
+#: solves cost the same by the model and by the clock, switching freely
+#: took 4% more Newton iterations and 9% more time per frame than
+#: block-Jacobi alone).
+MARGIN = 0.8
 #: A trial needs room for at least this many iterations to be worth running.
 MIN_TRIAL_ITERATIONS = 3
 #: Solves between trials: at the start, after a switch, at most.
@@ -72,6 +81,13 @@ def other(preconditioner: str) -> str:
 def solve_cost(preconditioner: str, iterations: int) -> float:
     """A solve's cost in block-Jacobi iterations (the module's model)."""
     return SETUP[preconditioner] + ITERATION[preconditioner] * iterations
+
+
+def trial_budget(trying: str, current_cost: float) -> int:
+    """The iterations a trial of ``trying`` may take to win against solves
+    of ``current_cost``: as many as cost MARGIN of it."""
+    return math.floor((MARGIN * current_cost - SETUP[trying])
+                      / ITERATION[trying])
 
 
 @dataclass(frozen=True)
@@ -103,7 +119,7 @@ class PreconditionerChoice:
         stale = self.won_at is not None and last is not None and \
             last > RISE * self.won_at
         if (self.since_trial >= self.period or stale) and last is not None:
-            budget = math.floor((last - SETUP[trying]) / ITERATION[trying])
+            budget = trial_budget(trying, last)
             if budget >= MIN_TRIAL_ITERATIONS:
                 return Attempt(trying, min(budget, max_iterations), True)
         return Attempt(self.current, max_iterations, False)

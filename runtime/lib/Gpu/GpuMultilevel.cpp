@@ -156,7 +156,13 @@ void GpuSystem::refreshLevels(const unsigned char *mask,
     }
     invertJacobi(*coarse.jacobi, coarse.parts, nullptr);
   }
+  const bool additiveFine = levels->structure.options().additiveFine;
   for (std::size_t l = 0; l + 1 < all.size(); ++l) {
+    // An additive fine level needs no damping (Multilevel.h).
+    if (l == 0 && additiveFine) {
+      all[l].damping = 1.0;
+      continue;
+    }
     all[l].damping = estimateDamping(l, l == 0 ? mask : nullptr,
                                      l == 0 ? hostMask : nullptr);
     // The cap of Multilevel::estimateDamping: w lmax < 2 whatever Lanczos
@@ -316,8 +322,12 @@ void GpuSystem::cycle(std::size_t l, const double *r, double *z,
     launch("yasps_ml_residual", vectorBlocks,
            ResidualArgs{n, r, t, mask, state});
   };
+  // The fine level added to the coarse levels' cycle restricts r itself
+  // (Multilevel::cycle).
+  const bool additive = l == 0 && levels->structure.options().additiveFine;
   smooth(r, level.damping, 0);
-  residual();
+  if (!additive)
+    residual();
   Levels::Level &coarse = levels->levels[l + 1];
   const std::int64_t aggregateBlocks = reductionBlocks(level.numAggregates);
   TransferArgs transfer{level.numAggregates,
@@ -326,7 +336,7 @@ void GpuSystem::cycle(std::size_t l, const double *r, double *z,
                         as<const long long>(level.memberDof),
                         as<const int>(level.aggregateSize),
                         mask,
-                        t,
+                        additive ? const_cast<double *>(r) : t,
                         as<double>(coarse.r),
                         state};
   launch("yasps_ml_restrict", aggregateBlocks, transfer);
@@ -335,6 +345,8 @@ void GpuSystem::cycle(std::size_t l, const double *r, double *z,
   transfer.fine = z;
   transfer.coarse = as<double>(coarse.z);
   launch("yasps_ml_prolong", aggregateBlocks, transfer);
+  if (additive)
+    return;
   residual();
   smooth(t, level.damping, 1);
 }

@@ -260,8 +260,9 @@ void Multilevel::refresh(const HessianParts &parts, const std::uint8_t *fixed,
   // symmetric, and positive definite while w lmax(D^-1 A~) < 2, whatever
   // the coarse inverse C's matrix (the coarse levels sum the f64 blocks).
   Level &fine = *levels_.front();
-  fine.rounded.resize(parts.size());
-  for (std::size_t k = 0; k < parts.size(); ++k) {
+  // An additive fine level reads no fine matrix in the cycle.
+  fine.rounded.resize(options_.additiveFine ? 0 : parts.size());
+  for (std::size_t k = 0; k < fine.rounded.size(); ++k) {
     const std::vector<double> &values = parts[k]->values();
     fine.rounded[k].resize(values.size());
     for (std::size_t i = 0; i < values.size(); ++i)
@@ -274,8 +275,12 @@ void Multilevel::refresh(const HessianParts &parts, const std::uint8_t *fixed,
     if (!level.coarsest)
       coarsen(l);
   }
-  for (std::size_t l = 0; l + 1 < levels_.size(); ++l)
-    estimateDamping(l, pool);
+  for (std::size_t l = 0; l + 1 < levels_.size(); ++l) {
+    if (l == 0 && options_.additiveFine)
+      levels_[l]->damping = 1.0;
+    else
+      estimateDamping(l, pool);
+  }
   factorCoarsest();
 }
 
@@ -440,12 +445,17 @@ void Multilevel::cycle(std::size_t l, const double *r, double *z,
   const double w = level.damping;
   double *t = level.t.data(), *u = level.u.data();
   ThreadPool &vectors = n >= kMinParallelVector ? pool : serial_;
+  const bool additive = l == 0 && options_.additiveFine;
   level.smoother->apply(r, z, vectors);
-  for (std::int64_t i = 0; i < n; ++i)
-    z[i] *= w;
-  multiply(l, z, t, pool);
-  for (std::int64_t i = 0; i < n; ++i)
-    t[i] = r[i] - t[i];
+  const double *restricted = r;
+  if (!additive) {
+    for (std::int64_t i = 0; i < n; ++i)
+      z[i] *= w;
+    multiply(l, z, t, pool);
+    for (std::int64_t i = 0; i < n; ++i)
+      t[i] = r[i] - t[i];
+    restricted = t;
+  }
 
   Level &coarse = *levels_[l + 1];
   const BlockLayout &fine = level.parts.front()->layout();
@@ -461,7 +471,7 @@ void Multilevel::cycle(std::size_t l, const double *r, double *z,
                                m < level.memberStart[a + 1]; ++m) {
                             std::int64_t f = fine.blockOffset[level.members[m]];
                             for (std::int64_t k = 0; k < s; ++k)
-                              coarse.r[o + k] += t[f + k];
+                              coarse.r[o + k] += restricted[f + k];
                           }
                         }
                       });
@@ -480,6 +490,8 @@ void Multilevel::cycle(std::size_t l, const double *r, double *z,
                           }
                         }
                       });
+  if (additive)
+    return;
 
   multiply(l, z, t, pool);
   for (std::int64_t i = 0; i < n; ++i)
