@@ -505,6 +505,8 @@ def plot_series(measured: Dict[str, Dict], path: Path) -> Path:
                                   "CG iterations per Newton iteration")):
         axis.set_xscale("log")
         axis.set_yscale("log")
+        axis.set_xticks(vertices, [f"{v:,}" for v in vertices])
+        axis.minorticks_off()
         axis.set_xlabel("vertices")
         axis.set_ylabel(label)
         axis.grid(True, which="both", alpha=0.3)
