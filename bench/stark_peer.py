@@ -68,7 +68,7 @@ HERE = Path(__file__).resolve().parent
 import benchlib  # noqa: E402
 
 benchlib.use_this_checkout()
-from benchlib.results import Results, add_json_argument  # noqa: E402
+from benchlib.results import RESULTS, Results, add_json_argument  # noqa: E402
 
 import numpy as np  # noqa: E402
 
@@ -570,6 +570,9 @@ def main() -> None:
         args.frames_a = args.frames_b = args.frames_series = 5
     if args.series:
         args.scenes = list(SERIES)
+        # The series keeps its own results, beside scenes A and B's.
+        if args.json == RESULTS / "stark_peer.json":
+            args.json = RESULTS / "stark_series.json"
     wrapper = shlex.split(args.build_wrapper)
     build = args.build_dir.resolve()
     # yasps' kernels are kept between runs too.
