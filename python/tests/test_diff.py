@@ -320,6 +320,7 @@ def check_run_gradients(build, starts, velocities, steps, checks, rtol=1e-4):
     return grads, params, weights
 
 
+@pytest.mark.usefixtures("one_preconditioner")
 def test_a_swinging_cloth_run_matches_differences_of_runs():
     rest, _ = cloth_grid(4, 0.5)
     start = rest[:, :, None]                       # the target's (N, 3, 1)
@@ -333,6 +334,7 @@ def test_a_swinging_cloth_run_matches_differences_of_runs():
         ("x0", 0, 1, 1e-6)])
 
 
+@pytest.mark.usefixtures("one_preconditioner")
 def test_a_box_landing_in_contact_matches_differences_of_runs():
     rest, _ = box_tet_mesh(1, 0.1)
     start = (rest + [0.0, 0.0, 0.0015])[:, :, None]

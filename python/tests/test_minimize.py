@@ -183,6 +183,7 @@ def test_non_convergence_is_reported():
     assert err.value.solution[0].shape == s.m.v["x"].value.shape
 
 
+@pytest.mark.usefixtures("one_preconditioner")
 def test_factored_and_dense_reduced_hessians_agree(monkeypatch):
     """The barrier over free and affine-body vertices: by default (the cost
     rule, 2 m (n + m) <= n^2 with n = 24, m = 6) it keeps J (6x24),
@@ -472,6 +473,7 @@ def test_every_kernel_is_compiled_once(tmp_path):
     assert kernels > 0 and total == kernels and objects == kernels
 
 
+@pytest.mark.usefixtures("one_preconditioner")
 def test_a_warm_newton_iteration_allocates_no_outputs(monkeypatch):
     """The derivative kernels' outputs keep their memory from one
     minimizeEnergy to the next (no fresh pages to fault in); outputs asked

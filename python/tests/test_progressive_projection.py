@@ -208,6 +208,7 @@ def test_unknown_projection_is_refused():
         NewtonSettings(projection="sometimes")
 
 
+@pytest.mark.usefixtures("one_preconditioner")
 def test_a_retry_at_the_same_point_reuses_the_derivatives(monkeypatch):
     """Another projection at the same point runs no derivative kernel
     again; any new value (even an equal one) or setting does."""
