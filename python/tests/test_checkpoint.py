@@ -89,3 +89,85 @@ def test_a_checkpoint_of_another_scene_or_step_is_refused(tmp_path):
     np.savez(tmp_path / "junk.npz", x=np.zeros(1))
     with pytest.raises(yasps.SceneError, match="not a yasps checkpoint"):
         stepper.restore(tmp_path / "junk.npz")
+
+
+def test_a_name_without_its_suffix_round_trips(tmp_path):
+    """save("state") writes state.npz (as NumPy names it) and restore
+    ("state") reads it; a name with another suffix gets .npz added, and
+    either spelling restores."""
+    stepper, _ = spinning_drop("suffix_saved")
+    stepper.step()
+    assert stepper.save(tmp_path / "state") == tmp_path / "state.npz"
+    assert stepper.save(str(tmp_path / "run.ckpt")) == \
+        tmp_path / "run.ckpt.npz"
+    assert sorted(p.name for p in tmp_path.iterdir()) == [
+        "run.ckpt.npz", "state.npz"]
+    for name in ("state", "state.npz", "run.ckpt", "run.ckpt.npz"):
+        resumed, _ = spinning_drop("suffix_" + name.replace(".", "_"))
+        resumed.restore(tmp_path / name)
+        assert resumed.time == stepper.time
+        for got, want in zip(resumed.targets, stepper.targets):
+            np.testing.assert_array_equal(got.value, want.value)
+
+
+def test_a_missing_or_cut_checkpoint_is_a_checkpoint_error(tmp_path):
+    """No file (with or without .npz), half a file and a file of other bytes
+    are CheckpointErrors naming the path (OSErrors too, as before)."""
+    stepper, _ = spinning_drop("cut")
+    with pytest.raises(yasps.CheckpointError,
+                       match="no checkpoint at .*nothing nor .*nothing.npz"):
+        stepper.restore(tmp_path / "nothing")
+    whole = stepper.save(tmp_path / "whole").read_bytes()
+    (tmp_path / "half.npz").write_bytes(whole[:len(whole) // 2])
+    (tmp_path / "text.npz").write_text("not a checkpoint")
+    for name in ("half", "text"):
+        with pytest.raises(yasps.CheckpointError,
+                           match=f"{name}.npz cannot be read") as error:
+            stepper.restore(tmp_path / name)
+        assert isinstance(error.value, OSError)
+
+
+SAVING_FOREVER = """
+import sys
+sys.path.insert(0, {tests!r})
+from test_checkpoint import spinning_drop
+stepper, _ = spinning_drop("killed", cells={cells})
+stepper.save({path!r})
+print("saved", flush=True)
+while True:
+    # Every later save differs from the first in its time.
+    stepper.time += 1.0
+    stepper.save({path!r})
+"""
+
+
+def test_a_save_killed_midway_leaves_a_whole_checkpoint(tmp_path):
+    """A process saving over and over is killed (SIGKILL, nothing to clean
+    up), four times at different moments: each time the checkpoint
+    restores, the first save's or a later whole one. (Written in place, as
+    np.savez did, it was cut short in about half of such kills.)"""
+    import os
+    import signal
+    import subprocess
+    import sys
+    import time
+    from pathlib import Path
+
+    cells, path = 12, tmp_path / "state"
+    tests = str(Path(__file__).resolve().parent)
+    resumed, _ = spinning_drop("after_kill", cells=cells)
+    for wait in (0.2, 0.35, 0.5, 0.65):
+        child = subprocess.Popen(
+            [sys.executable, "-c", SAVING_FOREVER.format(
+                tests=tests, cells=cells, path=str(path))],
+            stdout=subprocess.PIPE, text=True,
+            env=dict(os.environ, PYTHONPATH=str(Path(tests).parent)))
+        try:
+            assert child.stdout is not None
+            assert child.stdout.readline().strip() == "saved"
+            time.sleep(wait)
+        finally:
+            child.send_signal(signal.SIGKILL)
+            child.wait()
+        resumed.restore(path)
+        assert resumed.time == float(int(resumed.time)) >= 0.0

@@ -23,7 +23,8 @@ from .frontend import energies
 from .frontend.attribute import (Attribute, concat, constant, hstack,
                                  identity, select, vstack, zeros)
 from .frontend.errors import (ArgumentError, ArgumentTypeError,
-                              IndexRangeError, IRError, LineageError,
+                              CheckpointError, IndexRangeError, IRError,
+                              LineageError,
                               NameLookupError, SceneError, ShapeError,
                               ValueUpdateError, YaspsError)
 from .frontend.scene import (Connectivity, Entity, Mesh, Primitive,
@@ -53,8 +54,8 @@ install(Services(
 ))
 
 __all__ = [
-    "ArgumentError", "ArgumentTypeError", "IndexRangeError",
-    "NameLookupError", "Attribute", "BackendError", "backend", "CompileSummary", "compile",
+    "ArgumentError", "ArgumentTypeError", "CheckpointError",
+    "IndexRangeError", "NameLookupError", "Attribute", "BackendError", "backend", "CompileSummary", "compile",
     "Connectivity", "config",
     "Entity", "IRError", "IllConditionedSolve", "LineageError", "Mesh",
     "PrecisionWarning", "Primitive", "PrimitiveUnion", "Scene", "SceneError", "ShapeError", "SolverError",

@@ -49,3 +49,8 @@ class NameLookupError(YaspsError, KeyError):
 
 class IndexRangeError(YaspsError, IndexError):
     """An index outside its range (a row, a column, an instance)."""
+
+
+class CheckpointError(YaspsError, OSError):
+    """A checkpoint that cannot be read back: no file at the path (with or
+    without its ``.npz``), or one cut short or not written by ``save``."""

@@ -2,10 +2,10 @@
 :mod:`yasps.errors`, below every layer, so that ``yasps.config`` raises
 them too."""
 
-from ..errors import (ArgumentError, ArgumentTypeError, IndexRangeError,
-                      IRError, LineageError, NameLookupError, SceneError,
-                      ShapeError, ValueUpdateError, YaspsError)
+from ..errors import (ArgumentError, ArgumentTypeError, CheckpointError,
+                      IndexRangeError, IRError, LineageError, NameLookupError,
+                      SceneError, ShapeError, ValueUpdateError, YaspsError)
 
-__all__ = ["ArgumentError", "ArgumentTypeError", "IndexRangeError",
-           "IRError", "LineageError", "NameLookupError", "SceneError",
-           "ShapeError", "ValueUpdateError", "YaspsError"]
+__all__ = ["ArgumentError", "ArgumentTypeError", "CheckpointError",
+           "IndexRangeError", "IRError", "LineageError", "NameLookupError",
+           "SceneError", "ShapeError", "ValueUpdateError", "YaspsError"]

@@ -13,23 +13,34 @@ adaptive-stiffness state and the choice of preconditioner
 save work (derivatives at a point, the last step's broad phase) are not
 saved: a step starts without them (``ImplicitEuler.step``), resumed or
 not, so that their absence changes no bit.
+
+The file is ``path`` with ``.npz`` added where it lacks it (as NumPy's
+``savez`` names files), on writing and on reading alike, so that
+``save("state")`` and ``restore("state")`` meet. A save writes beside the
+file and renames over it, so that a run killed while saving leaves the
+previous checkpoint whole.
 """
 
 from __future__ import annotations
 
+import os
+import zipfile
 from os import PathLike
+from pathlib import Path
 from typing import Any, Dict, Iterator, List, Tuple, Union
 
 import numpy as np
 
 from ..frontend import introspect
 from ..frontend.attribute import STORED_KINDS
-from ..frontend.errors import SceneError
+from ..frontend.errors import CheckpointError, SceneError
 from ..frontend.scene import Entity, Primitive
 from ..solve import preconditioner_choice
 
 #: The format of the file, checked on reading.
 VERSION = 1
+#: The suffix of a checkpoint file, added where a path lacks it.
+SUFFIX = ".npz"
 
 
 def _entities(scene) -> Iterator[Tuple[str, Entity]]:
@@ -122,9 +133,47 @@ def restore_scene_state(scene, state: Dict[str, np.ndarray]) -> None:
                 attr.updateValue(value)
 
 
-def save(stepper, path: Union[str, PathLike]) -> None:
-    """Writes ``stepper``'s state (an ImplicitEuler) to ``path`` (.npz)."""
-    np.savez(path, **stepper_state(stepper))
+def checkpoint_path(path: Union[str, PathLike]) -> Path:
+    """The file a checkpoint named ``path`` lives in: ``path`` with
+    ``.npz`` added where it does not end so."""
+    path = Path(os.fspath(path))
+    return path if path.name.endswith(SUFFIX) else \
+        path.with_name(path.name + SUFFIX)
+
+
+def save(stepper, path: Union[str, PathLike]) -> Path:
+    """Writes ``stepper``'s state (an ImplicitEuler) to
+    :func:`checkpoint_path` of ``path``, atomically: into a file beside it,
+    flushed to disk, then renamed over it. Returns the file written."""
+    target = checkpoint_path(path)
+    arrays = stepper_state(stepper)
+    partial = target.with_name(f"{target.name}.{os.getpid()}.partial")
+    try:
+        with open(partial, "wb") as out:
+            np.savez(out, **arrays)
+            out.flush()
+            os.fsync(out.fileno())
+        os.replace(partial, target)
+    except BaseException:
+        partial.unlink(missing_ok=True)
+        raise
+    _sync_folder(target.parent)
+    return target
+
+
+def _sync_folder(folder: Path) -> None:
+    """Flushes ``folder``'s entries (the rename) to disk where the system
+    allows opening a folder."""
+    try:
+        descriptor = os.open(folder, os.O_RDONLY)
+    except OSError:
+        return
+    try:
+        os.fsync(descriptor)
+    except OSError:
+        pass
+    finally:
+        os.close(descriptor)
 
 
 def stepper_state(stepper) -> Dict[str, Any]:
@@ -155,10 +204,22 @@ def stepper_state(stepper) -> Dict[str, Any]:
 
 def restore(stepper, path: Union[str, PathLike]) -> None:
     """Reads a state :func:`save` wrote into ``stepper``, an ImplicitEuler
-    of the same scene structure and time step."""
-    with np.load(path) as data:
-        arrays = {k: data[k] for k in data.files}
-    restore_stepper_state(stepper, arrays, str(path))
+    of the same scene structure and time step: from ``path`` where that is
+    a file, else from :func:`checkpoint_path` of it (CheckpointError where
+    neither is, or the file is not one :func:`save` wrote)."""
+    given = Path(os.fspath(path))
+    found = given if given.is_file() else checkpoint_path(given)
+    if not found.is_file():
+        also = "" if found == given else f" nor {found}"
+        raise CheckpointError(f"restore: no checkpoint at {given}{also}")
+    try:
+        with np.load(found) as data:
+            arrays = {k: data[k] for k in data.files}
+    except (OSError, ValueError, EOFError, zipfile.BadZipFile) as error:
+        raise CheckpointError(
+            f"restore: {found} cannot be read as a checkpoint (cut short, "
+            f"or not written by save: {error})") from error
+    restore_stepper_state(stepper, arrays, str(found))
 
 
 def restore_stepper_state(stepper, arrays: Dict[str, Any],

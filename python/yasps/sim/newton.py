@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import time
 import warnings
+from pathlib import Path
 from typing import (Any, Callable, Dict, List, Mapping, Optional, Sequence,
                     Tuple, Union,
                     overload)
@@ -560,16 +561,18 @@ class ImplicitEuler:
         return backward(self, dloss, parameters, current_backend(),
                         dloss_velocities, tolerance, threads, hessian)
 
-    def save(self, path) -> None:
-        """Writes what the next step reads to ``path`` (.npz): the scene's
-        stored values and dynamic pairs, the velocities, the contact's
-        adaptive stiffness (:mod:`yasps.sim.checkpoint`)."""
-        checkpoint.save(self, path)
+    def save(self, path) -> Path:
+        """Writes what the next step reads to ``path`` (``.npz`` added
+        where it lacks it), atomically: the scene's stored values and
+        dynamic pairs, the velocities, the contact's adaptive stiffness
+        (:mod:`yasps.sim.checkpoint`). Returns the file written."""
+        return checkpoint.save(self, path)
 
     def restore(self, path) -> None:
-        """Reads a :meth:`save` of a stepper of the same scene structure
-        and dt: the run then continues bit for bit as the saved one did
-        (with the contact's default detection; ipctk's lists pairs in a
+        """Reads a :meth:`save` (``path`` as given to it, with or without
+        ``.npz``) of a stepper of the same scene structure and dt: the run
+        then continues bit for bit as the saved one did (with the
+        contact's default detection; ipctk's lists pairs in a
         thread-dependent order)."""
         checkpoint.restore(self, path)
 
