@@ -202,3 +202,41 @@ def test_contact_mesh_refuses_bad_input():
     broken[2, 1] = np.nan
     with pytest.raises(ValueError, match="vertex 2 has a non-finite"):
         native().contact_candidates(mesh, verts, broken, 0.1)
+
+
+def test_boxes_of_no_width_are_no_crash_and_no_miss():
+    """Inflation 0 and nothing moving: points give boxes of no width (the
+    grid's cell size fell to 1e-300 and its cell counts overflowed, a
+    segmentation fault). Points alone, and two flat sheets whose faces are
+    boxes of no height: every pair of boxes that touch is a candidate
+    (checked against all pairs in NumPy), and coinciding points are found."""
+    # Points alone, two of them at one place.
+    points = np.array([[0.0, 0.0, 0.0], [1.0, 2.0, 3.0], [1.0, 2.0, 3.0],
+                       [-4.0, 0.5, 2.0]])
+    mesh = native().ContactMesh(points, np.zeros((0, 2), np.int32),
+                                np.zeros((0, 3), np.int32))
+    found = native().contact_candidates(mesh, points, points, 0.0)
+    assert {tuple(sorted(r)) for r in found.vertex_vertex.tolist()} == {(1, 2)}
+    # All at one point: one cell.
+    same = np.zeros((5, 3))
+    mesh = native().ContactMesh(same, np.zeros((0, 2), np.int32),
+                                np.zeros((0, 3), np.int32))
+    found = native().contact_candidates(mesh, same, same, 0.0)
+    assert len(found.vertex_vertex) == 10
+    # Two flat sheets, the second's vertices on the first's faces' boxes.
+    verts, faces = cloth_grid(6, size=1.0)
+    V = np.vstack([verts, verts + [1.0 / 12, 1.0 / 12, 0.0]])
+    F = np.vstack([faces, faces + len(verts)]).astype(np.int32)
+    mesh = native().ContactMesh(V, edges_of(F).astype(np.int32), F)
+    found = native().contact_candidates(mesh, V, V, 0.0)
+    lo, hi = V[F].min(axis=1), V[F].max(axis=1)
+    inside = np.all((V[None, :, :] >= lo[:, None, :])
+                    & (V[None, :, :] <= hi[:, None, :]), axis=2)
+    incident = np.zeros_like(inside)
+    incident[np.repeat(np.arange(len(F)), 3), F.ravel()] = True
+    want = {tuple(p) for p in np.argwhere(inside & ~incident).tolist()}
+    assert want and want <= {tuple(r) for r in found.face_vertex.tolist()}
+    with pytest.raises(ValueError, match="inflation must be a finite"):
+        native().contact_candidates(mesh, V, V, -1.0)
+    with pytest.raises(ValueError, match="inflation must be a finite"):
+        native().contact_candidates(mesh, V, V, float("nan"))

@@ -148,21 +148,33 @@ public:
       listsA_.start.clear();
       return;
     }
-    double cell = std::max(width / (3.0 * count), 1e-300);
     // Cells no more than 16 per box: larger cells where the boxes are few
     // and the scene is wide. A cap of 4 made the cells under a dense tet
     // bunny on a wide cloth four times too wide (225 faces in one); a cap
     // of 64 spent more on empty cells than it saved on tests.
     const double maxCells = 16.0 * count + 64;
+    // As wide as the boxes on average, and no narrower than the scene's
+    // extent over the cap: boxes of no width (points that do not move,
+    // with no inflation) give no scale of their own, and a cell of
+    // 1e-300 made the cell counts overflow (a crash from Python).
+    double extent = 0.0;
+    for (int k = 0; k < 3; ++k)
+      extent = std::max(extent, hi[k] - lo_[k]);
+    double cell = std::max(width / (3.0 * count), extent / maxCells);
+    if (!(cell > 0.0))
+      cell = 1.0; // every box at one point: one cell
     for (;;) {
-      double cells = 1;
+      // Counted in double, cast once they are known to be few.
+      double counts[3], cells = 1;
       for (int k = 0; k < 3; ++k) {
-        dims_[k] = static_cast<int64_t>(
-            std::max(1.0, std::ceil((hi[k] - lo_[k]) / cell)));
-        cells *= static_cast<double>(dims_[k]);
+        counts[k] = std::max(1.0, std::ceil((hi[k] - lo_[k]) / cell));
+        cells *= counts[k];
       }
-      if (cells <= maxCells)
+      if (cells <= maxCells) {
+        for (int k = 0; k < 3; ++k)
+          dims_[k] = static_cast<int64_t>(counts[k]);
         break;
+      }
       cell *= 2;
     }
     inverseCell_ = 1.0 / cell;
@@ -386,6 +398,10 @@ Candidates sweptCandidates(const SurfaceMesh &mesh, Positions v0, Positions v1,
         std::to_string(mesh.numVertices()));
   checkFinite(v0, "sweptCandidates");
   checkFinite(v1, "sweptCandidates");
+  if (!(inflation >= 0.0) || !std::isfinite(inflation))
+    throw std::invalid_argument(
+        "sweptCandidates: the inflation must be a finite distance >= 0, got " +
+        std::to_string(inflation));
   std::vector<Box> vertices = vertexBoxes(v0, v1, inflation);
   std::vector<Box> edges = elementBoxes(mesh.edges(), vertices);
   std::vector<Box> faces = elementBoxes(mesh.faces(), vertices);
