@@ -469,6 +469,39 @@ class Contact:
                 or bool(ipctk.has_intersections(self.mesh,
                                                 self.colliding(V))))
 
+    def touching(self, surfaces: bool = True) -> Optional[str]:
+        """Where surfaces touch or cross now, where the barrier is
+        infinite or cannot see them: a sentence naming the lowest vertex
+        and its half-space, or the closest primitives' distance, and what
+        to do; None where every pair is apart. With ``surfaces`` False only
+        the half-spaces are looked at (a test of the vertices alone, cheap
+        enough for every step)."""
+        if not surfaces and not self.planes:
+            return None
+        V = self.world()
+        if self.halfspaces.lowest_apart(V) and not surfaces:
+            return None
+        vertex, plane, height = self.halfspaces.lowest(V)
+        if height <= 0.0:
+            where = "on" if height == 0.0 else f"{-height:.3g} m below"
+            return (f"vertex {vertex} lies {where} half-space {plane} "
+                    f"(origin {self.planes[plane][0]}, normal "
+                    f"{self.planes[plane][1]}), where the barrier is "
+                    f"infinite: start the body above it (within dhat = "
+                    f"{self.dhat:.3g} m of it the barrier pushes it off)")
+        if not surfaces:
+            return None
+        if self.has_intersections():
+            return ("an edge crosses a triangle of the contact surface: "
+                    "start the bodies apart")
+        distance = self.min_distance()
+        if distance <= 0.0:
+            return (f"surface primitives touch (distance {distance:.3g} m), "
+                    f"where the barrier is infinite: start them apart "
+                    f"(within dhat = {self.dhat:.3g} m the barrier pushes "
+                    f"them apart)")
+        return None
+
     def min_distance(self) -> float:
         """The smallest distance between surface primitives now, among
         those closer than dhat (inf if none are)."""

@@ -117,6 +117,23 @@ class HalfSpaces:
             return float("inf")
         return float(self.signed_distances(V).min())
 
+    def lowest(self, V: np.ndarray) -> Tuple[int, int, float]:
+        """The vertex closest to (or furthest below) a plane: (vertex,
+        plane, signed distance); (-1, -1, inf) without planes."""
+        if not len(self.offsets) or not len(V):
+            return -1, -1, float("inf")
+        distances = self.signed_distances(V)
+        vertex, plane = np.unravel_index(int(np.argmin(distances)),
+                                         distances.shape)
+        return int(vertex), int(plane), float(distances[vertex, plane])
+
+    def lowest_apart(self, V: np.ndarray) -> bool:
+        """Whether every vertex lies above every plane (a vertex on or
+        below one is where the barrier is infinite, or, below, blind: its
+        squared gap may exceed dhat^2)."""
+        return not len(self.offsets) or not len(V) or \
+            bool((self.signed_distances(V) > 0.0).all())
+
     def intersecting(self, V: np.ndarray) -> bool:
         """Whether some vertex lies below a plane."""
         return bool(len(self.offsets)) and bool(

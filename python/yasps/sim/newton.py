@@ -9,6 +9,7 @@ are the usual choices for a simulation.
 
 from __future__ import annotations
 
+import math
 import time
 import warnings
 from pathlib import Path
@@ -88,6 +89,19 @@ _SMALLEST_THRESHOLD = 1e-12
 _totals = {"newton": 0, "cg": 0}
 
 
+def _unusable_start(energy: float, contact) -> str:
+    """Why Newton cannot start from where it is: the energy there is not a
+    number (a NaN or an infinity), and what to change."""
+    cause = contact.touching() if contact is not None else None
+    if cause is not None:
+        return (f"newton: the total energy at the start is {energy}: "
+                f"{cause}")
+    return (f"newton: the total energy at the start is {energy}, so no step "
+            f"can lower it: an element inverted or of no volume in the "
+            f"starting positions, or a NaN in a value (check the targets' "
+            f"starting values and the materials)")
+
+
 def iteration_totals() -> Dict[str, int]:
     """Newton iterations and CG iterations done by :func:`newton` in this
     process so far."""
@@ -164,6 +178,13 @@ def newton(scene, targets: Optional[Targets] = None,
         return current_energy
 
     current_energy = energy()
+    finite = math.isfinite(current_energy)
+    # A vertex below a half-space leaves the energy finite (the barrier
+    # sees the squared gap): the half-spaces are checked every solve, the
+    # surfaces (an ipctk query) where the energy says so.
+    if not finite or (contact is not None and
+                      contact.touching(surfaces=False) is not None):
+        raise SceneError(_unusable_start(current_energy, contact))
     if contact is not None:
         current_energy = adapt()
     report.energies.append(current_energy)
