@@ -8,6 +8,7 @@
 //===----------------------------------------------------------------------===//
 
 #include "ContactBindings.h"
+#include "ErrorTranslation.h"
 #include "GpuRuntimeBindings.h"
 #include "KernelBindings.h"
 #include "PcgBindings.h"
@@ -358,6 +359,7 @@ NB_MODULE(_yasps_runtime, m) {
   m.doc() = "Bindings over the yasps runtime: the Newton system, local "
             "Hessian compression and the CUDA backend (no compiler).";
 
+  ::yasps::python::translateRuntimeErrors();
   ::yasps::python::bindPcg(m);
   ::yasps::python::bindKernelLaunch(m);
   ::yasps::python::bindContact(m);

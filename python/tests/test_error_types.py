@@ -68,3 +68,21 @@ def test_config_settings_are_checked_when_set(name, value):
     with pytest.raises(yasps.ArgumentError, match=f"config.{name} must be"):
         setattr(yasps.config, name, value)
     assert getattr(yasps.config, name) == before
+
+
+def test_the_runtimes_argument_errors_are_yasps_errors():
+    """A C++ std::invalid_argument from the runtime extension reaches
+    Python as yasps.ArgumentError (a ValueError still), not a bare
+    ValueError."""
+    import numpy as np
+    from yasps.runtime.native import native
+    from yasps.sim import cloth_grid
+
+    verts, faces = cloth_grid(2, size=0.3)
+    mesh = native().ContactMesh(verts, np.zeros((0, 2), np.int32),
+                                np.zeros((0, 3), np.int32))
+    with pytest.raises(yasps.ArgumentError, match="positions") as error:
+        native().contact_candidates(mesh, verts[:3], verts[:3], 0.1)
+    assert isinstance(error.value, ValueError)
+    with pytest.raises(yasps.ArgumentError, match="inflation"):
+        native().contact_candidates(mesh, verts, verts, -1.0)
