@@ -20,6 +20,7 @@ using yasps::runtime::BlockLayout;
 using yasps::runtime::BlockSlot;
 using yasps::runtime::BlockSparseMatrix;
 using yasps::runtime::PcgOptions;
+using yasps::runtime::PcgPreconditioner;
 using yasps::runtime::PcgResult;
 using yasps::runtime::PcgStop;
 using yasps::runtime::PcgStopping;
@@ -532,11 +533,17 @@ TEST(Pcg, LargeSystemsGiveTheSameBitsOnEveryThreadCount) {
 TEST(Pcg, TeamSolvesGiveTheOneThreadBits) {
   // On several threads a block-Jacobi solve runs as one team (each thread
   // a share of the product's rows and of the vector steps, barriers
-  // between): with a Hessian in two parts (the dynamic one sparse), fixed
+  // between), and so does one with the additive multilevel preconditioner
+  // (the restriction and prolongation shared too, the coarse cycle on one
+  // member): with a Hessian in two parts (the dynamic one sparse), fixed
   // DoFs, 12x12 blocks among the vertex blocks (the general step) or none,
   // and both stopping rules, it takes the one-thread iterations to the
   // one-thread bits.
-  for (bool vertexOnly : {true, false}) {
+  for (auto [vertexOnly, preconditioner] :
+       {std::pair{true, PcgPreconditioner::BlockJacobi},
+        std::pair{false, PcgPreconditioner::BlockJacobi},
+        std::pair{true, PcgPreconditioner::Multilevel},
+        std::pair{false, PcgPreconditioner::Multilevel}}) {
     std::vector<std::int64_t> sizes(900, 3);
     if (!vertexOnly)
       for (std::size_t k = 40; k < sizes.size(); k += 97)
@@ -583,6 +590,7 @@ TEST(Pcg, TeamSolvesGiveTheOneThreadBits) {
       options.relativeTolerance = 1e-9;
       options.fixedDofs = &fixed;
       options.stopping = stopping;
+      options.preconditioner = preconditioner;
       std::vector<double> first;
       PcgResult firstResult;
       for (unsigned threads : {1u, 2u, 3u}) {
@@ -591,6 +599,8 @@ TEST(Pcg, TeamSolvesGiveTheOneThreadBits) {
         PcgResult result = solvePcg(yasps::runtime::HessianParts{&h, &contact},
                                     b.data(), x.data(), options, pool);
         ASSERT_TRUE(result.converged) << threads << " threads";
+        if (preconditioner == PcgPreconditioner::Multilevel)
+          ASSERT_GT(result.levels, 1); // the fine level split
         if (first.empty()) {
           first = x;
           firstResult = result;

@@ -415,7 +415,100 @@ void Multilevel::multiply(std::size_t l, const double *x, double *y,
 }
 
 void Multilevel::apply(const double *r, double *z, ThreadPool &pool) {
-  cycle(0, r, z, pool);
+  if (!splitsFineLevel())
+    return cycle(0, r, z, pool);
+  Level &fine = *levels_.front();
+  fine.smoother->apply(r, z, fine.size >= kMinParallelVector ? pool : serial_);
+  addCoarseCorrection(r, z, pool);
+}
+
+double Multilevel::addCoarseCorrection(const double *r, double *z,
+                                       ThreadPool &pool) {
+  Level &fine = *levels_.front();
+  ThreadPool &vectors = fine.size >= kMinParallelVector ? pool : serial_;
+  const std::int64_t count = numFineAggregates();
+  vectors.parallelFor(0, count, kAggregatesPerChunk,
+                      [&](std::int64_t begin, std::int64_t end) {
+                        restrictAggregates(r, begin, end);
+                      });
+  double rz = solveCoarse();
+  vectors.parallelFor(0, count, kAggregatesPerChunk,
+                      [&](std::int64_t begin, std::int64_t end) {
+                        prolongAggregates(z, begin, end);
+                      });
+  return rz;
+}
+
+bool Multilevel::splitsFineLevel() const {
+  return options_.additiveFine && levels_.size() > 1;
+}
+
+const BlockJacobi &Multilevel::fineSmoother() const {
+  return *levels_.front()->smoother;
+}
+
+std::int64_t Multilevel::numFineAggregates() const {
+  return levels_.front()->aggregates.count();
+}
+
+void Multilevel::restrictAggregates(const double *r, std::int64_t begin,
+                                    std::int64_t end) {
+  restrictRange(0, r, begin, end);
+}
+
+double Multilevel::solveCoarse() {
+  // On one thread whatever the pool, so that PCG's team (whose other
+  // members wait meanwhile) and a lone caller get the same sums.
+  Level &coarse = *levels_[1];
+  cycle(1, coarse.r.data(), coarse.z.data(), serial_);
+  double rz = 0.0;
+  for (std::int64_t i = 0; i < coarse.size; ++i)
+    rz += coarse.r[i] * coarse.z[i];
+  return rz;
+}
+
+void Multilevel::prolongAggregates(double *z, std::int64_t begin,
+                                   std::int64_t end) const {
+  prolongRange(0, z, begin, end);
+}
+
+void Multilevel::restrictRange(std::size_t l, const double *r,
+                               std::int64_t begin, std::int64_t end) {
+  Level &level = *levels_[l];
+  Level &coarse = *levels_[l + 1];
+  const BlockLayout &fine = level.parts.front()->layout();
+  const BlockLayout &coarseLayout = coarse.parts.front()->layout();
+  for (std::int64_t a = begin; a < end; ++a) {
+    std::int64_t o = coarseLayout.blockOffset[a];
+    std::int64_t s = level.aggregates.size[a];
+    for (std::int64_t k = 0; k < s; ++k)
+      coarse.r[o + k] = 0.0;
+    for (std::size_t m = level.memberStart[a]; m < level.memberStart[a + 1];
+         ++m) {
+      std::int64_t f = fine.blockOffset[level.members[m]];
+      for (std::int64_t k = 0; k < s; ++k)
+        coarse.r[o + k] += r[f + k];
+    }
+  }
+}
+
+void Multilevel::prolongRange(std::size_t l, double *z, std::int64_t begin,
+                              std::int64_t end) const {
+  const Level &level = *levels_[l];
+  const Level &coarse = *levels_[l + 1];
+  const BlockLayout &fine = level.parts.front()->layout();
+  const BlockLayout &coarseLayout = coarse.parts.front()->layout();
+  for (std::int64_t a = begin; a < end; ++a) {
+    std::int64_t o = coarseLayout.blockOffset[a];
+    std::int64_t s = level.aggregates.size[a];
+    for (std::size_t m = level.memberStart[a]; m < level.memberStart[a + 1];
+         ++m) {
+      std::int64_t f = fine.blockOffset[level.members[m]];
+      for (std::int64_t k = 0; k < s; ++k)
+        if (!level.fixed || !level.fixed[f + k])
+          z[f + k] += coarse.z[o + k];
+    }
+  }
 }
 
 void Multilevel::cycle(std::size_t l, const double *r, double *z,
@@ -442,57 +535,27 @@ void Multilevel::cycle(std::size_t l, const double *r, double *z,
     }
     return;
   }
+  // The coarse levels' V-cycle (an additive fine level is split in
+  // apply()).
   const double w = level.damping;
   double *t = level.t.data(), *u = level.u.data();
   ThreadPool &vectors = n >= kMinParallelVector ? pool : serial_;
-  const bool additive = l == 0 && options_.additiveFine;
   level.smoother->apply(r, z, vectors);
-  const double *restricted = r;
-  if (!additive) {
-    for (std::int64_t i = 0; i < n; ++i)
-      z[i] *= w;
-    multiply(l, z, t, pool);
-    for (std::int64_t i = 0; i < n; ++i)
-      t[i] = r[i] - t[i];
-    restricted = t;
-  }
-
+  for (std::int64_t i = 0; i < n; ++i)
+    z[i] *= w;
+  multiply(l, z, t, pool);
+  for (std::int64_t i = 0; i < n; ++i)
+    t[i] = r[i] - t[i];
   Level &coarse = *levels_[l + 1];
-  const BlockLayout &fine = level.parts.front()->layout();
-  const BlockLayout &coarseLayout = coarse.parts.front()->layout();
   vectors.parallelFor(0, level.aggregates.count(), kAggregatesPerChunk,
                       [&](std::int64_t begin, std::int64_t end) {
-                        for (std::int64_t a = begin; a < end; ++a) {
-                          std::int64_t o = coarseLayout.blockOffset[a];
-                          std::int64_t s = level.aggregates.size[a];
-                          for (std::int64_t k = 0; k < s; ++k)
-                            coarse.r[o + k] = 0.0;
-                          for (std::size_t m = level.memberStart[a];
-                               m < level.memberStart[a + 1]; ++m) {
-                            std::int64_t f = fine.blockOffset[level.members[m]];
-                            for (std::int64_t k = 0; k < s; ++k)
-                              coarse.r[o + k] += restricted[f + k];
-                          }
-                        }
+                        restrictRange(l, t, begin, end);
                       });
   cycle(l + 1, coarse.r.data(), coarse.z.data(), pool);
   vectors.parallelFor(0, level.aggregates.count(), kAggregatesPerChunk,
                       [&](std::int64_t begin, std::int64_t end) {
-                        for (std::int64_t a = begin; a < end; ++a) {
-                          std::int64_t o = coarseLayout.blockOffset[a];
-                          std::int64_t s = level.aggregates.size[a];
-                          for (std::size_t m = level.memberStart[a];
-                               m < level.memberStart[a + 1]; ++m) {
-                            std::int64_t f = fine.blockOffset[level.members[m]];
-                            for (std::int64_t k = 0; k < s; ++k)
-                              if (!level.fixed || !level.fixed[f + k])
-                                z[f + k] += coarse.z[o + k];
-                          }
-                        }
+                        prolongRange(l, z, begin, end);
                       });
-  if (additive)
-    return;
-
   multiply(l, z, t, pool);
   for (std::int64_t i = 0; i < n; ++i)
     t[i] = r[i] - t[i];

@@ -284,6 +284,12 @@ private:
   double rz0_ = 0.0;
   std::unique_ptr<BlockJacobi> jacobi_;
   Multilevel *multilevel_ = nullptr;
+  /// The block-Jacobi whose fused passes PCG runs: jacobi_'s, or an
+  /// additive multilevel's fine level (null for the V-cycle).
+  const BlockJacobi *fine_ = nullptr;
+  /// With an additive multilevel, z += P cycle(P^T r) after fine_'s pass;
+  /// returns its term of r . z (0 without one).
+  double coarseCorrection();
   /// alpha_j r_j.z_j per iteration: the energy-norm estimate's terms.
   std::vector<double> terms_;
   double termSum_ = 0.0;
@@ -310,11 +316,11 @@ bool PcgSolve::iterate(double &pq) {
   // x += alpha p, r -= alpha q, r . r, and with block-Jacobi z = M^-1 r
   // and r . z, in one pass.
   double rr2, rzNext;
-  if (jacobi_) {
-    BlockJacobi::StepDots dots = jacobi_->stepApplyDots(
+  if (fine_) {
+    BlockJacobi::StepDots dots = fine_->stepApplyDots(
         alpha, pp, qq, x_, r_.data(), z_.data(), partial_, vectors_);
     rr2 = dots.rr;
-    rzNext = dots.rz;
+    rzNext = dots.rz + coarseCorrection();
   } else {
     double *rr = r_.data(), *xx = x_;
     rr2 = sumBySegments(n_, partial_, vectors_, [&](std::int64_t i) {
@@ -335,7 +341,12 @@ bool PcgSolve::iterate(double &pq) {
 
 bool PcgSolve::iterateAsTeam(double &pq) {
   const std::int64_t dotSegments = numSegments(n_);
-  const std::int64_t stepSegments = jacobi_->numSegments();
+  const std::int64_t stepSegments = fine_->numSegments();
+  // An additive multilevel's coarse correction: restriction and
+  // prolongation shared by aggregates, the coarse cycle on member 0.
+  const bool coarse = multilevel_ && fine_;
+  const std::int64_t aggregates = coarse ? multilevel_->numFineAggregates() : 0;
+  double rzCoarse = 0.0;
   std::vector<double> pqPartial(static_cast<std::size_t>(dotSegments));
   std::vector<double> stepPartial(static_cast<std::size_t>(2 * stepSegments));
   // The products of the parts after the first, added into q by the pass
@@ -359,6 +370,7 @@ bool PcgSolve::iterateAsTeam(double &pq) {
     };
     const auto [dotBegin, dotEnd] = share(dotSegments);
     const auto [stepBegin, stepEnd] = share(stepSegments);
+    const auto [aggregateBegin, aggregateEnd] = share(aggregates);
     const std::int64_t dofBegin = std::min(n_, dotBegin * kSegment);
     const std::int64_t dofEnd = std::min(n_, dotEnd * kSegment);
     // Every member keeps the scalars; they are the same sums on each.
@@ -390,15 +402,28 @@ bool PcgSolve::iterateAsTeam(double &pq) {
           return;
         }
         const double alpha = rz / pqAll;
-        jacobi_->stepSegments(stepBegin, stepEnd, alpha, pp, qq, x_, rr, zz,
-                              stepPartial.data());
+        fine_->stepSegments(stepBegin, stepEnd, alpha, pp, qq, x_, rr, zz,
+                            stepPartial.data());
         if (!sync())
           return;
+        if (coarse) {
+          multilevel_->restrictAggregates(rr, aggregateBegin, aggregateEnd);
+          if (!sync())
+            return;
+          if (member == 0)
+            rzCoarse = multilevel_->solveCoarse();
+          if (!sync())
+            return;
+          multilevel_->prolongAggregates(zz, aggregateBegin, aggregateEnd);
+          if (!sync())
+            return;
+        }
         double rr2 = 0.0, rzNext = 0.0;
         for (std::int64_t s = 0; s < stepSegments; ++s) {
           rr2 += stepPartial[2 * s];
           rzNext += stepPartial[2 * s + 1];
         }
+        rzNext += rzCoarse;
         const double beta = rzNext / rz;
         for (std::int64_t i = dofBegin; i < dofEnd; ++i)
           pp[i] = zz[i] + beta * pp[i];
@@ -418,6 +443,12 @@ bool PcgSolve::iterateAsTeam(double &pq) {
     }
   });
   return !brokeDown;
+}
+
+double PcgSolve::coarseCorrection() {
+  return multilevel_ && fine_
+             ? multilevel_->addCoarseCorrection(r_.data(), z_.data(), pool_)
+             : 0.0;
 }
 
 PcgResult PcgSolve::run() {
@@ -447,11 +478,14 @@ PcgResult PcgSolve::run() {
       kept = std::make_unique<Multilevel>(parts_, fixed_, pool_,
                                           options_.multilevel);
     multilevel_ = kept.get();
+    if (multilevel_->splitsFineLevel())
+      fine_ = &multilevel_->fineSmoother();
     result_.diagonalRatio = multilevel_->diagonalRatio();
     result_.levels =
         static_cast<std::int64_t>(multilevel_->levelSizes().size());
   } else {
     jacobi_ = std::make_unique<BlockJacobi>(parts_, fixed_, pool_);
+    fine_ = jacobi_.get();
     result_.diagonalRatio = jacobi_->diagonalRatio();
   }
   if (bNorm == 0.0)
@@ -462,8 +496,9 @@ PcgResult PcgSolve::run() {
   std::vector<double> trueResidual(un);
   // z = M^-1 r, rz = r . z, p = z.
   auto restart = [&] {
-    if (jacobi_) {
-      rz_ = jacobi_->applyDot(r_.data(), z_.data(), partial_, vectors_);
+    if (fine_) {
+      rz_ = fine_->applyDot(r_.data(), z_.data(), partial_, vectors_) +
+            coarseCorrection();
     } else {
       multilevel_->apply(r_.data(), z_.data(), pool_);
       rz_ = dot(r_.data(), z_.data());
@@ -479,8 +514,9 @@ PcgResult PcgSolve::run() {
   // little about; the recomputed residual is reported, not required.
   const bool residualRule = options_.stopping == PcgStopping::Residual;
   // The team pays a hand-off per solve and barriers per iteration: worth it
-  // on block-Jacobi solves big enough to share.
-  const bool team = jacobi_ && pool_.size() > 1 && n_ >= kMinTeamDofs;
+  // on solves big enough to share, with block-Jacobi or an additive
+  // multilevel (whose V-cycle on the coarse levels runs on one member).
+  const bool team = fine_ && pool_.size() > 1 && n_ >= kMinTeamDofs;
   while (true) {
     if (!std::isfinite(rNorm_))
       return finish(PcgStop::NonFinite, nan);

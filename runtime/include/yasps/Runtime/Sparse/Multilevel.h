@@ -110,6 +110,26 @@ public:
   /// z = M^-1 r (one V-cycle); `r` is zero at fixed DoFs, and so is z.
   void apply(const double *r, double *z, ThreadPool &pool);
 
+  /// Whether apply() runs the additive fine level in the pieces below
+  /// (additiveFine with a coarse level).
+  bool splitsFineLevel() const;
+  /// The pieces of an additive fine level's apply(), for PCG, whose team
+  /// shares the fine level's steps between barriers (Pcg.cpp):
+  ///   z = D^-1 r      fineSmoother(), with BlockJacobi's own passes
+  ///   r1 = P^T r      restrictAggregates(), aggregates [begin, end)
+  ///   z1 = cycle(r1)  solveCoarse(), on the calling thread alone
+  ///   z += P z1       prolongAggregates(), aggregates [begin, end)
+  /// r . z is r . D^-1 r plus r1 . z1, which solveCoarse returns (r is
+  /// zero at fixed DoFs, where z takes no correction).
+  const BlockJacobi &fineSmoother() const;
+  std::int64_t numFineAggregates() const;
+  void restrictAggregates(const double *r, std::int64_t begin,
+                          std::int64_t end);
+  double solveCoarse();
+  void prolongAggregates(double *z, std::int64_t begin, std::int64_t end) const;
+  /// The last three pieces over all aggregates (the pool's threads sharing
+  /// them where the fine level is large); returns r1 . z1.
+  double addCoarseCorrection(const double *r, double *z, ThreadPool &pool);
   /// The fine level's diagonal ratio (BlockJacobi::diagonalRatio).
   double diagonalRatio() const;
   /// Per level, its DoF count, the fine level first.
@@ -141,6 +161,14 @@ private:
   void estimateDamping(std::size_t l, ThreadPool &pool);
   void factorCoarsest();
   void cycle(std::size_t l, const double *r, double *z, ThreadPool &pool);
+  /// Level l + 1's residual on aggregates [begin, end) of level l: the
+  /// sums of their members' entries of r.
+  void restrictRange(std::size_t l, const double *r, std::int64_t begin,
+                     std::int64_t end);
+  /// z += level l + 1's correction on the free DoFs of aggregates
+  /// [begin, end) of level l.
+  void prolongRange(std::size_t l, double *z, std::int64_t begin,
+                    std::int64_t end) const;
   void multiply(std::size_t l, const double *x, double *y, ThreadPool &pool);
 
   MultilevelOptions options_;
