@@ -319,6 +319,29 @@ BlockSparseMatrix springChain(std::int64_t n, double ratio) {
   return assembled(layout, coords, locals);
 }
 
+TEST(Pcg, FindsANonFiniteValueInAnyChunkOfALargeHessian) {
+  // The finiteness checks split a large Hessian's values into chunks
+  // shared over the pool: a value in the first, a middle or the last
+  // chunk stops the solve, on one thread and on two.
+  BlockSparseMatrix h = springChain(150000, 10.0);
+  ASSERT_GT(h.values().size(), std::size_t{4} << 16);
+  std::vector<double> b(static_cast<std::size_t>(h.size()), 1.0);
+  for (unsigned threads : {1u, 2u})
+    for (std::size_t at :
+         {std::size_t{3}, h.values().size() / 2, h.values().size() - 1})
+      for (double bad : {std::numeric_limits<double>::infinity(),
+                         std::numeric_limits<double>::quiet_NaN()}) {
+        const double kept = h.values()[at];
+        h.values()[at] = bad;
+        ThreadPool pool(threads);
+        std::vector<double> x(b.size());
+        PcgResult result = solvePcg(h, b.data(), x.data(), PcgOptions{}, pool);
+        EXPECT_EQ(result.stop, PcgStop::NonFinite)
+            << threads << " threads, value " << at << " = " << bad;
+        h.values()[at] = kept;
+      }
+}
+
 /// sqrt((x - ref)^T H (x - ref) / ref^T H ref).
 double relativeEnergyError(const BlockSparseMatrix &H,
                            const std::vector<double> &x,

@@ -74,6 +74,27 @@ void maskBlock(const double *block, std::int64_t s, std::int64_t c,
         out[p * c + q] = 0.0;
 }
 
+/// to += the rows x cols block `values`, or its transpose (`to` is then
+/// cols x rows): BlockSparseMatrix::addBlock without its checks, unrolled
+/// for vertex blocks.
+inline void addBlockTo(double *to, const double *values, std::int64_t rows,
+                       std::int64_t cols, bool transposed) {
+  if (rows == 3 && cols == 3) {
+    for (int a = 0; a < 3; ++a)
+      for (int b = 0; b < 3; ++b)
+        to[a * 3 + b] += transposed ? values[b * 3 + a] : values[a * 3 + b];
+    return;
+  }
+  if (!transposed) {
+    for (std::int64_t k = 0; k < rows * cols; ++k)
+      to[k] += values[k];
+    return;
+  }
+  for (std::int64_t a = 0; a < cols; ++a)
+    for (std::int64_t b = 0; b < rows; ++b)
+      to[a * rows + b] += values[b * cols + a];
+}
+
 /// In-place Cholesky factor of the n x n row-major `a` (lower triangle);
 /// false if it is not positive definite.
 bool choleskyInPlace(std::vector<double> &a, std::int64_t n) {
@@ -210,6 +231,14 @@ void Multilevel::coarsen(std::size_t l) {
   Level &level = *levels_[l];
   const Aggregates &agg = level.aggregates;
   const BlockLayout &layout = level.parts.front()->layout();
+  // Per block, whether it has a fixed DoF: only those blocks are masked
+  // (a copy per block made this loop the bulk of a refresh).
+  std::vector<std::uint8_t> hasFixed(
+      static_cast<std::size_t>(layout.numBlocks()), 0);
+  if (level.fixed)
+    for (std::int64_t b = 0; b < layout.numBlocks(); ++b)
+      for (std::int64_t k = 0; k < layout.blockSize(b); ++k)
+        hasFixed[b] |= level.fixed[layout.blockOffset[b] + k];
   std::vector<double> masked;
   for (std::size_t k = 0; k < level.parts.size(); ++k) {
     const BlockSparseMatrix &part = *level.parts[k];
@@ -222,16 +251,18 @@ void Multilevel::coarsen(std::size_t l) {
       std::int64_t i = part.blockRow(b), j = part.blockCol(b);
       if (agg.of[i] < 0 || agg.of[j] < 0)
         continue;
+      const std::int64_t rows = layout.blockSize(i), cols = layout.blockSize(j);
       const double *values = part.blockData(b);
-      if (level.fixed) {
-        maskBlock(values, layout.blockSize(i), layout.blockSize(j), level.fixed,
-                  layout.blockOffset[i], layout.blockOffset[j], masked);
+      if (hasFixed[i] || hasFixed[j]) {
+        maskBlock(values, rows, cols, level.fixed, layout.blockOffset[i],
+                  layout.blockOffset[j], masked);
         values = masked.data();
       }
       BlockSlot slot = level.slots[k][next++];
-      coarse.addBlock(slot, values);
+      double *to = coarse.blockData(slot.block);
+      addBlockTo(to, values, rows, cols, slot.transposed);
       if (agg.of[i] == agg.of[j] && i != j)
-        coarse.addBlock({slot.block, !slot.transposed}, values);
+        addBlockTo(to, values, rows, cols, !slot.transposed);
     }
   }
 }

@@ -9,6 +9,7 @@
 #include "yasps/Runtime/Support/ThreadPool.h"
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <limits>
 #include <memory>
@@ -119,11 +120,24 @@ void yasps::runtime::multiplySum(const HessianParts &parts, const double *x,
   }
 }
 
-static bool allFinite(const double *v, std::size_t n) {
-  for (std::size_t i = 0; i < n; ++i)
-    if (!std::isfinite(v[i]))
-      return false;
-  return true;
+// Values per chunk of the finiteness checks.
+static constexpr std::int64_t kFiniteChunk = 1 << 16;
+
+/// Whether every entry of v is finite: chunks shared over `pool`, each
+/// without a branch per entry (v - v is 0 exactly when v is finite), so
+/// that it vectorises; at 86k DoFs the Hessian's values were 2 ms of
+/// serial checks per solve.
+static bool allFinite(const double *v, std::size_t n, ThreadPool &pool) {
+  std::atomic<bool> finite{true};
+  pool.parallelFor(0, static_cast<std::int64_t>(n), kFiniteChunk,
+                   [&](std::int64_t begin, std::int64_t end) {
+                     bool ok = true;
+                     for (std::int64_t i = begin; i < end; ++i)
+                       ok &= (v[i] - v[i]) == 0.0;
+                     if (!ok)
+                       finite.store(false, std::memory_order_relaxed);
+                   });
+  return finite.load();
 }
 
 void yasps::runtime::checkPcgOptions(const PcgOptions &options,
@@ -459,10 +473,10 @@ PcgResult PcgSolve::run() {
   maskFixed(r_.data());
   // Checked up front: a NaN in H might otherwise sit where the iterates are
   // zero and go unnoticed, or be hidden by the preconditioner's fallback.
-  if (!allFinite(r_.data(), un))
+  if (!allFinite(r_.data(), un, vectors_))
     return finish(PcgStop::NonFinite, nan);
   for (const BlockSparseMatrix *part : parts_)
-    if (!allFinite(part->values().data(), part->values().size()))
+    if (!allFinite(part->values().data(), part->values().size(), pool_))
       return finish(PcgStop::NonFinite, nan);
 
   const double bNorm = std::sqrt(dot(r_.data(), r_.data()));
