@@ -11,7 +11,8 @@ matched to yasps' materials):
     python3 bench/stark_driver.py SCENE_DIR --frames 100 --threads 1 \
         --codegen DIR --output RUN.npz
 
-It imports numpy and pystark only. The STARK settings it changes from
+It imports numpy, pystark and benchlib.memory (the standard library's
+own) only. The STARK settings it changes from
 STARK's defaults are the ones the comparison fixes (docs/benchmarks.md,
 "yasps against STARK, whole contact scenes"): the time step, gravity, no
 friction, Newton's step tolerance (STARK's DoFs are velocities, so 1e-2 is
@@ -34,7 +35,6 @@ import gc
 import json
 import math
 import re
-import resource
 import sys
 import time
 from pathlib import Path
@@ -43,6 +43,8 @@ from typing import Dict, List, Tuple
 import numpy as np
 
 import pystark
+
+from benchlib.memory import peak_rss_kb
 
 #: Attempts STARK may make at one frame (failed Newton solves halve its
 #: time step; stiffened contacts or pins retry it) before we give up.
@@ -289,8 +291,7 @@ def main() -> None:
                  args.output.parent / f"stark-{spec['name']}",
                  args.output.stem)
     # The process's peak resident memory (kB): mesh, matrices and code.
-    result["peak_rss_kb"] = np.array(
-        resource.getrusage(resource.RUSAGE_SELF).ru_maxrss)
+    result["peak_rss_kb"] = np.array(peak_rss_kb())
     np.savez(args.output, **result)
 
 

@@ -11,7 +11,6 @@ loads the kernels). bench/stark_peer.py starts it:
 from __future__ import annotations
 
 import argparse
-import resource
 from pathlib import Path
 
 import numpy as np
@@ -19,6 +18,7 @@ import numpy as np
 import benchlib
 
 benchlib.use_this_checkout()
+from benchlib.memory import peak_rss_kb
 from benchlib.results import commit
 from benchlib.stark_scenes import SCENES, run_yasps
 
@@ -36,8 +36,7 @@ def main() -> None:
     run = run_yasps(args.scene, args.frames, args.threads, args.newton_cap)
     # The commit measured, for summaries made later (stark_peer --no-run).
     # The process's peak resident memory (kB): mesh, matrices and code.
-    run["peak_rss_kb"] = np.array(
-        resource.getrusage(resource.RUSAGE_SELF).ru_maxrss)
+    run["peak_rss_kb"] = np.array(peak_rss_kb())
     np.savez(args.output, commit=np.array(commit()), **run)
 
 
