@@ -15,7 +15,7 @@ from yasps.sim import (ImplicitEuler, NewtonSettings, add_cloth,
 from yasps.solve import preconditioner_choice as pc
 from yasps.solve.preconditioner_choice import (BLOCK_JACOBI, MULTILEVEL,
                                                PreconditionerChoice,
-                                               solve_cost)
+                                               solve_cost, trial_budget)
 
 
 @pytest.fixture(autouse=True)
@@ -232,9 +232,10 @@ def test_the_state_survives_its_array():
 
 def test_a_trial_far_from_converging_waits_the_longest():
     """A trial stopped at a tenth of the way to its tolerance (in orders of
-    magnitude) sets the period to its longest at once; one nearly there
-    doubles it; a rise of the current's costs above what it won at calls a
-    trial before the period is out."""
+    magnitude) sets the period to its longest at once when its redo is no
+    dearer than before; one nearly there doubles it; a rise of the
+    current's costs above what it won at calls a trial before the period is
+    out."""
     reached = type("Report", (), {"relative_residual": 10 ** -0.4,
                                   "preconditioned_residual": float("nan"),
                                   "energy_error": float("nan")})()
@@ -249,12 +250,79 @@ def test_a_trial_far_from_converging_waits_the_longest():
         assert trial.trial
         assert choice.record(trial, trial.max_iterations, "max_iterations",
                              progress)
+        redo = choice.next_attempt(1000)
+        assert redo == pc.Attempt(BLOCK_JACOBI, 1000, False)
+        assert not choice.record(redo, 200, "converged")
         assert choice.period == period and choice.won_at == 205.0
     choice = choices[0]
     choice.record(choice.next_attempt(1000), 200, "converged")
     assert not choice.next_attempt(1000).trial
     choice.record(choice.next_attempt(1000), 400, "converged")
     assert choice.next_attempt(1000).trial
+
+
+def failed_trial(choice: PreconditionerChoice, progress: float,
+                 stop: str = "max_iterations") -> pc.Attempt:
+    """Runs block-Jacobi solves of 200 iterations until a trial comes, and
+    records that trial as stopped by ``stop`` having come ``progress`` of
+    the way; returns its redo."""
+    while True:
+        attempt = choice.next_attempt(1000)
+        if attempt.trial:
+            break
+        choice.record(attempt, 200, "converged")
+    assert choice.record(attempt, attempt.max_iterations, stop, progress)
+    return choice.next_attempt(1000)
+
+
+def test_the_redo_of_the_same_system_judges_a_trial():
+    """A trial stopped at its cap halfway to its tolerance would have cost
+    about twice its cap: against a redo that took 200 iterations it loses
+    (the period doubles); against a redo that took 600, the system being
+    harder than the solves its budget came from, it wins and the next
+    solve is the multilevel's."""
+    for redo_iterations, switched in ((200, False), (600, True)):
+        choice = PreconditionerChoice()
+        redo = failed_trial(choice, 0.5)
+        budget = trial_budget(MULTILEVEL, 205.0)
+        estimate = solve_cost(MULTILEVEL, budget / 0.5)
+        assert (estimate <= pc.MARGIN * solve_cost(
+            BLOCK_JACOBI, redo_iterations)) == switched
+        assert not choice.record(redo, redo_iterations, "converged")
+        if switched:
+            assert choice.current == MULTILEVEL
+            assert choice.costs[MULTILEVEL] == estimate
+            assert choice.next_attempt(1000) == \
+                pc.Attempt(MULTILEVEL, 1000, False)
+        else:
+            assert choice.current == BLOCK_JACOBI and choice.period == 2
+
+
+def test_a_breakdown_is_no_verdict():
+    """A trial or its redo that broke down (an indefinite system) leaves the
+    period as it was and makes the next solve a trial again."""
+    for trial_stop, redo_stop in (("breakdown", "breakdown"),
+                                  ("max_iterations", "breakdown"),
+                                  ("breakdown", "converged")):
+        choice = PreconditionerChoice()
+        redo = failed_trial(choice, 0.0, trial_stop)
+        assert not redo.trial
+        choice.record(redo, 3, redo_stop)
+        assert choice.period == pc.FIRST_PERIOD
+        assert choice.current == BLOCK_JACOBI
+        assert choice.next_attempt(1000).trial
+
+
+def test_the_redo_of_a_trial_is_never_a_trial():
+    """After a trial that did not converge, the next attempt is the redo
+    with the current preconditioner, even where the current's costs have
+    risen past what it last won at (which calls a trial otherwise)."""
+    choice = PreconditionerChoice(BLOCK_JACOBI, {BLOCK_JACOBI: 300.0}, 64, 0,
+                                  100.0)
+    trial = choice.next_attempt(1000)
+    assert trial.trial
+    assert choice.record(trial, trial.max_iterations, "max_iterations", 0.9)
+    assert choice.next_attempt(1000) == pc.Attempt(BLOCK_JACOBI, 1000, False)
 
 
 ON_THE_GPU = """

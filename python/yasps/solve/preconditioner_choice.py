@@ -16,14 +16,20 @@ in units of one block-Jacobi iteration is ``SETUP[p] + ITERATION[p] * k``
 for k iterations of preconditioner p. Every ``period`` solves the other
 preconditioner is tried with an iteration cap that stops it as soon as it
 would have cost more than MARGIN of the current one's solves (a moving
-average of their costs): a trial that
-converges within it is the solve, and the choice switches; one that does
-not is redone with the current preconditioner (about twice a solve's cost
-once per period) and the period doubles, up to ``MAX_PERIOD`` (at once
-where the trial came less than ``FAR`` of the way to its tolerance), unless
-the current preconditioner's solves grow ``RISE`` times costlier than the
-highest cost it won a trial at: then the verdict is stale and the next
-solve is a trial.
+average of their costs): a trial that converges within it is the solve, and
+the choice switches. One that does not is redone with the current
+preconditioner, and the redo, of the same system, judges it: where the
+trial's cost extrapolated from how far it came (its iterations over its
+progress toward the tolerance, in orders of magnitude) is at most MARGIN of
+the redo's, the choice switches after the redo (a trial's budget comes from
+past solves, and the one it ran on may be far harder). Otherwise the period
+doubles, up to ``MAX_PERIOD`` (at once where the trial came less than
+``FAR`` of the way to its tolerance), unless the current preconditioner's
+solves grow ``RISE`` times costlier than the highest cost it won a trial
+at: then the verdict is stale and the next solve is a trial. A breakdown of
+the trial or of the redo (an indefinite system: an exact Hessian of
+progressive projection) is no verdict on either: the next solve is a trial
+again.
 """
 
 from __future__ import annotations
@@ -78,7 +84,7 @@ def other(preconditioner: str) -> str:
     return MULTILEVEL if preconditioner == BLOCK_JACOBI else BLOCK_JACOBI
 
 
-def solve_cost(preconditioner: str, iterations: int) -> float:
+def solve_cost(preconditioner: str, iterations: float) -> float:
     """A solve's cost in block-Jacobi iterations (the module's model)."""
     return SETUP[preconditioner] + ITERATION[preconditioner] * iterations
 
@@ -111,9 +117,17 @@ class PreconditionerChoice:
     #: The highest cost at which the current one won a trial since the
     #: last switch (None: none won yet).
     won_at: Optional[float] = None
+    #: A trial that stopped without converging, awaiting its redo's
+    #: verdict (preconditioner, iterations, progress, stop); it lives
+    #: within one solve, so checkpoints do not carry it.
+    pending: Optional[Tuple[str, int, float, str]] = field(
+        default=None, compare=False)
 
     def next_attempt(self, max_iterations: int) -> Attempt:
-        """What the next solve runs first."""
+        """What the next solve runs first (after a trial that did not
+        converge: its redo, with the current preconditioner)."""
+        if self.pending is not None:
+            return Attempt(self.current, max_iterations, False)
         trying = other(self.current)
         last = self.costs.get(self.current)
         stale = self.won_at is not None and last is not None and \
@@ -135,21 +149,12 @@ class PreconditionerChoice:
         if attempt.trial:
             self.since_trial = 0
             if stop == "converged":
-                self.current = attempt.preconditioner
-                self.costs[self.current] = cost
-                self.period = PERIOD_AFTER_SWITCH
-                self.won_at = None
+                self._switch(attempt.preconditioner, cost)
                 return False
-            # Far from converging (it would have needed twice its cap and
-            # more), it will not win soon: wait the longest (a rise of the
-            # current's costs still calls a trial).
-            self.period = MAX_PERIOD if progress < FAR else \
-                min(2 * self.period, MAX_PERIOD)
-            # The highest cost the current one won at: the solves may swing
-            # within a frame; only a rise above it makes the verdict stale.
-            self.won_at = max(self.won_at or 0.0,
-                              self.costs.get(self.current, 0.0))
+            self.pending = (attempt.preconditioner, iterations, progress,
+                            stop)
             return True
+        trial, self.pending = self.pending, None
         self.since_trial += 1
         # A breakdown (an indefinite exact Hessian) says nothing of cost.
         if stop in ("converged", "max_iterations"):
@@ -162,7 +167,40 @@ class PreconditionerChoice:
         if stop == "max_iterations":
             # Stopped at the cap: the other may do what this could not.
             self.since_trial = max(self.since_trial, self.period)
+        if trial is not None:
+            self._judge(trial, cost, stop)
         return False
+
+    def _switch(self, to: str, cost: float) -> None:
+        self.current = to
+        self.costs[to] = cost
+        self.period = PERIOD_AFTER_SWITCH
+        self.won_at = None
+        self.since_trial = 0
+
+    def _judge(self, trial: Tuple[str, int, float, str], redo_cost: float,
+               redo_stop: str) -> None:
+        """The verdict on a trial that did not converge, from its redo (of
+        the same system) costing ``redo_cost``."""
+        trying, iterations, progress, stop = trial
+        if "breakdown" in (stop, redo_stop) or \
+                redo_stop not in ("converged", "max_iterations"):
+            self.since_trial = self.period
+            return
+        if progress > 0.0:
+            estimate = solve_cost(trying, iterations / progress)
+            if estimate <= MARGIN * redo_cost:
+                self._switch(trying, estimate)
+                return
+        # Far from converging (it would have needed twice its cap and more),
+        # it will not win soon: wait the longest (a rise of the current's
+        # costs still calls a trial).
+        self.period = MAX_PERIOD if progress < FAR else \
+            min(2 * self.period, MAX_PERIOD)
+        # The highest cost the current one won at: the solves may swing
+        # within a frame; only a rise above it makes the verdict stale.
+        self.won_at = max(self.won_at or 0.0,
+                          self.costs.get(self.current, 0.0))
 
     def as_array(self) -> np.ndarray:
         """The state as numbers (what a checkpoint stores)."""
