@@ -33,6 +33,9 @@ void yasps::python::translateRuntimeErrors() {
           PyErr_SetString(to->argument, e.what());
         } catch (const std::out_of_range &e) {
           PyErr_SetString(to->indexRange, e.what());
+        } catch (const std::length_error &e) {
+          // A size past what a container can hold: a size given wrong.
+          PyErr_SetString(to->argument, e.what());
         }
       },
       classes);

@@ -16,9 +16,9 @@
 
 namespace yasps::python {
 
-/// Registers the translation of std::invalid_argument to
-/// yasps.errors.ArgumentError and of std::out_of_range to
-/// yasps.errors.IndexRangeError for every function of the running
+/// Registers the translation of std::invalid_argument and std::length_error
+/// (a size past what a container holds) to yasps.errors.ArgumentError and
+/// of std::out_of_range to yasps.errors.IndexRangeError for every function of the running
 /// interpreter's extensions (nanobind's translators are global).
 void translateRuntimeErrors();
 

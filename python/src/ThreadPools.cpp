@@ -5,6 +5,8 @@
 #include <map>
 #include <memory>
 #include <mutex>
+#include <stdexcept>
+#include <string>
 
 using namespace yasps;
 
@@ -17,6 +19,9 @@ runtime::ThreadPool &yasps::python::poolFor(unsigned threads) {
   static const unsigned defaultCount = runtime::defaultThreadCount();
   if (threads == 0 || threads == defaultCount)
     return runtime::defaultThreadPool();
+  if (threads > kMaxThreads)
+    throw std::invalid_argument("a thread count of " + std::to_string(threads) +
+                                ": at most " + std::to_string(kMaxThreads));
   static std::mutex lock;
   static std::map<unsigned, std::unique_ptr<runtime::ThreadPool>> pools;
   std::lock_guard<std::mutex> guard(lock);

@@ -91,9 +91,25 @@ GlobalSystem::Part GlobalSystem::buildPart(const BlockLayout &layout,
   return Part{std::move(maps), std::move(matrix)};
 }
 
+/// `layout`, after checking that its offsets start at 0 and grow: the
+/// blocks' DoFs are looked up by them.
+static const BlockLayout &checked(const BlockLayout &layout) {
+  const std::vector<std::int64_t> &offsets = layout.blockOffset;
+  if (offsets.empty() || offsets.front() != 0)
+    throw std::invalid_argument(
+        "GlobalSystem: the block offsets must start at 0");
+  for (std::size_t b = 1; b < offsets.size(); ++b)
+    if (offsets[b] <= offsets[b - 1])
+      throw std::invalid_argument(
+          "GlobalSystem: block " + std::to_string(b - 1) + " ends at " +
+          std::to_string(offsets[b]) + ", not after its start " +
+          std::to_string(offsets[b - 1]));
+  return layout;
+}
+
 GlobalSystem::GlobalSystem(BlockLayout layout,
                            const std::vector<DofMap> &staticEnergies)
-    : staticPart(buildPart(layout, staticEnergies, 0)),
+    : staticPart(buildPart(checked(layout), staticEnergies, 0)),
       dynamicPart(buildPart(layout, {}, staticEnergies.size())),
       gradientValues(static_cast<std::size_t>(staticPart.matrix.size()), 0.0) {}
 

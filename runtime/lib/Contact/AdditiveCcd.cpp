@@ -9,6 +9,8 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <stdexcept>
+#include <string>
 #include <vector>
 
 namespace yasps::runtime::contact {
@@ -142,6 +144,12 @@ StepBound additiveStepBound(const SurfaceMesh &mesh,
                             ThreadPool *pool) {
   checkFinite(v0, "additiveStepBound");
   checkFinite(v1, "additiveStepBound");
+  checkCandidates(mesh, candidates, "additiveStepBound");
+  if (!(minDistance >= 0.0) || !std::isfinite(minDistance))
+    throw std::invalid_argument(
+        "additiveStepBound: the distance to keep must be finite and >= 0, "
+        "got " +
+        std::to_string(minDistance));
   // Each pair runs only up to the earliest impact found so far: the
   // minimum is the same in any order, and later pairs stop sooner.
   std::atomic<double> earliest(1.0);
@@ -198,6 +206,7 @@ StepBound additiveStepBound(const SurfaceMesh &mesh,
 double candidateMinDistance2(const SurfaceMesh &mesh,
                              const Candidates &candidates, Positions v) {
   checkFinite(v, "candidateMinDistance2");
+  checkCandidates(mesh, candidates, "candidateMinDistance2");
   double least = std::numeric_limits<double>::infinity();
   for (const auto &[f, p] : candidates.faceVertex) {
     const auto &face = mesh.faces()[f];

@@ -389,6 +389,32 @@ void codimCandidates(const SurfaceMesh &mesh, const std::vector<Box> &vertices,
 
 } // namespace
 
+void checkCandidates(const SurfaceMesh &mesh, const Candidates &candidates,
+                     const char *who) {
+  const int64_t counts[3] = {static_cast<int64_t>(mesh.faces().size()),
+                             static_cast<int64_t>(mesh.edges().size()),
+                             mesh.numVertices()};
+  const char *names[3] = {"face", "edge", "vertex"};
+  enum { Face, Edge, Vertex };
+  auto check = [&](const std::vector<std::array<int32_t, 2>> &pairs, int first,
+                   int second) {
+    for (const auto &pair : pairs)
+      for (int k = 0; k < 2; ++k) {
+        const int kind = k == 0 ? first : second;
+        if (pair[k] < 0 || pair[k] >= counts[kind])
+          throw std::invalid_argument(
+              std::string(who) + ": a candidate's " + names[kind] + " " +
+              std::to_string(pair[k]) + " is not one of the mesh's " +
+              std::to_string(counts[kind]) +
+              " (candidates of another contact mesh?)");
+      }
+  };
+  check(candidates.faceVertex, Face, Vertex);
+  check(candidates.edgeEdge, Edge, Edge);
+  check(candidates.vertexVertex, Vertex, Vertex);
+  check(candidates.edgeVertex, Edge, Vertex);
+}
+
 Candidates sweptCandidates(const SurfaceMesh &mesh, Positions v0, Positions v1,
                            double inflation, ThreadPool *pool) {
   if (v0.count != mesh.numVertices() || v1.count != mesh.numVertices())

@@ -5,7 +5,10 @@
 #include "Blocks.h"
 
 #include <algorithm>
+#include <cmath>
 #include <limits>
+#include <stdexcept>
+#include <string>
 #include <unordered_map>
 #include <utility>
 
@@ -224,6 +227,11 @@ CollisionSet buildCollisionSet(const SurfaceMesh &mesh,
                                const Candidates &candidates, Positions v,
                                double dhat, ThreadPool *pool) {
   checkFinite(v, "buildCollisionSet");
+  checkCandidates(mesh, candidates, "buildCollisionSet");
+  if (!(dhat > 0.0) || !std::isfinite(dhat))
+    throw std::invalid_argument(
+        "buildCollisionSet: dhat must be a finite distance > 0, got " +
+        std::to_string(dhat));
   const double dhat2 = dhat * dhat;
   // ipctk's order: vertex-vertex, edge-vertex, edge-edge, face-vertex.
   const int64_t numVertexVertex =

@@ -46,6 +46,8 @@ SurfaceMesh::SurfaceMesh(int64_t numVertices,
     throw std::invalid_argument("SurfaceMesh: " + std::to_string(rest.count) +
                                 " rest positions for " +
                                 std::to_string(numVertices) + " vertices");
+  // The rest lengths scale the edge-edge mollifier.
+  checkFinite(rest, "SurfaceMesh (rest positions)");
   std::unordered_map<uint64_t, int32_t> edgeIds;
   edgeIds.reserve(edges_.size());
   restLength2_.reserve(edges_.size());

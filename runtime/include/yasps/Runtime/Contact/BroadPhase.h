@@ -42,6 +42,12 @@ struct Candidates {
   }
 };
 
+/// Throws std::invalid_argument (naming `who`) unless every index of
+/// `candidates` is one of `mesh`'s faces, edges or vertices: candidates
+/// found on another mesh would read outside this one's arrays.
+void checkCandidates(const SurfaceMesh &mesh, const Candidates &candidates,
+                     const char *who);
+
 /// The candidates of the motion V0 -> V1 (V1 may be V0: a broad phase at
 /// rest) whose boxes grown by `inflation` overlap, found cell by cell in a
 /// uniform grid of the boxes; the pairs come in a fixed order (by grid
