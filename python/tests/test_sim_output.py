@@ -58,6 +58,60 @@ def test_recorder_writes_frames_and_a_series_per_body(tmp_path):
     assert recorder.frames[2].files["box"] == tmp_path / "out" / "box_0002.vtu"
 
 
+RECORDING_FOREVER = """
+import sys
+import numpy as np
+from yasps.sim import SurfaceRecorder, cloth_grid
+verts, faces = cloth_grid(12)
+recorder = SurfaceRecorder(sys.argv[1], {"cloth": faces, "copy": faces})
+k = 0
+while True:
+    moved = verts + [0.0, 0.0, -1e-3 * k]
+    recorder.record(0.01 * k, {"cloth": moved, "copy": moved})
+    if k == 0:
+        print("recorded", flush=True)
+    k += 1
+"""
+
+
+def test_a_run_killed_while_recording_keeps_every_frame_listed(tmp_path):
+    """A process recording frames is killed (SIGKILL) at three moments:
+    each time both series are whole, list frames 0, 1, ... in order, and
+    every frame they list reads back with its positions (a frame cut short
+    by the kill is not listed yet)."""
+    import os
+    import signal
+    import subprocess
+    import sys
+    import time
+    from pathlib import Path
+
+    python = str(Path(__file__).resolve().parents[1])
+    verts, faces = cloth_grid(12)
+    for k, wait in enumerate((0.1, 0.3, 0.5)):
+        out = tmp_path / f"run{k}"
+        child = subprocess.Popen(
+            [sys.executable, "-c", RECORDING_FOREVER, str(out)],
+            stdout=subprocess.PIPE, text=True,
+            env=dict(os.environ, PYTHONPATH=python))
+        try:
+            assert child.stdout is not None
+            assert child.stdout.readline().strip() == "recorded"
+            time.sleep(wait)
+        finally:
+            child.send_signal(signal.SIGKILL)
+            child.wait()
+        for name in ("cloth", "copy"):
+            series = read_series(out / f"{name}.pvd")
+            assert series == [(pytest.approx(0.01 * i), f"{name}_{i:04d}.vtu")
+                              for i in range(len(series))]
+            assert len(series) >= 1
+            for i, (_, file) in enumerate(series):
+                mesh = meshio.read(out / file)
+                np.testing.assert_allclose(
+                    mesh.points, verts + [0.0, 0.0, -1e-3 * i], atol=1e-12)
+
+
 def test_recorder_keeps_one_in_every(tmp_path):
     recorder = SurfaceRecorder(tmp_path, {"cloth": CLOTH_F}, every=3)
     written = [recorder.record(0.1 * k, {"cloth": CLOTH_V}) for k in range(7)]
