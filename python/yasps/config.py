@@ -5,7 +5,9 @@
   ``$XDG_CACHE_HOME/yasps`` or ``~/.cache/yasps``. ``None`` (or
   ``YASPS_CACHE_DIR=off``) keeps kernels in memory only.
 - ``num_threads``: threads used to evaluate kernels on the CPU; 0 uses every
-  core (or ``YASPS_NUM_THREADS`` if set).
+  core (or ``YASPS_NUM_THREADS`` if set). While ``ImplicitEuler.step`` or
+  ``newton`` runs, NumPy's BLAS runs on one thread (its idle threads spin
+  on the cores yasps' pool needs; :mod:`yasps.runtime.blas`).
 - ``opt_level``: LLVM optimisation level of CPU kernels (0-3).
 - ``backend``: ``"auto"`` (the GPU when one is usable, else the CPU),
   ``"cpu"`` or ``"gpu"``; from the environment variable ``YASPS_BACKEND``,

@@ -25,6 +25,7 @@ from ..frontend.attribute import Attribute
 from ..deprecation import renamed_argument, warn_renamed
 from ..frontend.errors import ArgumentTypeError, SceneError
 from ..runtime import current as current_backend
+from ..runtime.blas import one_blas_thread
 from ..solve import SolverError, minimize_energy
 from ..solve.minimize import checked_fixed_mask
 from ..solve.prepare import compile_scene
@@ -135,7 +136,20 @@ def newton(scene, targets: Optional[Targets] = None,
     passes False.
 
     Before NewtonSettings, its fields were keywords of newton (and the
-    targets were ``x=``): those spellings still work and warn once."""
+    targets were ``x=``): those spellings still work and warn once. NumPy's
+    BLAS runs on one thread meanwhile (:mod:`yasps.runtime.blas`)."""
+    with one_blas_thread():
+        return _newton(scene, targets, tolerance, step_bound,
+                       settings=settings, fixed=fixed, contact=contact,
+                       compile_first=compile_first, **deprecated)
+
+
+def _newton(scene, targets: Optional[Targets],
+            tolerance: Optional[float],
+            step_bound: Optional[Callable[[np.ndarray, np.ndarray], float]],
+            *, settings: Optional[NewtonSettings], fixed, contact,
+            compile_first: bool, **deprecated: Any) -> NewtonReport:
+    """newton() with NumPy's BLAS on one thread."""
     targets = renamed_argument("newton", "x", "targets", targets, deprecated)
     settings = settings_with_keywords("newton", settings, deprecated)
     if targets is None or tolerance is None:
@@ -668,7 +682,14 @@ class ImplicitEuler:
     def step(self, warn: bool = True) -> NewtonReport:
         """Advances one time step; returns the Newton report. A step that
         ends unconverged warns (NewtonNotConverged, once per stepper;
-        ``warn=False`` for none: ``run`` warns once per run instead)."""
+        ``warn=False`` for none: ``run`` warns once per run instead).
+        NumPy's BLAS runs on one thread meanwhile
+        (:mod:`yasps.runtime.blas`)."""
+        with one_blas_thread():
+            return self._step(warn)
+
+    def _step(self, warn: bool) -> NewtonReport:
+        """step() with NumPy's BLAS on one thread."""
         # Before friction's lag, which computes world positions: no stage
         # but ``compile`` includes compiling.
         compile_seconds = compile_kernels(self.scene, self.contact, False)
