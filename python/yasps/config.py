@@ -71,15 +71,18 @@
   ``"f32"`` is asked for).
 - ``preconditioner``: PCG's preconditioner, ``"auto"`` (the default),
   ``"block-jacobi"`` (the inverses of the Hessian's diagonal blocks) or
-  ``"multilevel"`` (a V-cycle over coarse levels of aggregated blocks,
+  ``"multilevel"`` (the fine level's block-Jacobi added to a V-cycle over
+  coarse levels of aggregated blocks,
   ``runtime/include/yasps/Runtime/Sparse/Multilevel.h``), on the CPU and the GPU.
   The multilevel one needs several times fewer iterations on meshes; each
-  costs about three to four of block-Jacobi's and every solve computes the
-  levels' values first (their structure is kept while the Hessian's
-  static structure stays), so it pays where block-Jacobi needs many
-  iterations (fine meshes, stiff materials). ``"auto"`` chooses per scene
-  between them by bounded trials and a fixed cost model (deterministic:
-  iteration counts, not clocks; :mod:`yasps.solve.preconditioner_choice`);
+  costs about one and a half of block-Jacobi's and every solve computes the
+  levels' values first (about a dozen block-Jacobi iterations; their
+  structure is kept while the Hessian's static structure stays), so it
+  pays where block-Jacobi needs many iterations (fine meshes, stiff
+  materials, contact). ``"auto"`` chooses per scene between them by
+  bounded trials, each judged against a solve of the same system, and a
+  fixed cost model (deterministic: iteration counts, not clocks;
+  :mod:`yasps.solve.preconditioner_choice`);
   ``lastSolve["preconditioner"]`` says which one a solve used. On the
   GPU backend ``"auto"`` is block-Jacobi (the model is the CPU's).
   ``docs/benchmarks.md`` has the figures.

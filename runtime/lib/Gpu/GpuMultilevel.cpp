@@ -323,7 +323,7 @@ void GpuSystem::cycle(std::size_t l, const double *r, double *z,
            ResidualArgs{n, r, t, mask, state});
   };
   // The fine level added to the coarse levels' cycle restricts r itself
-  // (Multilevel::cycle).
+  // (Multilevel::apply).
   const bool additive = l == 0 && levels->structure.options().additiveFine;
   smooth(r, level.damping, 0);
   if (!additive)
