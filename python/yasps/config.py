@@ -74,9 +74,10 @@
   ``"multilevel"`` (the fine level's block-Jacobi added to a V-cycle over
   coarse levels of aggregated blocks,
   ``runtime/include/yasps/Runtime/Sparse/Multilevel.h``), on the CPU and the GPU.
-  The multilevel one needs several times fewer iterations on meshes; each
-  costs about one and a half of block-Jacobi's and every solve computes the
-  levels' values first (about a dozen block-Jacobi iterations; their
+  The multilevel one needs fewer iterations (several times fewer on the
+  cloth and contact systems of larger scenes); each costs 1.2-1.7 of
+  block-Jacobi's and every solve computes the levels' values first (9-11
+  block-Jacobi iterations in all; their
   structure is kept while the Hessian's static structure stays), so it
   pays where block-Jacobi needs many iterations (fine meshes, stiff
   materials, contact). ``"auto"`` chooses per scene between them by
