@@ -202,6 +202,9 @@ def yasps_results(work: Work, repeat: int) -> ToolResults:
     """yasps' per-tet kernel times, its Newton direction and its check
     values, one thread."""
     yasps.config.num_threads = 1
+    # The peers' solves are Jacobi-preconditioned CG; "auto" would try the
+    # multilevel preconditioner on some of the timed solves.
+    yasps.config.preconditioner = "block-jacobi"
     s = work.scene
     count = len(work.tets)
     paths = [work.base + k for k in ("__grad", "__hess", "__hess_proj")]
