@@ -20,6 +20,7 @@ from .loads import Loads, add_loads
 from .parts import CagedBody, add_caged_body, add_obstacle, contact_union
 from .shapes import bowl_surface, ring_surface, sphere_surface
 from .motion import Motion, affine_motion, affine_velocity, vertex_motion
+from .inversion import ElementsInverted
 from .newton import (ImplicitEuler, NewtonNotConverged, NewtonReport,
                      iteration_totals, newton)
 from .newton_settings import MAX_ITERATIONS, PROJECTIONS, NewtonSettings
@@ -42,7 +43,7 @@ __all__ = ["AffineBody", "Body", "Cage", "FreeVertices", "HEX_CORNERS",
            "cage_grid", "hex8_gauss_points", "hex_tets", "lame",
            "lumped_masses",
            "material_constant",
-           "trilinear_weights", "tube_mesh", "polyline_segments", "zigzag_spring", "RunSummary", "simulate", "ImplicitEuler", "NewtonNotConverged", "NewtonReport", "NewtonSettings", "MAX_ITERATIONS",
+           "trilinear_weights", "tube_mesh", "polyline_segments", "zigzag_spring", "RunSummary", "simulate", "ImplicitEuler", "ElementsInverted", "NewtonNotConverged", "NewtonReport", "NewtonSettings", "MAX_ITERATIONS",
            "PROJECTIONS", "RecordedFrame",
            "SurfaceRecorder", "add_affine_body", "add_affine_inertia",
            "add_cloth", "add_elastic_tets",

@@ -99,6 +99,14 @@ def add_elastic_tets(mesh: Mesh, positions: Attribute, rest: np.ndarray,
     if material not in MATERIALS:
         raise SceneError(f"add_elastic_tets: material must be one of "
                          f"{', '.join(MATERIALS)}, got {material!r}")
+    if material == "stable_neo_hookean" and not isinstance(lam, Attribute) \
+            and not float(lam) > 0:
+        raise ArgumentError(
+            f"add_elastic_tets: stable Neo-Hookean needs lam > 0 (Poisson's "
+            f"ratio > 0), got lam = {lam}: its rest offset alpha = 1 + 3 mu / "
+            f"(4 lam) is infinite at lam = 0 and the energy NaN. Give a "
+            f"Poisson's ratio above 0 (lame(E, nu)), or "
+            f"material='fixed_corotated' or 'neo_hookean', which take lam = 0")
     tets = np.asarray(tets, dtype=np.int64).reshape(-1, 4)
     corners = np.asarray(rest, dtype=float)[tets]
     edges = np.stack([corners[:, k] - corners[:, 0] for k in (1, 2, 3)], axis=2)
@@ -118,6 +126,7 @@ def add_elastic_tets(mesh: Mesh, positions: Attribute, rest: np.ndarray,
     if guard_inversion if guard_inversion is not None \
             else material in INVERSION_BARRIERS:
         inversion.guard_inversion(positions, tets)
+    inversion.watch_inversion(positions, tets, t.describe(), material)
     return energy
 
 

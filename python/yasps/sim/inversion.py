@@ -14,11 +14,19 @@ Materials say whether they need it: ``add_elastic_tets`` registers the
 tets of such a material with :func:`guard_inversion`, and every stepper
 whose targets include their positions bounds its steps by them
 (:func:`guarded_step_bound`) without being told.
+
+The other materials (stable Neo-Hookean, fixed corotated) are defined past
+J = 0 and let a tet invert where a step is too large for their stiffness
+(a soft body hit at speed, a heavy body on a soft one). ``add_elastic_tets``
+registers every material's tets with :func:`watch_inversion`, and
+``ImplicitEuler`` counts the inverted ones after each step
+(:func:`count_inverted`): the report's ``inverted_tets``, and an
+:class:`ElementsInverted` warning naming the primitive and what to change.
 """
 
 from __future__ import annotations
 
-from typing import Callable, List, Optional, Sequence, Tuple, Union, cast
+from typing import Any, Callable, List, Optional, Sequence, Tuple, Union, cast
 
 import numpy as np
 
@@ -128,6 +136,64 @@ def guard_inversion(positions, tets: np.ndarray) -> None:
     scene = positions.owner.scene
     scene.state.setdefault(_GUARDS, list).append(
         (positions, np.asarray(tets, dtype=np.int64).reshape(-1, 4)))
+
+
+class ElementsInverted(UserWarning):
+    """A step ended with tets inverted (signed volume at most 0) under a
+    material that allows it: the body passed through itself there."""
+
+
+#: Per scene, every tet set added by add_elastic_tets: (positions, tets,
+#: the primitive's description, the material).
+_WATCHED: StateKey[List[Tuple[object, np.ndarray, str, str]]] = StateKey(
+    "the tets whose inversion steppers report")
+
+
+def watch_inversion(positions, tets: np.ndarray, primitive: str,
+                    material: str) -> None:
+    """Registers ``tets`` over the vertices whose world positions are
+    ``positions`` (of ``material``, on the primitive described by
+    ``primitive``): steppers whose targets include ``positions`` count
+    the inverted ones after each step."""
+    scene = positions.owner.scene
+    scene.state.setdefault(_WATCHED, list).append(
+        (positions, np.asarray(tets, dtype=np.int64).reshape(-1, 4),
+         primitive, material))
+
+
+def signed_volumes(x: np.ndarray, tets: np.ndarray) -> np.ndarray:
+    """Six times each tet's signed volume at positions ``x`` (N, 3)."""
+    corners = x[tets]
+    a, b, c = (corners[:, k] - corners[:, 0] for k in (1, 2, 3))
+    return np.einsum("ij,ij->i", np.cross(a, b), c)
+
+
+def count_inverted(scene, targets: Sequence) -> List[Tuple[int, str, str]]:
+    """Per watched tet set whose positions are one of ``targets``: the
+    number of tets inverted now, the primitive and the material (sets with
+    none left out)."""
+    found = []
+    for positions, tets, primitive, material in \
+            scene.state.get(_WATCHED) or ():
+        if any(target is positions for target in targets):
+            x = np.asarray(cast(Any, positions).value).reshape(-1, 3)
+            count = int((signed_volumes(x, tets) <= 0.0).sum())
+            if count:
+                found.append((count, primitive, material))
+    return found
+
+
+def inverted_text(found: Sequence[Tuple[int, str, str]], where: str) -> str:
+    """The ElementsInverted warning's text for ``count_inverted``'s
+    result."""
+    parts = ", ".join(f"{count} tets of {primitive} ({material})"
+                      for count, primitive, material in found)
+    return (f"{where}: {parts} inverted (signed volume <= 0): the step was "
+            f"too large for the material's stiffness (a fast impact, a heavy "
+            f"body on a soft one). Lower dt or raise the stiffness; or use "
+            f"material='neo_hookean' (IPC's, whose energy and step bound "
+            f"keep every tet from inverting) or guard_inversion=True. "
+            f"NewtonReport.inverted_tets counts them per step (warned once)")
 
 
 def guarded_step_bound(scene, targets: Sequence,

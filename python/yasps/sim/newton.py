@@ -35,7 +35,8 @@ from .newton_report import NewtonNotConverged, NewtonReport
 from .newton_settings import (NewtonSettings, add_settings_attributes,
                               settings_with_keywords)
 from .forcing import Forcing
-from .inversion import guarded_step_bound
+from .inversion import (ElementsInverted, count_inverted,
+                        guarded_step_bound, inverted_text)
 from .world import WorldInertia
 from .prescribed import (Prescription, add_pull, entry_mask,
                          fixed_with_prescribed, move_prescribed, prescription,
@@ -523,6 +524,7 @@ class ImplicitEuler:
         self.velocities = initial_velocities(self.targets, velocities,
                                              single)
         self._warned = False
+        self._warned_inverted = False
         #: with ``record``: what backward() reads, from the first step on
         self.record = bool(record)
         self.tape: Optional[Tape] = None
@@ -543,6 +545,8 @@ class ImplicitEuler:
         count from 1); returns the sum of the steps' reports."""
         total = NewtonReport()
         total.converged = True
+        #: the first frame that ended with tets inverted, and what inverted
+        first_inverted: Tuple[int, List[Tuple[int, str, str]]] = (0, [])
         # The wait for kernels shown on its own bar before the frames'.
         compiled = compile_kernels(self.scene, self.contact, progress)
         total.seconds["compile"] += compiled
@@ -554,6 +558,11 @@ class ImplicitEuler:
                 total.converged = total.converged and report.converged
                 if not report.converged:
                     total.unconverged.append((frame, report.residual))
+                if report.inverted_tets and not total.inverted_tets:
+                    first_inverted = (frame, count_inverted(self.scene,
+                                                            self.targets))
+                total.inverted_tets = max(total.inverted_tets,
+                                          report.inverted_tets)
                 bar.set_postfix(newton=report.iterations,
                                 **({"unconverged": len(total.unconverged)}
                                    if total.unconverged else {}))
@@ -568,6 +577,11 @@ class ImplicitEuler:
                 "before the step fell below velocity_tolerance * dt. Raise "
                 "max_iterations, or see docs/contact.md on convergence",
                 NewtonNotConverged, stacklevel=2)
+        if total.inverted_tets:
+            frame, found = first_inverted
+            warnings.warn(inverted_text(
+                found, f"ImplicitEuler.run, from frame {frame}"),
+                ElementsInverted, stacklevel=2)
         return total
 
     def backward(self, dloss: Mapping[Attribute, Any],
@@ -634,20 +648,37 @@ class ImplicitEuler:
     def _bound(self, steps: List[np.ndarray]) -> float:
         """The safe fraction of the motion ``steps`` (one per target) from
         the targets' values now: ``step_bound``'s and the contact's CCD."""
+        return self._bound_and_length(steps)[0]
+
+    def _bound_and_length(self, steps: List[np.ndarray]
+                          ) -> Tuple[float, float]:
+        """``_bound(steps)``, and how far the motion moves a position at
+        most, as Newton measures its directions (world positions with a
+        contact, else the targets' entries)."""
         alpha = 1.0
         now = [t.value for t in self.targets]
         bound = guarded_step_bound(self.scene, self.targets, self.step_bound)
         if bound is not None:
             alpha = bound(now[0], steps[0]) if len(steps) == 1 \
                 else bound(now, steps)
-        if self.contact is not None and alpha > 0.0:
-            alpha = min(alpha, self.contact.step_bound(steps))
-        return alpha
+        if self.contact is None:
+            return alpha, max(float(np.abs(s).max()) for s in steps)
+        contact_bound, length = self.contact.step_bound_and_length(steps)
+        return min(alpha, contact_bound), length
 
     def _start_from_velocities(self, fixed) -> float:
         """Moves the targets' free entries (not in ``fixed``, Newton's
         masks) from their values towards ``+ dt v`` as far as the step
-        bounds allow (warm_start); returns the seconds the bounds took."""
+        bounds allow (warm_start); returns the seconds the bounds took.
+
+        A motion that moves no position by Newton's tolerance
+        (``velocity_tolerance * dt``) is not taken: Newton cannot resolve
+        it, and carried from step to step it never dies out. A body resting
+        on the ground kept such a creep: each guess pressed it further into
+        the barrier, cut by CCD to a fraction of its distance, and Newton,
+        whose steps there are as small as the distance, stopped at once,
+        until rounding put a vertex below the ground (an affine box at
+        dt = 0.1 s, bench/extremes.py)."""
         steps = [self.dt * v for v in self.velocities]
         for k, mask in enumerate(fixed or []):
             if mask is not None:
@@ -657,7 +688,9 @@ class ImplicitEuler:
         if not any(step.any() for step in steps):
             return 0.0
         clock = time.perf_counter()
-        alpha = self._bound(steps)
+        alpha, length = self._bound_and_length(steps)
+        if length < self.velocity_tolerance * self.dt:
+            return time.perf_counter() - clock
         for t, step in zip(self.targets, steps):
             t.updateValue(t.value + alpha * step)
         return time.perf_counter() - clock
@@ -777,6 +810,12 @@ class ImplicitEuler:
         assert report is not None  # friction_iterations >= 1: one solve
         report.prescribed_lag = lagging
         report.seconds["compile"] += compile_seconds
+        inverted = count_inverted(self.scene, self.targets)
+        report.inverted_tets = sum(count for count, _, _ in inverted)
+        if warn and inverted and not self._warned_inverted:
+            self._warned_inverted = True
+            warnings.warn(inverted_text(inverted, "ImplicitEuler.step"),
+                          ElementsInverted, stacklevel=2)
         if warn and not report.converged and not self._warned:
             self._warned = True
             warnings.warn(

@@ -73,6 +73,10 @@ class NewtonReport:
         #: a run's frames (from 1) that ended unconverged, with their
         #: ``residual``
         self.unconverged: List[Tuple[int, float]] = []
+        #: tets inverted at the end of the step (signed volume <= 0) under
+        #: materials that allow it (``yasps.sim.inversion``); a run's: the
+        #: most after any of its steps
+        self.inverted_tets = 0
 
     def add(self, other: "NewtonReport") -> None:
         """Accumulates another solve's counts and seconds (a run's total)."""
