@@ -338,9 +338,9 @@ def test_affine_inertia_is_the_vertices_inertia():
                            VERTS, masses[:3], name="other")
 
 
-def test_stiffness_doubles_while_surfaces_close_below_a_hundredth_of_dhat():
+def test_stiffness_doubles_while_surfaces_close_below_a_tenth_of_dhat():
     """kappa doubles, up to its bound, only while the closest distance
-    keeps shrinking below dhat / 100 (ipctk's update rule at that distance;
+    keeps shrinking below dhat / 10 (ipctk's update rule at that distance;
     IPC's default, 1e-9 of the diagonal, would leave it unchanged here)."""
     from yasps.contact.stiffness import CLOSE_FRACTION, AdaptiveStiffness
     dhat, diagonal = 1e-3, 1.0
