@@ -299,16 +299,9 @@ def build(cell: Cell) -> Built:
 # -- running ------------------------------------------------------------------
 
 def _inverted(V: np.ndarray, bodies: Sequence[Body]) -> int:
-    count = 0
-    for body in bodies:
-        if body.tets is None:
-            continue
-        c = V[body.start + body.tets]
-        volume = np.einsum("ij,ij->i", np.cross(c[:, 1] - c[:, 0],
-                                               c[:, 2] - c[:, 0]),
-                           c[:, 3] - c[:, 0])
-        count += int((volume <= 0).sum())
-    return count
+    from yasps.sim.inversion import signed_volumes
+    return sum(int((signed_volumes(V, body.start + body.tets) <= 0).sum())
+               for body in bodies if body.tets is not None)
 
 
 def _mechanics(V: np.ndarray, before: np.ndarray, dt: float,
