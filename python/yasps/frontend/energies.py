@@ -74,6 +74,24 @@ def neo_hookean(F: Attribute, mu: Number, lam: Number,
     return volume * psi
 
 
+def inversion_barrier(F: Attribute, mu: Number, lam: Number,
+                      volume: Number, start: float = 0.1) -> Attribute:
+    """A barrier on a tet's volume ratio J = det F for materials defined
+    past J = 0 (stable Neo-Hookean, fixed corotated), so that with a step
+    bound they never invert, as IPC's Neo-Hookean does not: with
+    ``s = J / start``, ``V (mu + lam) [-(s - 1)^2 log s]`` for ``s < 1``,
+    else 0 (IPC's barrier on J instead of a distance; C2 at ``s = 1``).
+    Zero wherever a tet keeps ``start`` of its rest volume, so it changes
+    nothing there; as J -> 0 it grows without bound, and it is NaN past
+    J = 0, which the line search rejects. Its scale, the material's
+    ``mu + lam``, makes it a few times the material's own energy density
+    by J = start / 10."""
+    s = F.determinant() / start
+    gap = s - 1.0
+    return volume * select(s < 1.0, -((mu + lam) * gap * gap * s.log()),
+                           0.0)
+
+
 def fixed_corotated(F: Attribute, mu: Number, lam: Number,
                     volume: Number) -> Attribute:
     """Fixed corotated energy density times rest volume (Stomakhin et al.

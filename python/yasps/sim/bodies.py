@@ -95,7 +95,9 @@ def add_elastic_tets(mesh: Mesh, positions: Attribute, rest: np.ndarray,
     the material is undefined past J = 0, IPC's Neo-Hookean): steppers
     whose targets include ``positions`` then bound each step so that no
     tet falls below a tenth of its volume (:func:`inversion_bound`), as
-    IPC does. Returns the energy."""
+    IPC does; a material defined past J = 0 then also gets
+    :func:`yasps.energies.inversion_barrier` (zero above a tenth of the
+    rest volume), so that it never inverts either. Returns the energy."""
     if material not in MATERIALS:
         raise SceneError(f"add_elastic_tets: material must be one of "
                          f"{', '.join(MATERIALS)}, got {material!r}")
@@ -119,12 +121,18 @@ def add_elastic_tets(mesh: Mesh, positions: Attribute, rest: np.ndarray,
     mu, lam, scale = (material_constant(mesh, f"{name}_{what}", value)
                       for what, value in (("mu", mu), ("lam", lam),
                                           ("scale", scale)))
-    energy = t.addAttribute("elastic", computed_attribute=scale *
-                            MATERIALS[material](E.deformation_gradient(
-                                gathered, t["inv"]), mu, lam, t["vol"]))
+    F = E.deformation_gradient(gathered, t["inv"])
+    density = MATERIALS[material](F, mu, lam, t["vol"])
+    guarded = guard_inversion if guard_inversion is not None \
+        else material in INVERSION_BARRIERS
+    if guarded and material not in INVERSION_BARRIERS:
+        # A step bound alone freezes a run whose directions keep pressing a
+        # tet that such a material lets collapse: every step then stops at
+        # the bound. The barrier makes collapse cost what it costs in IPC's.
+        density = density + E.inversion_barrier(F, mu, lam, t["vol"])
+    energy = t.addAttribute("elastic", computed_attribute=scale * density)
     mesh.scene.addEnergy(energy, projection=projection)
-    if guard_inversion if guard_inversion is not None \
-            else material in INVERSION_BARRIERS:
+    if guarded:
         inversion.guard_inversion(positions, tets)
     inversion.watch_inversion(positions, tets, t.describe(), material)
     return energy

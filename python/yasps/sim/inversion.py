@@ -17,7 +17,12 @@ whose targets include their positions bounds its steps by them
 
 The other materials (stable Neo-Hookean, fixed corotated) are defined past
 J = 0 and let a tet invert where a step is too large for their stiffness
-(a soft body hit at speed, a heavy body on a soft one). ``add_elastic_tets``
+(a soft body hit at speed, a heavy body on a soft one). Asked to guard them
+(``add_elastic_tets(..., guard_inversion=True)``), ``add_elastic_tets``
+adds :func:`yasps.energies.inversion_barrier` to their energy besides the
+step bound: the bound alone cannot stop a move no energy checks (a
+prescribed motion) and, where Newton's directions keep pressing a tet the
+material lets collapse, cuts every step to nothing. ``add_elastic_tets``
 registers every material's tets with :func:`watch_inversion`, and
 ``ImplicitEuler`` counts the inverted ones after each step
 (:func:`count_inverted`): the report's ``inverted_tets``, and an
