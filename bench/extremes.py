@@ -33,6 +33,7 @@ import os
 import sys
 import tempfile
 import time
+from dataclasses import replace
 from pathlib import Path
 from typing import Dict, List, Sequence, Tuple
 
@@ -194,11 +195,17 @@ def main(argv: Sequence[str] = ()) -> int:
                         default=ROOT / "docs" / "accuracy",
                         help="where extremes_axes.png and extremes_pairs.png "
                              "go ('' for none)")
+    parser.add_argument("--guard", action="store_true",
+                        help="every soft body's tets with guard_inversion="
+                             "True (stable Neo-Hookean made inversion-free); "
+                             "give --json bench/results/extremes_guarded.json")
     add_json_argument(parser, "extremes")
     args = parser.parse_args(list(argv) or None)
 
     plan: List[Tuple[str, Cell]] = reduced_map() if args.reduced \
         else full_map()
+    if args.guard:
+        plan = [(axis, replace(cell, guard=True)) for axis, cell in plan]
     cells = [cell for _, cell in plan]
     began = time.monotonic()
     bar, advance = _progress(len(cells))
@@ -239,7 +246,7 @@ def main(argv: Sequence[str] = ()) -> int:
                              "frames", "Newton/frame", "s/frame"], limits,
                   ["", "{:g}", "", "", "", "{:.1f}", "{:.3f}"])
     path = results.write(args.json)
-    if str(args.pictures) and not args.reduced:
+    if str(args.pictures) and not args.reduced and not args.guard:
         args.pictures.mkdir(parents=True, exist_ok=True)
         draw_axes(rows, args.pictures / "extremes_axes.png")
         draw_pairs(rows, args.pictures / "extremes_pairs.png")

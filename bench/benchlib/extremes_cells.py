@@ -63,7 +63,9 @@ class Cell:
     distance as a fraction of the scene's size (its bounding box's
     diagonal); ``size``: the scene's edge length (m); ``aspect``: the tet
     boxes' height over their width (slivers below 1); ``within_dhat``: the
-    bodies start at half the contact distance from what they land on."""
+    bodies start at half the contact distance from what they land on;
+    ``guard``: the soft tets with ``guard_inversion=True`` (stable
+    Neo-Hookean made inversion-free)."""
     kind: str
     young: float = 1e5
     poisson: float = 0.3
@@ -78,6 +80,7 @@ class Cell:
     precision: str = "f64"
     friction: float = 0.0
     frames: int = 20
+    guard: bool = False
 
     def name(self) -> str:
         """What differs from the kind's defaults, as 'axis=value' pairs."""
@@ -213,7 +216,7 @@ def build(cell: Cell) -> Built:
         masses = lumped_masses(verts, tets, density)
         body = add_free_vertices(s.addMesh(name), verts, masses)
         add_elastic_tets(getattr(s, name), body.x, verts, tets, mu, lam,
-                         scale=dt2)
+                         scale=dt2, guard_inversion=cell.guard or None)
         members.append(body.primitive)
         faces.append(surface_of(tets) + count)
         bodies.append(Body(count, masses, tets, np.asarray(velocity, float)))

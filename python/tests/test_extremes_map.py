@@ -130,3 +130,13 @@ def test_stable_neo_hookean_refuses_lam_zero_and_names_why():
     # The materials defined at lam = 0 take it.
     add_elastic_tets(mesh, body.x, verts, tets, 1e4, 0.0,
                      material="fixed_corotated")
+
+
+def test_a_guarded_cell_inverts_nothing():
+    """``--guard``: the soft box hit at 100 m/s, whose stable Neo-Hookean
+    tets invert unguarded (the map's limits table), holds with every tet
+    positive (the map's own count of signed volumes)."""
+    from benchlib.extremes_cells import run_cell
+    record = run_cell(Cell("soft", speed=100.0, guard=True))
+    assert record.inverted_tets == 0
+    assert outcome(record)[0] == "holds", outcome(record)
