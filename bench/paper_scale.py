@@ -21,6 +21,7 @@ minutes. Not part of the test command.
 from __future__ import annotations
 
 import argparse
+import os
 import shutil
 import sys
 import tempfile
@@ -85,8 +86,8 @@ def run_layers(layers: int, frames: int, output: Path) -> Dict[str, Any]:
     last = max((k for k in summary.files if k.startswith("frame_")),
                key=lambda k: int(k.split("_")[1]))
     return {"row": [vertices, diff, 1e3 * diff / max(r.iterations, 1), cg,
-                    1e3 * cg / max(cg_its, 1), summary.seconds, r.iterations, cg_its,
-                    summary.frames, cg_its / max(r.iterations, 1),
+                    1e3 * cg / max(cg_its, 1), summary.seconds, r.iterations,
+                    cg_its, summary.frames, cg_its / max(r.iterations, 1),
                     len(r.unconverged),
                     "yes" if summary.intersections else "none"],
             "picture": summary.files[last],
@@ -109,7 +110,7 @@ def main() -> None:
     for layers in args.layers:
         out = Path(tempfile.mkdtemp(prefix=f"yasps-paper-{layers}-"))
         measured = run_layers(layers, args.frames, out)
-        threads = args.threads or len(__import__("os").sched_getaffinity(0))
+        threads = args.threads or len(os.sched_getaffinity(0))
         rows.append([layers, f"yasps (this CPU, {threads} threads)",
                      *measured["row"]])
         for system, numbers in PAPER[layers].items():
