@@ -50,6 +50,7 @@
 #include <mutex>
 #include <stdexcept>
 #include <string>
+#include <tuple>
 
 namespace nb = nanobind;
 using namespace mlir;
@@ -280,11 +281,13 @@ CpuLibrary compileCpu(const std::string &ir,
                       const std::string &bufferName,
                       const std::string &prePipeline, int64_t lanes,
                       const std::string &locations,
-                      std::optional<nb::callable> onKernelCompiled) {
+                      std::optional<nb::callable> onKernelCompiled,
+                      const std::string &cpu) {
   mlir::yasps::CpuCompileOptions options;
   options.cacheDir = cacheDir;
   options.optLevel = optLevel;
   options.lanes = lanes;
+  options.targetCpu = cpu;
   if (onKernelCompiled)
     options.onKernelCompiled = [&](const std::string &attribute) {
       nb::gil_scoped_acquire acquire;
@@ -510,6 +513,17 @@ NB_MODULE(_yasps_compiler, m) {
             return d;
           },
           "how the compilation went (cache hits, times, cache key)")
+      .def_prop_ro(
+          "objects",
+          [](const CpuLibrary &self) {
+            std::vector<std::tuple<std::string, std::string, std::string>> out;
+            for (const auto &kernel : self.library->kernels())
+              out.emplace_back(kernel.attribute, kernel.symbol,
+                               kernel.objectKey);
+            return out;
+          },
+          "[(attribute path, symbol, object key)] per kernel: its object is "
+          "<cache_dir>/<object key>.o, its packed entry point _mlir_<symbol>")
       .def("entry", &cpuEntry, nb::arg("attribute"),
            "(entry point, buffer codes) of an attribute's kernel, for the "
            "runtime's launch_cpu_kernel; valid while the library lives");
@@ -582,7 +596,7 @@ NB_MODULE(_yasps_compiler, m) {
         nb::arg("cache_dir") = "", nb::arg("opt_level") = 3,
         nb::arg("name") = "<yasps>", nb::arg("pre_pipeline") = "",
         nb::arg("lanes") = 0, nb::arg("locations") = "",
-        nb::arg("on_kernel_compiled") = nb::none(),
+        nb::arg("on_kernel_compiled") = nb::none(), nb::arg("cpu") = "",
         "Compiles CPU kernels for the attributes (scene-relative paths) of "
         "the IR's scene, reusing in-memory and on-disk caches keyed by the "
         "IR; locations: the definitions of the location aliases it refers "
@@ -590,7 +604,8 @@ NB_MODULE(_yasps_compiler, m) {
         "on_kernel_compiled(attribute): called as each kernel's machine "
         "code is made (for progress; not for kernels found in a cache). "
         "lanes: instances evaluated together in SIMD lanes (0: the host's "
-        "vector width in doubles; 1: one at a time). Raises "
+        "vector width in doubles; 1: one at a time); cpu: an LLVM CPU name "
+        "to compile for instead of this host (e.g. 'x86-64-v3'). Raises "
         "MissingAttributeError (.symbol) for an attribute that does not exist "
         "after pre_pipeline, IRError for other failures.");
   m.def("cpu_kernels_compiled", &mlir::yasps::cpuKernelsCompiled,

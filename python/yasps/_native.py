@@ -62,7 +62,21 @@ def load(name: str) -> ModuleType:
 
 def compiler_module() -> ModuleType:
     """The compiler's bindings (links MLIR)."""
+    if os.environ.get("YASPS_NO_COMPILER", "") not in ("", "0"):
+        raise ImportError("the compiler is switched off (YASPS_NO_COMPILER)")
     return load(COMPILER_MODULE)
+
+
+@lru_cache(maxsize=None)
+def has_compiler() -> bool:
+    """Whether this installation has the compiler's bindings, and
+    ``YASPS_NO_COMPILER`` does not switch them off (to run as a
+    runtime-only installation would, from the kernel store)."""
+    try:
+        compiler_module()
+    except ImportError:
+        return False
+    return True
 
 
 def runtime_module() -> ModuleType:

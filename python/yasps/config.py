@@ -21,6 +21,12 @@
   of eigensolvers overlap their chains of square roots and divisions:
   17% faster on stable Neo-Hookean's 9x9); 1 evaluates one instance at a
   time. A width set here applies to every kernel.
+- ``cpu_target``: the CPU that CPU kernels are compiled for, an LLVM CPU
+  name (``"x86-64-v3"``: any x86 machine with AVX2 and FMA); ``None``, the
+  default, compiles for this machine with every feature it has. For kernels
+  compiled ahead into the kernel store and carried to another machine
+  (``yasps.compile(scene, store=True)``, :mod:`yasps.compiler.store`). From
+  ``YASPS_CPU_TARGET`` where set.
 - ``separate_reduced_hessians``: where the reduced-space projection applies
   (paper 5.4), keep each local Hessian as its factors, the inner map J and
   the projected inner Hessian P, and form J^T P J only while assembling
@@ -128,6 +134,7 @@ num_threads: int = 0
 opt_level: int = 3
 backend: str = os.environ.get("YASPS_BACKEND", "auto").strip().lower() or "auto"
 simd_lanes: int = 0
+cpu_target: Optional[str] = os.environ.get("YASPS_CPU_TARGET") or None
 separate_reduced_hessians: Optional[bool] = None
 linear_map_projection: bool = True
 slot_jacobians: bool = True
@@ -218,6 +225,9 @@ def _check(name: str, value) -> None:
                               (name == "opt_level" and value > 3)):
         wrong = ("a whole number from 0 to 3" if name == "opt_level"
                  else "a whole number >= 0")
+    elif name == "cpu_target" and not (value is None or
+                                       (isinstance(value, str) and value)):
+        wrong = "an LLVM CPU name such as 'x86-64-v3', or None"
     elif name == "cache_dir" and not (value is None or
                                       isinstance(value, (str, os.PathLike))):
         wrong = "a folder (str or path) or None"
@@ -228,6 +238,7 @@ def _check(name: str, value) -> None:
 
 #: Every setting, by name (what ``override`` takes).
 SETTINGS = ("cache_dir", "num_threads", "opt_level", "backend", "simd_lanes",
+            "cpu_target",
             "separate_reduced_hessians", "linear_map_projection",
             "slot_jacobians", "compress_local_hessians", "gpu_derivatives",
             "precision", "hessian_storage", "preconditioner")

@@ -54,3 +54,9 @@ class IndexRangeError(YaspsError, IndexError):
 class CheckpointError(YaspsError, OSError):
     """A checkpoint that cannot be read back: no file at the path (with or
     without its ``.npz``), or one cut short or not written by ``save``."""
+
+
+class KernelNotCompiledError(YaspsError, LookupError):
+    """A kernel that a run needs, on an installation without the compiler,
+    is not in the kernel store (``yasps.compiler.store``): the message names
+    the kernel and how to compile it ahead."""

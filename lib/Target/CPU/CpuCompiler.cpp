@@ -32,6 +32,7 @@
 
 #include "llvm/ADT/StringExtras.h"
 #include "llvm/ExecutionEngine/Orc/ExecutionUtils.h"
+#include "llvm/ExecutionEngine/Orc/JITTargetMachineBuilder.h"
 #include "llvm/ExecutionEngine/Orc/LLJIT.h"
 #include "llvm/Support/FileSystem.h"
 #include "llvm/Support/MemoryBuffer.h"
@@ -39,6 +40,8 @@
 #include "llvm/Support/SHA256.h"
 #include "llvm/Support/TargetSelect.h"
 #include "llvm/TargetParser/Host.h"
+#include "llvm/TargetParser/SubtargetFeature.h"
+#include "llvm/TargetParser/X86TargetParser.h"
 
 #include <algorithm>
 #include <atomic>
@@ -52,7 +55,8 @@ using namespace mlir::yasps;
 
 // Bumped whenever generated code changes for the same IR, so that stale
 // objects in an on-disk cache are never reused.
-static constexpr const char *kCodegenVersion = "yasps-cpu-2";
+// 3: position-independent code (objects link into shared libraries).
+static constexpr const char *kCodegenVersion = "yasps-cpu-3";
 
 static constexpr const char *kLoweringPipeline =
     "convert-scf-to-cf,convert-to-llvm,reconcile-unrealized-casts";
@@ -156,6 +160,16 @@ int64_t mlir::yasps::hostDoubleLanes() {
   return 2;
 }
 
+int64_t mlir::yasps::doubleLanesOf(StringRef cpu) {
+  if (cpu.empty())
+    return hostDoubleLanes();
+  llvm::SmallVector<StringRef, 64> features;
+  llvm::X86::getFeaturesForCPU(cpu, features);
+  if (llvm::is_contained(features, "avx512f"))
+    return 8;
+  return llvm::is_contained(features, "avx") ? 4 : 2;
+}
+
 namespace {
 
 std::string hostDescription() {
@@ -182,12 +196,19 @@ unsigned optLevelOf(const CpuKernel &kernel, const CpuCompileOptions &options) {
                                : options.optLevel;
 }
 
-std::string cacheKey(ModuleOp kernels, unsigned optLevel) {
+/// The machine the kernels are for, in their cache keys.
+std::string targetDescription(const CpuCompileOptions &options) {
+  return options.targetCpu.empty() ? hostDescription()
+                                   : "cpu:" + options.targetCpu;
+}
+
+std::string cacheKey(ModuleOp kernels, unsigned optLevel,
+                     const CpuCompileOptions &options) {
   std::string extra;
   llvm::raw_string_ostream os(extra);
   os << kLoweringPipeline << "\nO" << optLevel << "\n"
      << kCodegenVersion << "\n"
-     << hostDescription();
+     << targetDescription(options);
   return hashKernels(kernels, extra);
 }
 
@@ -316,11 +337,32 @@ std::vector<KernelUnit> splitKernels(ModuleOp kernels,
         builder.clone(op);
     }
     unit.kernel = kernel;
-    unit.key = cacheKey(*unit.module, optLevelOf(kernel, options));
+    unit.key =
+        cacheKey(*unit.module, optLevelOf(kernel, options), options);
     unit.kernel.objectKey = unit.key;
     units.push_back(std::move(unit));
   }
   return units;
+}
+
+/// The target machine for kernels at `optLevel`: the host, or
+/// `options.targetCpu` with that CPU's features only. Its code is position
+/// independent, so that the cached objects also link into the shared
+/// libraries of the kernel store (python/yasps/compiler/store.py), which a
+/// runtime without LLVM loads with dlopen.
+llvm::Expected<std::unique_ptr<llvm::TargetMachine>>
+kernelTargetMachine(unsigned optLevel, const CpuCompileOptions &options) {
+  auto builder = llvm::orc::JITTargetMachineBuilder::detectHost();
+  if (!builder)
+    return builder.takeError();
+  if (!options.targetCpu.empty()) {
+    builder->setCPU(options.targetCpu);
+    builder->getFeatures() = llvm::SubtargetFeatures();
+  }
+  builder->setRelocationModel(llvm::Reloc::PIC_);
+  builder->setCodeGenOptLevel(
+      static_cast<llvm::CodeGenOptLevel>(std::min(optLevel, 3u)));
+  return builder->createTargetMachine();
 }
 
 /// LLVM's optimisation and code generation of one lowered kernel, its
@@ -339,7 +381,11 @@ llvm::Error jitUnit(KernelUnit &unit, const CpuCompileOptions &options) {
   engineOptions.jitCodeGenOptLevel =
       static_cast<llvm::CodeGenOptLevel>(std::min(optLevel, 3u));
   engineOptions.enableObjectDump = !objectPath.empty();
-  auto engine = ExecutionEngine::create(*unit.module, engineOptions);
+  auto machine = kernelTargetMachine(optLevel, options);
+  if (!machine)
+    return machine.takeError();
+  auto engine = ExecutionEngine::create(*unit.module, engineOptions,
+                                        std::move(*machine));
   ++compiledCount();
   if (!engine)
     return engine.takeError();
@@ -373,7 +419,8 @@ mlir::yasps::compileCpuKernels(ModuleOp module,
   // lanes in f32.
   int64_t lanes = options.lanes > 0
                       ? options.lanes
-                      : hostDoubleLanes() * (64 / computeFloatBits(module));
+                      : doubleLanesOf(options.targetCpu) *
+                            (64 / computeFloatBits(module));
   // By default projections of small matrices run two vectors of problems
   // at a time; a width the user chose applies to every kernel.
   int64_t projectionLanes = options.lanes > 0 ? options.lanes : 2 * lanes;

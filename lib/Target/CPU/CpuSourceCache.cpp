@@ -158,6 +158,7 @@ std::string mlir::yasps::cpuSourceKey(
   add(prePipeline);
   add(std::to_string(options.optLevel));
   add(std::to_string(options.lanes));
+  add(options.targetCpu);
   add(llvm::sys::getHostCPUName());
   add(buildIdentity());
   std::array<uint8_t, 32> digest = hash.final();

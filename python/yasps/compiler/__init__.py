@@ -11,6 +11,7 @@ on no minimisation target has no derivatives) as
 
 from __future__ import annotations
 
+from .._native import has_compiler
 from .errors import MissingAttributeError, invocations, native, translated
 from ..frontend.errors import IRError
 
@@ -18,9 +19,16 @@ from ..frontend.errors import IRError
 def verify(ir: str, name: str = "<yasps>") -> None:
     """Parses and verifies yasps IR with the C++ dialect.
 
+    Without the compiler (a runtime-only installation) nothing is checked
+    here: such an installation runs only scenes whose kernels were compiled
+    ahead from verified IR (``yasps.compiler.store``), and any other fails
+    at its first kernel with KernelNotCompiledError.
+
     Raises:
         IRError: with the compiler's diagnostics if the IR is invalid.
     """
+    if not has_compiler():
+        return
     with translated("verify"):
         native().verify(ir, name)
 

@@ -9,7 +9,9 @@ from typing import Any, Callable, Dict, List, Optional, Sequence, Tuple
 import numpy as np
 
 from .. import config
+from .._native import has_compiler
 from ..ir import text_and_locations
+from . import store
 from .errors import native, translated
 from .params import KernelArgument, Param, decode_params, kernel_arguments
 
@@ -72,7 +74,7 @@ def kernels_compiled() -> int:
     """How many CPU kernels this process has compiled to machine code: each
     kernel once, whichever requests share it (loads from the memory and
     disk caches are not counted)."""
-    return native().cpu_kernels_compiled()
+    return native().cpu_kernels_compiled() if has_compiler() else 0
 
 
 #: Requests of this process that parsed and lowered their scene.
@@ -105,7 +107,7 @@ _entries: Dict[int, Dict[str, Tuple[int, str]]] = {}
 
 def _key(ir: str, paths: Sequence[str], pipeline: str) -> tuple:
     return (ir, tuple(paths), pipeline, config.cache_dir, config.opt_level,
-            config.simd_lanes)
+            config.simd_lanes, config.cpu_target)
 
 
 def compile_cpu(ir: str, paths: Sequence[str], name: str,
@@ -119,14 +121,30 @@ def compile_cpu(ir: str, paths: Sequence[str], name: str,
     key = _key(ir, paths, pipeline)
     library = _libraries.get(key)
     if library is not None:
+        if store.recording() and has_compiler():
+            store.store_cpu(library, text_and_locations(ir)[0], pipeline,
+                            paths)
         return CpuKernels(library, dict(library.stats, from_memory=True,
                                         from_disk=False, lower_seconds=0.0,
                                         codegen_seconds=0.0))
     text, locations = text_and_locations(ir)
-    with translated("compile_cpu"):
-        library = native().compile_cpu(
-            text, list(paths), config.cache_dir or "", config.opt_level,
-            name, pipeline, config.simd_lanes, locations, on_kernel)
+    if not has_compiler():
+        # A runtime-only installation: kernels compiled ahead, or a
+        # KernelNotCompiledError naming the first that was not.
+        library = store.load_cpu(text, pipeline, paths, name)
+    else:
+        with translated("compile_cpu"):
+            library = native().compile_cpu(
+                text, list(paths), config.cache_dir or "", config.opt_level,
+                name, pipeline, config.simd_lanes, locations, on_kernel,
+                config.cpu_target or "")
+        if store.recording():
+            store.store_cpu(library, text, pipeline, paths)
+            chips = store.mirrored_chips()
+            if chips:
+                from .gpu import compile_ir
+                compile_ir(ir, paths, name, pipeline, chips=chips,
+                           keep_ptx=False)
     _libraries[key] = library
     stats = dict(library.stats)
     if not stats.get("from_source"):

@@ -18,9 +18,12 @@ from dataclasses import dataclass, field
 from typing import Dict, List, Optional, Sequence, Tuple
 
 from .. import config
+from .._native import has_compiler
 from ..ir import kernel_ir, text_and_locations
+from . import store
 from .errors import native, translated
-from .params import KernelArgument, Param, attribute_params, kernel_arguments
+from .params import (KernelArgument, Param, attribute_param_records,
+                     attribute_params, kernel_arguments)
 from .pipelines import differentiation_pipeline
 from .specs import scene_kernel_paths
 from ..frontend.errors import NameLookupError
@@ -97,16 +100,57 @@ def compile_ir(ir: str, paths: Sequence[str], name: str, pipeline: str = "",
                keep_ptx: bool = True) -> GpuKernels:
     """``compile_scene`` for IR that is already emitted (``name`` labels
     diagnostics)."""
+    text, locations = text_and_locations(ir)
+    if not has_compiler():
+        return _stored(ir, text, paths, name, pipeline)
     with translated("compile_gpu"):
-        text, locations = text_and_locations(ir)
         library = native().compile_gpu(text, list(paths), list(chips),
                                        keep_ptx, config.cache_dir or "",
                                        name, pipeline, locations)
-    kernels = [GpuKernel(k["attribute"], k["name"], k["threads_per_block"],
-                         kernel_arguments(k["arguments"]),
-                         [tuple(p) for p in k["launch_params"]],
-                         k["rows"], k["cols"], k["projection"])
-               for k in library.kernels]
+    if store.recording():
+        params = [native_params(ir, pipeline, k["attribute"], name)
+                  for k in library.kernels]
+        store.store_gpu(library, text, pipeline, params)
+    kernels = [_kernel(k) for k in library.kernels]
     binaries = {(chip, fmt): data for chip, fmt, data in library.binaries}
     return GpuKernels(kernels, binaries, dict(library.stats),
                       (ir, pipeline, name))
+
+
+def _kernel(fields: dict) -> GpuKernel:
+    """A GpuKernel from the bindings' dict of a kernel (or a stored one)."""
+    return GpuKernel(fields["attribute"], fields["name"],
+                     fields["threads_per_block"],
+                     kernel_arguments(fields["arguments"]),
+                     [tuple(p) for p in fields["launch_params"]],
+                     fields["rows"], fields["cols"], fields["projection"])
+
+
+def native_params(ir: str, pipeline: str, path: str, name: str
+                  ) -> List[List[str]]:
+    """The parameter records of a kernel as the compiler gives them (for
+    the store): empty where the pipeline gives the attribute none."""
+    return attribute_param_records(ir, pipeline, [path], name)[0]
+
+
+def _stored(ir: str, text: str, paths: Sequence[str], name: str,
+            pipeline: str) -> GpuKernels:
+    """The kernels of ``paths`` from the kernel store (no compiler here):
+    one set over the stored libraries that hold them."""
+    found = store.load_gpu(text, pipeline, list(dict.fromkeys(paths)), name)
+    by_library: Dict[str, GpuKernels] = {}
+    for record in found:
+        library = by_library.get(record.library)
+        if library is None:
+            library = by_library[record.library] = GpuKernels(
+                [], store.gpu_binaries(record.library),
+                {"from_disk": True, "from_store": True,
+                 "key": record.library}, (ir, pipeline, name))
+        library.kernels.append(_kernel(record.fields))
+    if len(by_library) == 1:
+        return next(iter(by_library.values()))
+    return GpuKernels([k for lib in by_library.values() for k in lib.kernels],
+                      {}, {"from_disk": True, "from_store": True},
+                      (ir, pipeline, name),
+                      {k.attribute: lib for lib in by_library.values()
+                       for k in lib.kernels})

@@ -4,6 +4,7 @@ This module is the one decoder of the bindings' records."""
 
 from __future__ import annotations
 
+import enum
 import hashlib
 import json
 import os
@@ -12,33 +13,45 @@ from pathlib import Path
 from typing import Any, List, Optional, Sequence, Tuple, Union
 
 from .. import config
+from .._native import has_compiler
 from ..ir import text_and_locations
+from . import store
 from .errors import native, translated
 from ..frontend.errors import ArgumentError
 
-#: Kinds of kernel arguments, the dialect's enum as the bindings give it
-#: (``KernelArgKind``): ``attr`` (a stored attribute's values), ``conn``
-#: (a connectivity's indices), ``offsets`` (a union's member offsets),
-#: ``dof_offsets`` (the targets' first DoFs) and ``out`` (the output).
-ArgumentKind: Any = native().KernelArgKind
+class ArgumentKind(enum.Enum):
+    """Kinds of kernel arguments: the dialect's ``KernelArgKind``, by the
+    names the bindings give its values. Defined here, not taken from the
+    compiler's bindings, so that kernels compiled ahead of time
+    (``yasps.compiler.store``) are described without the compiler."""
+    out = "out"                  #: the output
+    attr = "attr"                #: a stored attribute's values
+    conn = "conn"                #: a connectivity's indices
+    offsets = "offsets"          #: a union's member offsets
+    dof_offsets = "dof_offsets"  #: the targets' first DoFs
 
 
 @dataclass(frozen=True)
 class KernelArgument:
     """One buffer a kernel reads or writes, in launch order."""
-    kind: Any  #: an ArgumentKind
+    kind: ArgumentKind
     path: str  #: scene-relative symbol it comes from ("" for dof_offsets/out)
 
 
+def argument_kind(kind: Any) -> ArgumentKind:
+    """The ArgumentKind of a bindings' ``KernelArgKind`` value or of its
+    name (as a stored kernel records it)."""
+    name = kind if isinstance(kind, str) else getattr(kind, "name", None)
+    try:
+        return ArgumentKind(name)
+    except ValueError:
+        raise ArgumentError(f"unknown kernel argument kind {kind!r}") from None
+
+
 def kernel_arguments(record: Sequence[Tuple[Any, str]]) -> List[KernelArgument]:
-    """The typed arguments of a kernel from the bindings' (kind, path)
-    pairs, their kinds ArgumentKind values."""
-    out = []
-    for kind, path in record:
-        if not isinstance(kind, ArgumentKind):
-            raise ArgumentError(f"unknown kernel argument kind {kind!r}")
-        out.append(KernelArgument(kind, path))
-    return out
+    """The typed arguments of a kernel from (kind, path) pairs, each kind a
+    bindings' ``KernelArgKind`` or its name."""
+    return [KernelArgument(argument_kind(kind), path) for kind, path in record]
 
 
 @dataclass(frozen=True)
@@ -102,18 +115,33 @@ def _record_path(ir: str, pipeline: str, paths: Sequence[str]
     return Path(config.cache_dir) / f"{key}.params.json"
 
 
-def attribute_params(ir: str, pipeline: str, paths: Sequence[str],
-                     name: str) -> List[List[Param]]:
-    """The local parameter groups of each of ``paths`` in the scene ``ir``
-    (a ``kernel_ir``) after ``pipeline``; an empty list for an attribute
-    without them. Answers are kept on disk, so that a warm start parses
-    nothing; the compiler keeps the scene after the pipeline for the kernel
-    requests that follow."""
+def attribute_param_records(ir: str, pipeline: str, paths: Sequence[str],
+                            name: str) -> List[List[List[str]]]:
+    """The bindings' records of ``attribute_params``: for a runtime-only
+    installation, from the kernel store."""
     text, locations = text_and_locations(ir)
+    if not has_compiler():
+        found = []
+        for path in paths:
+            stored = store.stored_params(text, pipeline, path)
+            if stored is None:
+                raise store.missing("", path, name)
+            found.append(stored)
+        return found
+    records = _native_param_records(text, locations, pipeline, paths, name)
+    if store.recording():
+        store.store_params(text, pipeline, paths, records)
+    return records
+
+
+def _native_param_records(text: str, locations: str, pipeline: str,
+                          paths: Sequence[str],
+                          name: str) -> List[List[List[str]]]:
+    """The compiler's answer, kept on disk by the request."""
     record = _record_path(text, pipeline, paths)
     if record is not None and record.exists():
         try:
-            return [decode_params(r) for r in json.loads(record.read_text())]
+            return json.loads(record.read_text())
         except (OSError, ValueError, TypeError):
             pass  # a damaged record is made again
     with translated("attribute_params"):
@@ -124,4 +152,15 @@ def attribute_params(ir: str, pipeline: str, paths: Sequence[str],
         temporary = record.with_suffix(f".tmp.{os.getpid()}")
         temporary.write_text(json.dumps(records))
         os.replace(temporary, record)
-    return [decode_params(r) for r in records]
+    return records
+
+
+def attribute_params(ir: str, pipeline: str, paths: Sequence[str],
+                     name: str) -> List[List[Param]]:
+    """The local parameter groups of each of ``paths`` in the scene ``ir``
+    (a ``kernel_ir``) after ``pipeline``; an empty list for an attribute
+    without them. Answers are kept on disk, so that a warm start parses
+    nothing; the compiler keeps the scene after the pipeline for the kernel
+    requests that follow."""
+    return [[decode_param(fields) for fields in r]
+            for r in attribute_param_records(ir, pipeline, paths, name)]

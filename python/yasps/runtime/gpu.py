@@ -31,7 +31,47 @@ from .inputs import host_input, source_of
 from .native import native
 
 
-class GpuSession:
+class GpuKernelCache:
+    """The GPU kernels of this process for some chips, each compiled once:
+    a request compiles, in one module, only the kernels no earlier request
+    of the same IR and pipeline compiled, and the set it returns refers to
+    the libraries that hold the others (``GpuKernels.library``)."""
+
+    def __init__(self, chips: Sequence[str], keep_ptx: bool = False):
+        self.chips = tuple(chips)
+        self.keep_ptx = keep_ptx
+        self._libraries: Dict[Tuple[str, Tuple[str, ...], str],
+                              GpuKernels] = {}
+        #: the compiled library of each kernel, by (IR, pipeline, path)
+        self._library_of: Dict[Tuple[str, str, str], GpuKernels] = {}
+
+    def kernels(self, ir: str, paths, name: str,
+                pipeline: str = "") -> GpuKernels:
+        """The kernels of ``paths`` (one path or a list)."""
+        paths = (paths,) if isinstance(paths, str) else tuple(paths)
+        key = (ir, paths, pipeline)
+        if key in self._libraries:
+            return self._libraries[key]
+        missing = [p for p in dict.fromkeys(paths)
+                   if (ir, pipeline, p) not in self._library_of]
+        if missing:
+            library = compile_ir(ir, missing, name, pipeline,
+                                 chips=self.chips, keep_ptx=self.keep_ptx)
+            for kernel in library.kernels:
+                self._library_of[(ir, pipeline, kernel.attribute)] = \
+                    library.library(kernel.attribute)
+            stats = dict(library.stats, from_memory=False)
+        else:
+            stats = {"from_memory": True, "from_disk": False}
+        libraries = {p: self._library_of[(ir, pipeline, p)] for p in paths}
+        gathered = GpuKernels([libraries[p].kernel(p) for p in
+                               dict.fromkeys(paths)], {}, stats,
+                              (ir, pipeline, name), libraries)
+        self._libraries[key] = gathered
+        return gathered
+
+
+class GpuSession(GpuKernelCache):
     """The device, its modules and the device copies of stored values."""
 
     def __init__(self, ordinal: int = 0):
@@ -43,9 +83,7 @@ class GpuSession:
         #: the test stand-in driver, which runs host images of the kernels
         #: (yasps/Runtime/Gpu/HostImage.h)
         self.target = "host" if status.host_images else self.chip
-        self._libraries: Dict[Tuple[str, str, str], GpuKernels] = {}
-        #: the compiled library of each kernel, by (IR, pipeline, path)
-        self._library_of: Dict[Tuple[str, str, str], GpuKernels] = {}
+        super().__init__((self.target,))
         # Loaded modules, by their library's stats' "key" (else its id).
         self._modules: Dict[object, Any] = {}
         # (kind, path) -> (what the copy was made from, device buffer, and
@@ -58,34 +96,6 @@ class GpuSession:
         self._outputs: Dict[object, Any] = {}
         #: what the driver raises (an allocation that fails, a bad launch)
         self.driver_error = self._native.CudaError
-
-    def kernels(self, ir: str, paths, name: str,
-                pipeline: str = "") -> GpuKernels:
-        """The kernels of ``paths`` (one path or a list) for this device.
-        Each kernel is compiled once per process: a request compiles, in
-        one module, only the kernels no earlier request of the same IR and
-        pipeline compiled, and the set it returns refers to the libraries
-        that hold the others (``GpuKernels.library``)."""
-        paths = (paths,) if isinstance(paths, str) else tuple(paths)
-        key = (ir, paths, pipeline)
-        if key in self._libraries:
-            return self._libraries[key]
-        missing = [p for p in dict.fromkeys(paths)
-                   if (ir, pipeline, p) not in self._library_of]
-        if missing:
-            library = compile_ir(ir, missing, name, pipeline,
-                                 chips=(self.target,), keep_ptx=False)
-            for kernel in library.kernels:
-                self._library_of[(ir, pipeline, kernel.attribute)] = library
-            stats = dict(library.stats, from_memory=False)
-        else:
-            stats = {"from_memory": True, "from_disk": False}
-        libraries = {p: self._library_of[(ir, pipeline, p)] for p in paths}
-        gathered = GpuKernels([libraries[p].kernel(p) for p in
-                               dict.fromkeys(paths)], {}, stats,
-                              (ir, pipeline, name), libraries)
-        self._libraries[key] = gathered
-        return gathered
 
     def module(self, kernels: GpuKernels):
         """The loaded module of a library (the cubin or PTX that fits)."""
@@ -168,8 +178,14 @@ class GpuBackend:
     #: that setup moves to the device and the choice has a device model.
     chooses_preconditioner = False
 
-    def __init__(self, host: CpuBackend):
+    def __init__(self, host: CpuBackend,
+                 chips: Optional[Sequence[str]] = None):
         self._host = host
+        #: kernels compiled ahead for these chips, on a machine that need
+        #: not have a GPU (``yasps.compile(scene, backend="gpu",
+        #: chips=...)``): such a backend compiles and runs nothing else
+        self._ahead = GpuKernelCache(chips, keep_ptx=True) \
+            if chips is not None else None
         # The GpuSystem mirroring each scene's host system, made once per
         # static structure: scene -> (host system, GpuSystem).
         self._systems: "weakref.WeakKeyDictionary" = weakref.WeakKeyDictionary()
@@ -189,7 +205,8 @@ class GpuBackend:
 
     def compile(self, ir: str, paths: Sequence[str], name: str,
                 pipeline: str = "") -> GpuKernels:
-        return session().kernels(ir, paths, name, pipeline)
+        cache = self._ahead if self._ahead is not None else session()
+        return cache.kernels(ir, paths, name, pipeline)
 
     def compile_ahead(self, requests: Sequence[KernelRequest],
                       progress: Callable[[int], None]) -> int:

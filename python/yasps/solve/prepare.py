@@ -13,14 +13,18 @@ from __future__ import annotations
 
 import sys
 import time
+from contextlib import nullcontext
 from dataclasses import dataclass
-from typing import Any, Optional, Sequence
+from typing import Any, Optional, Sequence, Union
 
+from ..compiler import store as kernel_store
 from ..compiler.specs import KernelRequest, grouped_requests
+from ..errors import ArgumentError
 from ..frontend.attribute import Attribute
 from ..frontend.errors import SceneError
 from ..frontend.scene import Scene
-from ..runtime import Backend, current
+from ..runtime import (Backend, GpuBackend, cpu_backend, current,
+                       gpu_backend)
 from ..runtime.evaluate import compute_request
 from .derivatives import assembly_requests, projector_requests
 
@@ -55,22 +59,65 @@ def _check_also(scene: Scene, also: Sequence[Attribute]) -> None:
                              f"scene '{scene.name}'")
 
 
+def _backend(backend: Union[None, str, Backend],
+             chips: Optional[Sequence[str]]) -> Backend:
+    """The backend ``compile_scene`` compiles for."""
+    if chips is not None:
+        if backend != "gpu":
+            raise ArgumentError("yasps.compile: chips=... compiles GPU "
+                                "kernels ahead; pass backend='gpu' with it")
+        if isinstance(chips, str) or not chips:
+            raise ArgumentError("yasps.compile: chips must be a non-empty "
+                                "list of compute capabilities such as "
+                                f"['sm_90'], got {chips!r}")
+        return GpuBackend(cpu_backend(), chips=list(chips))
+    if backend is None:
+        return current()
+    if backend == "cpu":
+        return cpu_backend()
+    if backend == "gpu":
+        return gpu_backend()
+    if isinstance(backend, str):
+        raise ArgumentError("yasps.compile: backend must be 'cpu', 'gpu' or "
+                            f"a backend object, got {backend!r}")
+    return backend
+
+
 def compile_scene(scene: Scene, also: Sequence[Attribute] = (),
                   progress: bool = True,
-                  backend: Optional[Backend] = None,
-                  contact: Any = None) -> CompileSummary:
+                  backend: Union[None, str, Backend] = None,
+                  contact: Any = None, store: bool = False,
+                  chips: Optional[Sequence[str]] = None) -> CompileSummary:
     """Compiles (or loads from the caches) every kernel that evaluating
     ``scene``'s energy and assembling its Newton system need (progressive
     projection's per-size projections included), and those of the
     attributes ``also`` (world positions, say) and of ``contact`` (a
     :class:`yasps.contact.Contact`: its force queries), on ``backend``
-    (default: the current one). After it, stepping the scene makes no
-    compiler request. With ``progress``, a progress bar over kernels while
-    it works and a summary line on stderr when anything was compiled.
-    Raises IRError for an energy the compiler cannot differentiate."""
+    ("cpu", "gpu" or a backend object; default: the current one). After
+    it, stepping the scene makes no compiler request. With ``progress``, a
+    progress bar over kernels while it works and a summary line on stderr
+    when anything was compiled.
+
+    Ahead of time: with ``store``, every kernel is also written into the
+    kernel store (:mod:`yasps.compiler.store`), from which an installation
+    without the compiler runs the scene; ``backend="gpu", chips=[...]``
+    compiles the GPU kernels for those compute capabilities ("sm_90";
+    "host" for the stand-in driver of the tests) into the store, with the
+    CPU kernels the GPU backend's host side needs, on a machine that needs
+    no GPU. Raises IRError for an energy the compiler cannot
+    differentiate."""
     start = time.perf_counter()
     _check_also(scene, also)
-    backend = backend or current()
+    backend = _backend(backend, chips)
+    recording = kernel_store.storing() if store or chips is not None \
+        else nullcontext()
+    with recording:
+        return _compile(scene, also, progress, backend, contact, start)
+
+
+def _compile(scene: Scene, also: Sequence[Attribute], progress: bool,
+             backend: Backend, contact: Any,
+             start: float) -> CompileSummary:
     # kernel_ir keeps the scene's IR: the named attributes' requests share
     # one emission.
     values = [compute_request(a) for a in list(scene.energies) + list(also)]

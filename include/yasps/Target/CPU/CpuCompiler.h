@@ -70,6 +70,10 @@ struct CpuCompileOptions {
   /// {lanes}); 0 picks the host's vector width in doubles (8 with AVX-512,
   /// else 4), 1 evaluates one instance at a time.
   int64_t lanes = 0;
+  /// The CPU the kernels are for, an LLVM CPU name ("x86-64-v3" for any
+  /// x86 machine with AVX2 and FMA), for kernels carried to other machines
+  /// (the kernel store); empty: this host, with every feature it has.
+  std::string targetCpu;
   /// Called with each kernel's attribute path once its machine code is
   /// made (not for kernels found in a cache), from the thread that made it
   /// and one call at a time: for progress shown to users. No part of any
@@ -83,6 +87,10 @@ int64_t cpuKernelsCompiled();
 
 /// The number of f64 lanes in the host's widest vector registers.
 int64_t hostDoubleLanes();
+
+/// The number of f64 lanes in the widest vector registers of `cpu` (an
+/// LLVM CPU name; empty: the host).
+int64_t doubleLanesOf(llvm::StringRef cpu);
 
 /// Registers the dialects, interfaces and translations the CPU pipeline uses.
 void registerCpuCompilerDialects(DialectRegistry &registry);
