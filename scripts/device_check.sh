@@ -124,6 +124,40 @@ fi
 step "one Newton iteration of the bunny, in stages" newton.log \
   "$kit/yasps-newton-bench" "$kit/newton"
 
+# Whole simulations: the runtime-only build of the Python package (no LLVM
+# or MLIR) from the kit's sources, the wheels this Python lacks, then the
+# kit's scenes from its kernel store on the GPU and, beside them, on the
+# CPU (bench/device_sim.py). A dry run takes the demo's first frames on
+# the stand-in driver and this machine's own packages.
+work=${WORK_DIR:-$(mktemp -d)}
+python=$(command -v python3)
+step "runtime-only build (no LLVM or MLIR)" runtime_build.log \
+  bash -c "cmake -S '$kit/src' -B '$work/build' -G Ninja \
+    -DYASPS_RUNTIME_ONLY=ON -DPython_EXECUTABLE='$python' >/dev/null &&
+    cmake --build '$work/build'"
+if [ $dry = 0 ] && ls "$kit"/wheels/*.whl >/dev/null 2>&1; then
+  step "wheels the machine lacks" wheels.log \
+    "$python" -m pip install --no-index --no-deps --target "$work/site" \
+    "$kit"/wheels/*.whl
+fi
+sim_frames=${SIM_FRAMES:-100}
+sim_limit=${SIM_LIMIT:-60}
+sim_options=
+# A dry run solves tightly, so that the stand-in's positions compare with
+# the CPU's to round-off (at the default tolerances the two backends' PCG
+# sums in other orders take Newton to points a tolerance apart).
+[ $dry = 1 ] && sim_frames=${SIM_FRAMES:-2} && sim_options=--tight
+scenes=$(cat "$kit/store/scenes.txt" 2>/dev/null || echo demo)
+# Each scene runs twice (GPU, CPU), each at most sim_limit seconds of
+# stepping plus its start.
+limit=$(( $(echo $scenes | wc -w) * 2 * (sim_limit + 120) ))
+step "whole simulations (GPU beside CPU)" sim.log \
+  env YASPS_BUILD_DIR="$work/build" YASPS_DATA_DIR="$kit" \
+  PYTHONPATH="$kit/src/python:$work/site" \
+  "$python" "$kit/src/bench/device_sim.py" run "$kit/store" \
+  --scenes $scenes --frames "$sim_frames" --limit "$sim_limit" $sim_options
+limit=${STEP_LIMIT:-150}
+
 sanitizer=$(command -v compute-sanitizer ||
   ls /usr/local/cuda/bin/compute-sanitizer 2>/dev/null)
 if [ $dry = 1 ]; then
@@ -148,6 +182,7 @@ fi
   grep -hE "ms|GB/s|within|iterations|FAILED|differs" \
     "$out/spmv.log" "$out/cusparse.log" "$out/kernels.log" \
     "$out/peers.log" "$out/newton.log" 2>/dev/null
+  grep -hE "^sim |^  [0-9]+ Newton iterations" "$out/sim.log" 2>/dev/null
   grep -hE "^\[  (PASSED|FAILED) |ERROR SUMMARY|RACECHECK SUMMARY" \
     "$out"/gtest.log "$out"/racecheck.log "$out"/synccheck.log \
     "$out"/memcheck.log 2>/dev/null

@@ -5,6 +5,7 @@ Each scene script builds its scene in its own file; this holds no physics."""
 from __future__ import annotations
 
 import argparse
+import os
 import sys
 import time
 from pathlib import Path
@@ -21,7 +22,9 @@ from yasps.sim import (FreeVertices, RunSummary, add_cloth,  # noqa: E402,F401
                        add_free_vertices, cloth_corners, cloth_grid,
                        lame, lumped_masses, read_tet_mesh, simulate)
 
-DATA = REPO.parent / "shared" / "data"
+#: The meshes: ../shared/data, or the folder $YASPS_DATA_DIR names (a GPU
+#: machine's device kit carries them elsewhere).
+DATA = Path(os.environ.get("YASPS_DATA_DIR") or REPO.parent / "shared" / "data")
 DT = 0.01
 GRAVITY = (0.0, 0.0, -9.81)
 

@@ -103,6 +103,18 @@ def compile_ir(ir: str, paths: Sequence[str], name: str, pipeline: str = "",
     text, locations = text_and_locations(ir)
     if not has_compiler():
         return _stored(ir, text, paths, name, pipeline)
+    if store.recording():
+        # A store holds each kernel once: those an earlier request of the
+        # recording stored for these chips are read back, not compiled.
+        unique = list(dict.fromkeys(paths))
+        done = [p for p in unique if store.has_gpu(text, pipeline, p, chips)]
+        if done:
+            todo = [p for p in unique if p not in done]
+            parts = [_stored(ir, text, done, name, pipeline)]
+            if todo:
+                parts.append(compile_ir(ir, todo, name, pipeline, chips,
+                                        keep_ptx))
+            return _merged(parts, (ir, pipeline, name))
     with translated("compile_gpu"):
         library = native().compile_gpu(text, list(paths), list(chips),
                                        keep_ptx, config.cache_dir or "",
@@ -131,6 +143,17 @@ def native_params(ir: str, pipeline: str, path: str, name: str
     """The parameter records of a kernel as the compiler gives them (for
     the store): empty where the pipeline gives the attribute none."""
     return attribute_param_records(ir, pipeline, [path], name)[0]
+
+
+def _merged(parts: Sequence[GpuKernels],
+            source: Tuple[str, str, str]) -> GpuKernels:
+    """One set of the kernels of several sets (each kernel's binaries stay
+    in the library that holds them)."""
+    libraries = {k.attribute: part.library(k.attribute)
+                 for part in parts for k in part.kernels}
+    return GpuKernels([k for part in parts for k in part.kernels], {},
+                      {"from_disk": all(p.stats.get("from_disk")
+                                        for p in parts)}, source, libraries)
 
 
 def _stored(ir: str, text: str, paths: Sequence[str], name: str,

@@ -366,6 +366,22 @@ def load_gpu(text: str, pipeline: str, paths: Sequence[str],
     return found
 
 
+def has_gpu(text: str, pipeline: str, path: str,
+            chips: Sequence[str]) -> bool:
+    """Whether the store holds the GPU kernel of ``path`` for every one of
+    ``chips``."""
+    record = _read_record(gpu_key(text, pipeline, path))
+    folder = store_dir()
+    if record is None or folder is None:
+        return False
+    try:
+        formats = json.loads((folder / "libraries" /
+                              f"{record['library']}.json").read_text())
+    except (OSError, ValueError):
+        return False
+    return set(chips) <= {chip for chip, _ in formats}
+
+
 def gpu_binaries(library: str) -> Dict[Tuple[str, str], bytes]:
     """The binaries of a stored GPU library, by (chip, format)."""
     folder = store_dir()

@@ -184,7 +184,7 @@ class GpuBackend:
         #: kernels compiled ahead for these chips, on a machine that need
         #: not have a GPU (``yasps.compile(scene, backend="gpu",
         #: chips=...)``): such a backend compiles and runs nothing else
-        self._ahead = GpuKernelCache(chips, keep_ptx=True) \
+        self._ahead = GpuKernelCache(chips) \
             if chips is not None else None
         # The GpuSystem mirroring each scene's host system, made once per
         # static structure: scene -> (host system, GpuSystem).
