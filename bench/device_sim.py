@@ -29,13 +29,12 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
-import json
 import os
 import subprocess
 import sys
 import time
 from pathlib import Path
-from typing import Dict, List, Optional, Tuple
+from typing import Dict, List, Tuple
 
 import numpy as np
 
@@ -43,6 +42,8 @@ import benchlib
 
 benchlib.use_this_checkout()
 sys.path.insert(0, str(benchlib.ROOT / "examples"))
+
+from benchlib.results import Results, add_json_argument  # noqa: E402
 
 #: The scenes: the README demo, and the bunny on the pinned cloth at the
 #: sizes of the scale series (bench/benchlib/stark_scenes.py).
@@ -208,7 +209,7 @@ def details(gpu: Dict[str, np.ndarray]) -> str:
 
 
 def run(store: Path, scenes: List[str], frames: int, limit: float,
-        tight: bool, json_out: Optional[Path]) -> int:
+        tight: bool, json_out: Path) -> int:
     folder = Path(os.environ.get("TMPDIR", "/tmp")) / "yasps-device-sim"
     folder.mkdir(parents=True, exist_ok=True)
     results, failed = {}, 0
@@ -225,8 +226,15 @@ def run(store: Path, scenes: List[str], frames: int, limit: float,
             print(f"  CPU run: {cpu['error']}", flush=True)
         failed += "FAILED" in line or bool(figures.get("intersecting"))
         results[name] = figures
-    if json_out is not None:
-        json_out.write_text(json.dumps(results, indent=2))
+    table = Results("device_sim")
+    table.table("sims", ["scene", "frames", "GPU s/frame", "CPU s/frame",
+                         "Newton/frame", "CG/Newton", "positions within",
+                         "intersecting frames"],
+                [[name, f.get("frames"), f.get("seconds_per_frame"),
+                  f.get("cpu_seconds_per_frame"), f.get("newton_per_frame"),
+                  f.get("cg_per_newton"), f.get("positions_gap"),
+                  f.get("intersecting")] for name, f in results.items()])
+    table.write(json_out)
     return 1 if failed else 0
 
 
@@ -249,7 +257,7 @@ def main() -> None:
     r.add_argument("--tight", action="store_true",
                    help="Newton and PCG to tolerances far below the "
                    "defaults, so that the positions compare to ~1e-10")
-    r.add_argument("--json", type=Path)
+    add_json_argument(r, "device_sim")
     o = commands.add_parser("one")
     o.add_argument("scene", choices=SCENES)
     o.add_argument("frames", type=int)

@@ -66,6 +66,15 @@ skipped() {
   printf '%-44s %s\n' "$1" "skipped in a dry run: $2" >>"$summary"
 }
 
+# in_kit FILE NAME: whether the kit holds FILE (scripts/device_kit.sh's
+# KIT_PARTS); if not, the step NAME is recorded as not in the kit.
+in_kit() {
+  [ -e "$kit/$1" ] && return 0
+  echo "== $2: not in the kit"
+  printf '%-44s %s\n' "$2" "not in the kit" >>"$summary"
+  return 1
+}
+
 if [ $dry = 1 ]; then
   # The stand-in plays the real driver too: every "ThisMachine" test runs.
   export YASPS_CUDA_LIBRARY="$kit/libYaspsFakeCuda.so"
@@ -83,46 +92,48 @@ if [ $dry = 0 ]; then
   cat "$out/gpu.log" >>"$summary"
 fi
 
-step "runtime unit tests (stand-in and real driver)" gtest.log \
-  env YASPS_FAKE_CUDA="$kit/libYaspsFakeCuda.so" "$kit/YaspsRuntimeTests"
-# The real-driver instances must run: a skip means the GPU was not used.
-skipped=$(grep -cE "^\[  SKIPPED \] .*ThisMachine" "$out/gtest.log")
-if [ "$skipped" != 0 ]; then
-  printf '%-44s %s\n' "real-driver tests skipped" \
-    "FAILED ($skipped skipped)" >>"$summary"
-  status=1
+if in_kit YaspsRuntimeTests "runtime unit tests (stand-in and real driver)"; then
+  step "runtime unit tests (stand-in and real driver)" gtest.log \
+    env YASPS_FAKE_CUDA="$kit/libYaspsFakeCuda.so" "$kit/YaspsRuntimeTests"
+  # The real-driver instances must run: a skip means the GPU was not used.
+  skipped=$(grep -cE "^\[  SKIPPED \] .*ThisMachine" "$out/gtest.log")
+  if [ "$skipped" != 0 ]; then
+    printf '%-44s %s\n' "real-driver tests skipped" \
+      "FAILED ($skipped skipped)" >>"$summary"
+    status=1
+  fi
+
+  step "SpMV, assembly and PCG on the bunny" spmv.log \
+    "$kit/yasps-spmv-bench" "$kit/bunny-19k.msh" --repeat 100 \
+    --export /tmp/yasps-bunny-hessian
+  ms=$(awk '/GPU SpMV/ {print $3}' "$out/spmv.log")
+
+  # The stand-in runs the kernels' host images one thread after another:
+  # their values are checked as on a GPU, their timings mean nothing.
+  kernel_repeat=100
+  if [ $dry = 1 ]; then
+    kernel_repeat=1
+    skipped "cuSPARSE on the same matrix" "cuSPARSE needs a GPU"
+  else
+    step "cuSPARSE on the same matrix" cusparse.log \
+      python3 "$root/bench/gpu_cusparse.py" /tmp/yasps-bunny-hessian \
+      ${ms:+--yasps-ms "$ms"}
+  fi
+
+  step "stable Neo-Hookean kernels (yasps)" kernels.log \
+    "$kit/yasps-kernel-bench" "$kit/snh" --repeat "$kernel_repeat"
+
+  if [ $dry = 1 ]; then
+    skipped "stable Neo-Hookean with PyTorch and JAX" "the peers need a GPU"
+  else
+    step "stable Neo-Hookean with PyTorch and JAX" peers.log \
+      python3 "$root/bench/gpu_peers.py" "$kit/snh" \
+      --yasps-log "$out/kernels.log"
+  fi
+
+  step "one Newton iteration of the bunny, in stages" newton.log \
+    "$kit/yasps-newton-bench" "$kit/newton"
 fi
-
-step "SpMV, assembly and PCG on the bunny" spmv.log \
-  "$kit/yasps-spmv-bench" "$kit/bunny-19k.msh" --repeat 100 \
-  --export /tmp/yasps-bunny-hessian
-ms=$(awk '/GPU SpMV/ {print $3}' "$out/spmv.log")
-
-# The stand-in runs the kernels' host images one thread after another:
-# their values are checked as on a GPU, their timings mean nothing.
-kernel_repeat=100
-if [ $dry = 1 ]; then
-  kernel_repeat=1
-  skipped "cuSPARSE on the same matrix" "cuSPARSE needs a GPU"
-else
-  step "cuSPARSE on the same matrix" cusparse.log \
-    python3 "$root/bench/gpu_cusparse.py" /tmp/yasps-bunny-hessian \
-    ${ms:+--yasps-ms "$ms"}
-fi
-
-step "stable Neo-Hookean kernels (yasps)" kernels.log \
-  "$kit/yasps-kernel-bench" "$kit/snh" --repeat "$kernel_repeat"
-
-if [ $dry = 1 ]; then
-  skipped "stable Neo-Hookean with PyTorch and JAX" "the peers need a GPU"
-else
-  step "stable Neo-Hookean with PyTorch and JAX" peers.log \
-    python3 "$root/bench/gpu_peers.py" "$kit/snh" \
-    --yasps-log "$out/kernels.log"
-fi
-
-step "one Newton iteration of the bunny, in stages" newton.log \
-  "$kit/yasps-newton-bench" "$kit/newton"
 
 # Whole simulations: the runtime-only build of the Python package (no LLVM
 # or MLIR) from the kit's sources, the wheels this Python lacks, then the
@@ -131,6 +142,7 @@ step "one Newton iteration of the bunny, in stages" newton.log \
 # the stand-in driver and this machine's own packages.
 work=${WORK_DIR:-$(mktemp -d)}
 python=$(command -v python3)
+if in_kit store "whole simulations (GPU beside CPU)"; then
 step "runtime-only build (no LLVM or MLIR)" runtime_build.log \
   bash -c "cmake -S '$kit/src' -B '$work/build' -G Ninja \
     -DYASPS_RUNTIME_ONLY=ON -DPython_EXECUTABLE='$python' >/dev/null &&
@@ -155,13 +167,18 @@ step "whole simulations (GPU beside CPU)" sim.log \
   env YASPS_BUILD_DIR="$work/build" YASPS_DATA_DIR="$kit" \
   PYTHONPATH="$kit/src/python:$work/site" \
   "$python" "$kit/src/bench/device_sim.py" run "$kit/store" \
-  --scenes $scenes --frames "$sim_frames" --limit "$sim_limit" $sim_options
+  --scenes $scenes --frames "$sim_frames" --limit "$sim_limit" $sim_options \
+  --json "$out/sim.json"
 limit=${STEP_LIMIT:-150}
+fi
 
 sanitizer=$(command -v compute-sanitizer ||
   ls /usr/local/cuda/bin/compute-sanitizer 2>/dev/null)
 if [ $dry = 1 ]; then
   skipped "real-driver tests under compute-sanitizer" "it needs a GPU"
+elif [ ! -e "$kit/YaspsRuntimeTests" ]; then
+  printf '%-44s %s\n' "real-driver tests under compute-sanitizer" \
+    "not in the kit" >>"$summary"
 elif [ -n "$sanitizer" ]; then
   # racecheck is the slow one: about 250 s on an H200 (138 s of it in
   # SolvesLikeTheCpu), against 6 s for synccheck and 74 s for memcheck.
@@ -189,6 +206,6 @@ fi
 } >>"$summary"
 echo
 cat "$summary"
-logs=$(cd "$out" && ls *.log 2>/dev/null)
+logs=$(cd "$out" && ls *.log *.json 2>/dev/null)
 tar -czf "$out/logs.tar.gz" -C "$out" $logs && (cd "$out" && rm -f $logs)
 exit $status
