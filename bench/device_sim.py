@@ -239,8 +239,8 @@ def run(store: Path, scenes: List[str], frames: int, limit: float,
 
 
 def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    commands = parser.add_subparsers(dest="command", required=True)
+    cli = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    commands = cli.add_subparsers(dest="command", required=True)
     p = commands.add_parser("prepare", help="compile the scenes' kernels "
                             "into a store (needs the compiler)")
     p.add_argument("store", type=Path)
@@ -248,23 +248,24 @@ def main() -> None:
     p.add_argument("--chips", nargs="+", default=["sm_90"])
     p.add_argument("--cpu", default="x86-64-v3",
                    help="LLVM CPU name of the CPU kernels ('' for this host)")
-    r = commands.add_parser("run", help="run the scenes from a store")
-    r.add_argument("store", type=Path)
-    r.add_argument("--scenes", nargs="+", default=["demo"], choices=SCENES)
-    r.add_argument("--frames", type=int, default=20)
-    r.add_argument("--limit", type=float, default=60.0,
-                   help="seconds of stepping per scene and backend")
-    r.add_argument("--tight", action="store_true",
-                   help="Newton and PCG to tolerances far below the "
-                   "defaults, so that the positions compare to ~1e-10")
-    add_json_argument(r, "device_sim")
+    parser = commands.add_parser("run", help="run the scenes from a store")
+    parser.add_argument("store", type=Path)
+    parser.add_argument("--scenes", nargs="+", default=["demo"],
+                        choices=SCENES)
+    parser.add_argument("--frames", type=int, default=20)
+    parser.add_argument("--limit", type=float, default=60.0,
+                        help="seconds of stepping per scene and backend")
+    parser.add_argument("--tight", action="store_true",
+                        help="Newton and PCG to tolerances far below the "
+                        "defaults, so that the positions compare to ~1e-10")
+    add_json_argument(parser, "device_sim")
     o = commands.add_parser("one")
     o.add_argument("scene", choices=SCENES)
     o.add_argument("frames", type=int)
     o.add_argument("limit", type=float)
     o.add_argument("out", type=Path)
     o.add_argument("--tight", action="store_true")
-    args = parser.parse_args()
+    args = cli.parse_args()
     if args.command == "prepare":
         prepare(args.store.resolve(), args.scenes, args.chips, args.cpu)
     elif args.command == "run":
