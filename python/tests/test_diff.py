@@ -272,7 +272,8 @@ def run_steps(build, record, starts, velocities, steps, change=None):
     return stepper, params, counts
 
 
-def check_run_gradients(build, starts, velocities, steps, checks, rtol=1e-4):
+def check_run_gradients(build, starts, velocities, steps, checks, rtol=1e-4,
+                        loose=None):
     """backward's gradients against central differences of whole runs, the
     dynamic pair counts the same in every perturbed run. A check is
     (parameter name, entry, step) or ("x0" or "v0", target, entry, step).
@@ -280,10 +281,11 @@ def check_run_gradients(build, starts, velocities, steps, checks, rtol=1e-4):
     in a perturbed run, whose solves then differ by their tolerance."""
     with yasps.config.override(preconditioner="block-jacobi"):
         return _check_run_gradients(build, starts, velocities, steps, checks,
-                                    rtol)
+                                    rtol, loose or {})
 
 
-def _check_run_gradients(build, starts, velocities, steps, checks, rtol):
+def _check_run_gradients(build, starts, velocities, steps, checks, rtol,
+                         loose):
     stepper, params, counts = run_steps(build, True, starts, velocities, steps)
     rng = np.random.default_rng(0)
     weights = [rng.normal(size=t.value.shape) for t in stepper.targets]
@@ -324,7 +326,8 @@ def _check_run_gradients(build, starts, velocities, steps, checks, rtol):
             want = (loss(velocities=moved(velocities, k, entry, h)) -
                     loss(velocities=moved(velocities, k, entry, -h))) / (2 * h)
             got = grads.initial_velocities[k].flat[entry]
-        assert got == pytest.approx(want, rel=rtol), (check, got, want)
+        assert got == pytest.approx(want, rel=loose.get(check[0], rtol)), \
+            (check, got, want)
     return grads, params, weights
 
 
@@ -469,10 +472,13 @@ def test_four_bodies_in_one_union_in_contact_match_differences_of_runs():
                                                  velocities, 6, [
         # (The affine body's orthogonality stiffness moves this loss too
         # little for differences to resolve: its gradient is 1e-6.)
-        # mu by 1% of its 2e4: its gradient (2.6e-8) is so small that a
+        # mu by 0.5% of its 2e4: its gradient (2.6e-8) is so small that a
         # step of 20 left the difference of the losses (1e-6) to the
-        # runs' Newton tolerance, which differs with the preconditioner.
-        ("stretch", 0, 2.0), ("mu", 0, 200.0), ("lam", 0, 50.0),
+        # runs' Newton tolerance, which differs with the preconditioner;
+        # by 1% and 2% the differences' truncation showed (1.7e-4 and
+        # 3.8e-4 off on an AMD EPYC machine, whose kernels run 4 SIMD
+        # lanes instead of 8).
+        ("stretch", 0, 2.0), ("mu", 0, 100.0), ("lam", 0, 50.0),
         ("caged mu", 0, 20.0), ("cloth mass", 12, 1e-5),
         ("rest shape", 4, 1e-3),                # a tet's inverse rest edges
         # Positions moved by 1e-5 m, velocities by 1e-4 m/s: by less, the
@@ -481,7 +487,13 @@ def test_four_bodies_in_one_union_in_contact_match_differences_of_runs():
         ("x0", 0, 38, 1e-5),                    # a cloth vertex
         ("v0", 1, 5, 1e-4),                     # the soft box
         ("x0", 2, 4, 1e-5), ("v0", 3, 2, 1e-4),  # A, and t
-        ("x0", 4, 2, 1e-5), ("v0", 4, 23, 1e-4)])  # the cage's corners
+        ("x0", 4, 2, 1e-5), ("v0", 4, 23, 1e-4)],  # the cage's corners
+        # lam's gradient (1.6e-9) moves the loss by 1.6e-7 over the step
+        # of 50 (by 2e-5 over 5e3, where the differences' truncation
+        # shows): on an AMD EPYC machine (kernels in 4 SIMD lanes, not 8)
+        # the runs' round-off left its differences 7.7e-3 off, checked to
+        # 1e-2 here; the chain through lame below checks it too.
+        loose={"lam": 1e-2})
 
     # Young's modulus and Poisson's ratio, and the rest positions, by the
     # chains through lame and through the tets' inverse edges and volumes.

@@ -35,9 +35,11 @@ def test_tetgen_fills_the_sphere_and_keeps_its_surface():
     tv, tt = tetrahedralize(V, F, max_volume=2e-6, method="tetgen")
     volumes = signed_tet_volumes(tv, tt)
     # TetGen's volume bound is a target: most tets meet it, the largest
-    # (at the surface, which it may not split) within twice it.
+    # (at the surface, which it may not split) within about twice it
+    # (2.005x on an AMD EPYC machine, where TetGen meshed the same sphere
+    # a little differently).
     assert volumes.min() > 0 and np.median(volumes) <= 2e-6
-    assert volumes.max() <= 4e-6
+    assert volumes.max() <= 4.2e-6
     assert volumes.sum() == pytest.approx(enclosed_volume(V, F), rel=1e-12)
     assert sorted_triangles(tv, surface_of(tt)) == sorted_triangles(V, F)
     # Inner points were added to meet the volume bound; every vertex is used.
