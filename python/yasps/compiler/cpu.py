@@ -105,6 +105,10 @@ _infos: Dict[int, Dict[str, KernelInfo]] = {}
 _entries: Dict[int, Dict[str, Tuple[int, str]]] = {}
 
 
+#: Requests whose kernels this process has written to the kernel store.
+_recorded: set = set()
+
+
 def _key(ir: str, paths: Sequence[str], pipeline: str) -> tuple:
     return (ir, tuple(paths), pipeline, config.cache_dir, config.opt_level,
             config.simd_lanes, config.cpu_target)
@@ -121,9 +125,12 @@ def compile_cpu(ir: str, paths: Sequence[str], name: str,
     key = _key(ir, paths, pipeline)
     library = _libraries.get(key)
     if library is not None:
-        if store.recording() and has_compiler():
+        if store.recording() and has_compiler() and key not in _recorded:
+            # Once per request: a recording run's Newton iterations ask
+            # for the same kernels again and again.
             store.store_cpu(library, text_and_locations(ir)[0], pipeline,
                             paths)
+            _recorded.add(key)
         return CpuKernels(library, dict(library.stats, from_memory=True,
                                         from_disk=False, lower_seconds=0.0,
                                         codegen_seconds=0.0))
@@ -140,6 +147,7 @@ def compile_cpu(ir: str, paths: Sequence[str], name: str,
                 config.cpu_target or "")
         if store.recording():
             store.store_cpu(library, text, pipeline, paths)
+            _recorded.add(key)
             chips = store.mirrored_chips()
             if chips:
                 from .gpu import compile_ir
