@@ -104,6 +104,8 @@ public:
     spent = 0;
     scopes.clear();
     scopes.emplace_back();
+    gathered.clear();
+    gathered.emplace_back();
   }
 
   bool hasSymbolicZeros() const { return symbolicZeros; }
@@ -286,9 +288,8 @@ private:
     ScalarMatrix out{type.getRows(), type.getCols(), {}};
     out.values.resize(type.getNumElements());
     for (int64_t l = 0; l < arity; ++l) {
-      Value raw =
-          memref::LoadOp::create(b, loc, indices, ValueRange{add(b, base, l)});
-      Value target = arith::IndexCastOp::create(b, loc, b.getIndexType(), raw);
+      Value target = gatheredIndex(b, loc, connectivity, indices, base, index,
+                                   l);
       FailureOr<ScalarMatrix> row = evaluate(b, source, target);
       if (failed(row))
         return failure();
@@ -296,6 +297,26 @@ private:
         out.values[m * arity + l] = scalar;
     }
     return out;
+  }
+
+  /// The l-th instance that `connectivity` connects instance `index` to:
+  /// loaded once per region, so that JOINs of several sources (an
+  /// attribute, its Jacobian, its second Jacobian) through one
+  /// connectivity read one index, and evaluate() finds a source's value
+  /// already computed at it. Without this, each JOIN's own load was a new
+  /// index, and a chain of JOINs of computed attributes (a kinematic tree's
+  /// transforms) re-evaluated every ancestor once per path: 3^depth times.
+  Value gatheredIndex(OpBuilder &b, Location loc, ConnectivityOp connectivity,
+                      Value indices, Value base, Value index, int64_t l) {
+    std::tuple<Operation *, Value, int64_t> key{connectivity, index, l};
+    for (auto &scope : llvm::reverse(gathered))
+      if (auto it = scope.find(key); it != scope.end())
+        return it->second;
+    Value raw =
+        memref::LoadOp::create(b, loc, indices, ValueRange{add(b, base, l)});
+    Value target = arith::IndexCastOp::create(b, loc, b.getIndexType(), raw);
+    gathered.back()[key] = target;
+    return target;
   }
 
   /// Finds the member that `index` falls in and evaluates its attribute.
@@ -337,11 +358,13 @@ private:
       Block *block = branch == 0 ? ifOp.thenBlock() : ifOp.elseBlock();
       OpBuilder inner = OpBuilder::atBlockEnd(block);
       scopes.emplace_back();
+      gathered.emplace_back();
       FailureOr<ScalarMatrix> value =
           branch == 0 ? evaluateMember(inner, member)
                       : chain(inner, loc, type, member + 1, numMembers,
                               offsetOf, evaluateMember, index);
       scopes.pop_back();
+      gathered.pop_back();
       if (failed(value))
         return failure();
       scf::YieldOp::create(inner, loc, value->values);
@@ -363,6 +386,10 @@ private:
   /// Values already computed, per region: an inner region may reuse the
   /// values of enclosing ones but not those of its siblings.
   SmallVector<DenseMap<std::pair<Operation *, Value>, ScalarMatrix>> scopes{1};
+  /// The instances JOINs gathered, per region as `scopes`
+  /// (gatheredIndex).
+  SmallVector<DenseMap<std::tuple<Operation *, Value, int64_t>, Value>>
+      gathered{1};
 };
 
 } // namespace mlir::yasps
