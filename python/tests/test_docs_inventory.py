@@ -10,6 +10,7 @@ import re
 import pytest
 
 import yasps
+import yasps.articulated
 import yasps.contact
 import yasps.diff
 import yasps.sim
@@ -20,7 +21,8 @@ from test_layers import LAYERS
 PYTHON_MD = (REPO / "docs" / "python.md").read_text()
 ARCHITECTURE_MD = (REPO / "docs" / "architecture.md").read_text()
 WORDS = set(re.findall(r"[A-Za-z_][A-Za-z0-9_]*", PYTHON_MD))
-MODULES = [yasps, yasps.sim, yasps.contact, yasps.diff, yasps.sweep]
+MODULES = [yasps, yasps.sim, yasps.contact, yasps.articulated, yasps.diff,
+           yasps.sweep]
 #: Classes users get from the API rather than construct: their
 #: constructors' parameters are not the API.
 NOT_CONSTRUCTED = {"Attribute"}

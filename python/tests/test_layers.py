@@ -1,6 +1,6 @@
 """The package's layers: each module imports only its own layer and those
 before it (frontend -> ir -> compiler -> runtime -> solve -> contact ->
-sim -> diff -> sweep), so the import graph has no cycle, and library code never decides
+sim -> articulated -> diff -> sweep), so the import graph has no cycle, and library code never decides
 what to do by reading an error message's text."""
 
 import ast
@@ -13,7 +13,7 @@ PACKAGE = Path(__file__).resolve().parents[1] / "yasps"
 #: come before every layer (they import no layer), the root's __init__
 #: (which wires the layers together) after all of them.
 LAYERS = ["errors", "deprecation", "config", "_native", "frontend", "ir", "compiler", "runtime",
-          "solve", "contact", "sim", "diff", "sweep"]
+          "solve", "contact", "sim", "articulated", "diff", "sweep"]
 
 
 def module_name(path: Path) -> str:

@@ -27,6 +27,7 @@ from .frontend.errors import (ArgumentError, ArgumentTypeError,
                               LineageError,
                               NameLookupError, SceneError, ShapeError,
                               ValueUpdateError, YaspsError)
+from .errors import ModelFileError
 from .frontend.scene import (Connectivity, Entity, Mesh, Primitive,
                              PrimitiveUnion, Scene, scene)
 from .frontend.services import Services, install
@@ -58,6 +59,7 @@ __all__ = [
     "IndexRangeError", "NameLookupError", "Attribute", "BackendError", "backend", "CompileSummary", "compile",
     "Connectivity", "config",
     "Entity", "IRError", "IllConditionedSolve", "LineageError", "Mesh",
+    "ModelFileError",
     "PrecisionWarning", "Primitive", "PrimitiveUnion", "Scene", "SceneError", "ShapeError", "SolverError",
     "ValueUpdateError", "YaspsDeprecationWarning", "YaspsError", "concat", "constant", "energies",
     "gpu_status", "hstack", "identity", "scene", "select", "vstack", "zeros",

@@ -60,3 +60,9 @@ class KernelNotCompiledError(YaspsError, LookupError):
     """A kernel that a run needs, on an installation without the compiler,
     is not in the kernel store (``yasps.compiler.store``): the message names
     the kernel and how to compile it ahead."""
+
+
+class ModelFileError(YaspsError, ValueError):
+    """A model file (URDF) that cannot be read, or that holds an element
+    yasps does not support: the message names the element and where it
+    is."""
