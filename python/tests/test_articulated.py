@@ -228,3 +228,97 @@ def test_a_swinging_chain_follows_rigid_body_dynamics():
     fine = np.abs(implicit_euler_swing(q0, seconds, 0.005) - exact).max()
     assert 1.6 < coarse / fine < 2.4, (coarse, fine)
     assert fine < 0.05, fine
+
+
+def lever(lower: float, upper: float) -> KinematicTree:
+    """A 0.4 m horizontal bar on a hinge about y, limited to [lower,
+    upper]: gravity turns it down (positive angles)."""
+    bar = Link("bar", 1.0, np.array([0.2, 0.0, 0.0]),
+               np.diag([1e-4, 0.0134, 0.0134]))
+    return KinematicTree({"post": Link("post"), "bar": bar},
+                         [Joint("hinge", "revolute", "post", "bar",
+                                axis=np.array([0.0, 1.0, 0.0]),
+                                lower=lower, upper=upper)])
+
+
+def test_a_joint_limit_is_never_crossed_and_holds_the_bar():
+    from yasps.articulated import add_joint_limits
+    from yasps.articulated.limits import barrier, UNBOUNDED  # noqa: F401
+    scene = yasps.scene("limited_lever")
+    body = add_articulated_body(scene, lever(-0.3, 0.3))
+    scene.addMinimizeTarget(body.targets)
+    limits = add_joint_limits(scene, body)
+    # The energy is IPC's barrier, scaled: value at a distance of dhat / 2.
+    dhat, kappa = limits.dhat[0], limits.stiffness[0]
+    body.set_joint_positions([0.3 - dhat / 2])
+    value = scene.energyDerivatives(limits.energies[0]).value[0]
+    d = dhat / 2
+    assert value == pytest.approx(-kappa * (d - dhat) ** 2 * np.log(d / dhat),
+                                  rel=1e-12)
+    body.set_joint_positions([0.0])
+    stepper = ImplicitEuler(scene, targets=body.targets, dt=0.01,
+                            world=body.world, velocity_tolerance=1e-5)
+    angles = []
+    for _ in range(60):
+        report = stepper.step()
+        assert report.converged
+        angles.append(body.joint_positions()[0])
+    angles = np.array(angles)
+    assert (angles < 0.3).all() and (angles > -0.3).all()
+    # It swung into the limit and rests within dhat of it.
+    assert angles.max() > 0.3 - dhat
+    assert abs(angles[-1] - 0.3) < dhat
+
+
+def test_a_start_outside_the_limits_is_refused():
+    from yasps.articulated import add_joint_limits
+    scene = yasps.scene("outside_lever")
+    body = add_articulated_body(scene, lever(0.1, 0.3))
+    scene.addMinimizeTarget(body.targets)
+    with pytest.raises(yasps.SceneError, match="'hinge'"):
+        add_joint_limits(scene, body)
+
+
+def test_drives_hold_the_chain_with_pinocchios_gravity_torques():
+    """PD drives hold the pendulum chain at its targets under gravity; at
+    rest their torques are the joint-space gravity of Pinocchio's RNEA."""
+    from yasps.articulated import add_joint_drives
+    scene, body, path = built("pendulum_chain")
+    target = np.array([0.3, -0.2, 0.4])
+    body.set_joint_positions(target)
+    drives = add_joint_drives(scene, body, 0.01, stiffness=400.0,
+                              damping=20.0)
+    drives.set_targets(target)
+    stepper = ImplicitEuler(scene, targets=body.targets, dt=0.01,
+                            world=body.world, velocity_tolerance=1e-7)
+    drives.attach(stepper)
+    for _ in range(150):
+        stepper.step()
+    q = body.joint_positions()
+    assert np.abs(q - target).max() < 0.05   # held near the targets
+    ref = Reference(path, body.joint_names)
+    gravity = pin.computeGeneralizedGravity(
+        ref.model, ref.data, ref.configuration(q))[ref.columns]
+    torques = drives.torques()
+    assert np.abs(torques - gravity).max() <= 1e-2 * np.abs(gravity).max()
+
+
+def test_a_scheduled_drive_follows_its_targets_in_time():
+    from yasps.articulated import add_joint_drives
+    scene = yasps.scene("scheduled_lever")
+    body = add_articulated_body(scene, lever(-1.0, 1.0))
+    scene.addMinimizeTarget(body.targets)
+    drives = add_joint_drives(scene, body, 0.01, stiffness=50.0, damping=2.0)
+    drives.schedule = lambda t: {"positions": 0.5 * t, "velocities": 0.5}
+    stepper = ImplicitEuler(scene, targets=body.targets, dt=0.01,
+                            world=body.world, velocity_tolerance=1e-6)
+    drives.attach(stepper)
+    for _ in range(40):
+        stepper.step()
+    assert drives.targets[0] == pytest.approx(0.5 * stepper.time, rel=1e-12)
+    assert drives.target_velocities[0] == pytest.approx(0.5, rel=1e-12)
+    # The bar follows, off its target by the sag under gravity.
+    assert abs(body.joint_positions()[0] - 0.5 * stepper.time) < 0.1
+    with pytest.raises(yasps.SceneError, match="dt = 0.01"):
+        drives.attach(ImplicitEuler(scene, targets=body.targets, dt=0.02,
+                                    world=body.world))

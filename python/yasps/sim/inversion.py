@@ -36,6 +36,7 @@ from typing import Any, Callable, List, Optional, Sequence, Tuple, Union, cast
 import numpy as np
 
 from ..frontend.state import StateKey
+from .target_bounds import target_bounds
 
 #: The fraction of its volume a tet keeps over one step (IPC's CCD keeps a
 #: tenth of a distance likewise).
@@ -206,12 +207,15 @@ def guarded_step_bound(scene, targets: Sequence,
                        ) -> Optional[Callable]:
     """``step_bound`` (None for none) combined with the inversion bounds
     that :func:`guard_inversion` registered on ``scene`` for any of
-    ``targets``; None when there is neither."""
+    ``targets`` and the targets' own bounds
+    (:func:`yasps.sim.target_bounds.guard_target`); None when there is
+    none."""
     bounds = [] if step_bound is None else [step_bound]
     for positions, tets in scene.state.get(_GUARDS) or ():
         for index, target in enumerate(targets):
             if target is positions:
                 bounds.append(inversion_bound(tets, target=index))
+    bounds += target_bounds(scene, targets)
     if not bounds:
         return None
     return bounds[0] if len(bounds) == 1 else combined_bound(*bounds)

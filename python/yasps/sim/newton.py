@@ -527,6 +527,9 @@ class ImplicitEuler:
         self._warned_inverted = False
         #: with ``record``: what backward() reads, from the first step on
         self.record = bool(record)
+        #: called with the stepper at the start of every step, before the
+        #: predictions (a drive's damping reads the coordinates there)
+        self.before_step: List[Callable[["ImplicitEuler"], None]] = []
         self.tape: Optional[Tape] = None
         if checkpoint_every is not None and (
                 int(checkpoint_every) != checkpoint_every or
@@ -730,6 +733,8 @@ class ImplicitEuler:
             self.tape = start_recording(self, self.checkpoint_every)
         if self.contact is not None:
             self.contact.forget_candidates()
+        for hook in self.before_step:
+            hook(self)
         previous = [t.value for t in self.targets]
         for inertia in self.world:
             inertia.predict(self.dt, self.world_gravity)
