@@ -361,3 +361,33 @@ def test_the_gripper_lifts_and_holds_the_soft_cube():
     assert np.ptp(held) < 1e-3                           # slip over the hold
     weight = example.carried_mass(gripping) * 9.81
     assert gripping.drives.torques()[lift] == pytest.approx(weight, rel=1e-2)
+
+
+def test_urdf_geometry_becomes_surfaces_in_the_links_frames(tmp_path):
+    """A collision mesh file (scaled, placed by its origin) and URDF's
+    shapes: their vertices where the file puts them, their faces closed."""
+    import meshio
+    from yasps.articulated import box_surface, cylinder_surface
+    corners = box_surface([1.0, 2.0, 3.0])
+    meshio.write_points_cells(tmp_path / "part.obj", corners.vertices,
+                              [("triangle", corners.faces)])
+    (tmp_path / "robot.urdf").write_text(
+        '<robot name="r"><link name="a"><collision>'
+        '<origin xyz="0.5 0 0" rpy="0 0 1.5707963267948966"/>'
+        '<geometry><mesh filename="part.obj" scale="0.1 0.1 0.1"/>'
+        '</geometry></collision><collision><geometry>'
+        '<cylinder radius="0.2" length="0.4"/></geometry></collision>'
+        '</link></robot>')
+    link = read_urdf(tmp_path / "robot.urdf").links["a"]
+    mesh, cylinder = link.surfaces
+    # Half extents (0.05, 0.1, 0.15) turned a quarter about z, then moved.
+    assert np.allclose(mesh.vertices.min(0), [0.4, -0.05, -0.15])
+    assert np.allclose(mesh.vertices.max(0), [0.6, 0.05, 0.15])
+    expected = cylinder_surface(0.2, 0.4)
+    assert np.allclose(cylinder.vertices, expected.vertices)
+    for surface in (mesh, cylinder):
+        edges = np.sort(np.concatenate([surface.faces[:, [0, 1]],
+                                        surface.faces[:, [1, 2]],
+                                        surface.faces[:, [2, 0]]]), axis=1)
+        _, counts = np.unique(edges, axis=0, return_counts=True)
+        assert (counts == 2).all()   # closed: every edge on two triangles
