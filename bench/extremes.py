@@ -195,6 +195,8 @@ def main(argv: Sequence[str] = ()) -> int:
                         default=ROOT / "docs" / "accuracy",
                         help="where extremes_axes.png and extremes_pairs.png "
                              "go ('' for none)")
+    parser.add_argument("--frames", type=int, default=None,
+                        help="frames per cell (default: each cell's own, 20)")
     parser.add_argument("--guard", action="store_true",
                         help="every soft body's tets with guard_inversion="
                              "True (stable Neo-Hookean made inversion-free); "
@@ -206,6 +208,11 @@ def main(argv: Sequence[str] = ()) -> int:
         else full_map()
     if args.guard:
         plan = [(axis, replace(cell, guard=True)) for axis, cell in plan]
+    if args.frames is not None:
+        if args.frames < 1:
+            parser.error("--frames must be at least 1")
+        plan = [(axis, replace(cell, frames=args.frames))
+                for axis, cell in plan]
     cells = [cell for _, cell in plan]
     began = time.monotonic()
     bar, advance = _progress(len(cells))

@@ -34,9 +34,12 @@ def test_the_reduced_map_ends_in_no_failure(tmp_path):
     stopped naming the cause; intersections are checked by ipctk in the
     bench, apart from yasps' queries."""
     out = tmp_path / "extremes.json"
+    # 10 frames a cell, half the map's 20: the reduced map took 6.5 min of
+    # the test command's cores at 20.
     done = subprocess.run(
         [sys.executable, str(REPO / "bench" / "extremes.py"), "--reduced",
-         "--jobs", "1", "--budget", "300", "--json", str(out)],
+         "--frames", "10", "--jobs", "1", "--budget", "300", "--json",
+         str(out)],
         capture_output=True, text=True, timeout=1500)
     rows = json.loads(out.read_text())["values"]["rows"]
     assert len(rows) == len(reduced_map())
