@@ -18,7 +18,6 @@ from __future__ import annotations
 
 import argparse
 import sys
-from dataclasses import dataclass
 from pathlib import Path
 from typing import Dict
 
@@ -27,18 +26,15 @@ import numpy as np
 HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE.parents[1] / "python"))
 
-import yasps  # noqa: E402
-from yasps.articulated import (ArticulatedBody, JointDrives,  # noqa: E402
-                               JointLimits, add_articulated_body,
-                               add_joint_drives, add_joint_limits, read_urdf,
-                               transform)
-from yasps.contact import Contact, surface_of  # noqa: E402
-from yasps.sim import (Body, FreeVertices, ImplicitEuler,  # noqa: E402
-                       add_elastic_tets, add_free_vertices, box_tet_mesh,
-                       contact_union, lame, lumped_masses, simulate)
+sys.path.insert(0, str(HERE))
 
-DT = 0.01
-GRAVITY = np.array([0.0, 0.0, -9.81])
+import yasps  # noqa: E402
+from robot_scenes import (DT, RobotRun, add_soft_box,  # noqa: E402
+                    robot_and_box)
+from yasps.articulated import add_articulated_body, read_urdf  # noqa: E402
+from yasps.articulated import transform  # noqa: E402
+from yasps.sim import simulate  # noqa: E402
+
 CUBE = 0.05            # m, the cube's side
 DENSITY = 500.0        # kg/m^3: 62.5 g
 YOUNG, POISSON = 1e5, 0.4
@@ -48,22 +44,6 @@ SQUEEZE = 0.031        # finger travel: its inner face 6 mm into the cube
 LIFT = 0.05            # m raised
 #: frames of each phase: close, lift, hold
 CLOSE, RAISE = 30, 40
-
-
-@dataclass
-class Gripping:
-    """The scene and what a run reads."""
-    scene: yasps.Scene
-    stepper: ImplicitEuler
-    contact: Contact
-    robot: ArticulatedBody
-    drives: JointDrives
-    limits: JointLimits
-    cube: FreeVertices
-    cube_mass: float
-    bodies: Dict[str, Body]
-    #: the contact's triangles, numbered within its union of vertices
-    faces: np.ndarray
 
 
 def schedule(t: float) -> Dict[str, Dict[str, float]]:
@@ -77,55 +57,25 @@ def schedule(t: float) -> Dict[str, Dict[str, float]]:
             "velocities": {"lift": speed}}
 
 
-def build() -> Gripping:
+def build() -> RobotRun:
     s = yasps.scene("gripper")
     robot = add_articulated_body(s, read_urdf(HERE / "urdf" / "gripper.urdf"),
                                  name="gripper",
                                  base=transform(translation=[0, 0, MOUNT]))
-    verts, tets = box_tet_mesh(3, CUBE)
-    verts = verts - [CUBE / 2, CUBE / 2, 0.0] + [0.0, 0.0, 1e-3]
-    masses = lumped_masses(verts, tets, DENSITY)
-    cube_mesh = s.addMesh("cube")
-    cube = add_free_vertices(cube_mesh, verts, masses)
-    mu, lam = lame(YOUNG, POISSON)
-    add_elastic_tets(cube_mesh, cube.x, verts, tets, mu, lam, scale=DT * DT)
-    cube_faces = surface_of(tets)
-    union, faces = contact_union(s, robot.surfaces + [(cube.primitive,
-                                                       cube_faces)])
-    contact = Contact(s, union, faces=faces, dhat=1e-3, friction=FRICTION,
-                      halfspaces=[((0.0, 0.0, 0.0), (0.0, 0.0, 1.0))],
-                      average_mass=float(masses.mean()))
-    targets = robot.targets + [cube.x]
-    s.addMinimizeTarget(targets)
-    limits = add_joint_limits(s, robot)
-    drives = add_joint_drives(s, robot, DT,
-                              stiffness={"lift": 3000.0, "left_slide": 300.0,
-                                         "right_slide": 300.0},
-                              damping={"lift": 60.0, "left_slide": 6.0,
-                                       "right_slide": 6.0})
-    drives.schedule = schedule
-    stepper = ImplicitEuler(
-        s, targets=targets, predicted=[None] * len(robot.targets)
-        + [cube.x_hat], dt=DT, gravity=[None] * len(robot.targets)
-        + [GRAVITY], world=robot.world, contact=contact,
-        velocity_tolerance=1e-3)
-    drives.attach(stepper)
-    bodies = {"gripper": Body(union["position"], faces[:_robot_faces(robot)],
-                              (0.55, 0.6, 0.7)),
-              "cube": Body(cube.x, cube_faces, (0.9, 0.45, 0.35))}
-    return Gripping(s, stepper, contact, robot, drives, limits, cube,
-                    float(masses.sum()), bodies, faces)
+    cube = add_soft_box(s, "cube", 3, CUBE, [0.0, 0.0, 1e-3], DENSITY,
+                        YOUNG, POISSON)
+    return robot_and_box(
+        s, robot, cube, FRICTION,
+        stiffness={"lift": 3000.0, "left_slide": 300.0, "right_slide": 300.0},
+        damping={"lift": 60.0, "left_slide": 6.0, "right_slide": 6.0},
+        schedule=schedule, names=("gripper", "cube"))
 
 
-def _robot_faces(robot: ArticulatedBody) -> int:
-    return sum(len(faces) for _, faces in robot.surfaces)
-
-
-def carried_mass(gripping: Gripping) -> float:
+def carried_mass(gripping: RobotRun) -> float:
     """The mass the lift carries: the palm, the fingers and the cube."""
     links = gripping.robot.tree.links
     return sum(links[name].mass for name in
-               ("palm", "finger_left", "finger_right")) + gripping.cube_mass
+               ("palm", "finger_left", "finger_right")) + gripping.box.mass
 
 
 def main() -> None:
@@ -140,7 +90,7 @@ def main() -> None:
     def report(frame: int, _) -> None:
         if frame % 10 == 9:
             height = gripping.robot.joint_positions()[lift] * 1e3
-            bottom = gripping.cube.x.value[:, 2, 0].min() * 1e3
+            bottom = gripping.box.body.x.value[:, 2, 0].min() * 1e3
             force = gripping.drives.torques()[lift]
             print(f"frame {frame + 1}: lift {height:.1f} mm, cube bottom "
                   f"{bottom:.1f} mm, lift force {force:.3f} N")

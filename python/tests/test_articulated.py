@@ -362,9 +362,9 @@ def test_the_gripper_lifts_and_holds_the_soft_cube():
         q = robot.joint_positions()
         assert ((q > limits.lower) & (q < limits.upper)).all(), (frame, q)
         if frame >= frames - 10:
-            cube_height = gripping.cube.x.value[:, 2, 0].mean()
+            cube_height = gripping.box.body.x.value[:, 2, 0].mean()
             held.append(cube_height - q[lift])
-    assert gripping.cube.x.value[:, 2, 0].min() > 0.03   # off the ground
+    assert gripping.box.body.x.value[:, 2, 0].min() > 0.03   # off the ground
     assert np.ptp(held) < 1e-3                           # slip over the hold
     weight = example.carried_mass(gripping) * 9.81
     assert gripping.drives.torques()[lift] == pytest.approx(weight, rel=1e-2)
@@ -423,5 +423,5 @@ def test_the_arm_pushes_the_box_round_the_table():
         q = pushing.robot.joint_positions()
         assert ((q > pushing.limits.lower) & (q < pushing.limits.upper)).all()
     assert example.box_angle(pushing) > example.START + 0.25
-    heights = pushing.box.x.value[:, 2, 0]
+    heights = pushing.box.body.x.value[:, 2, 0]
     assert 0.0 < heights.min() < 2e-3   # resting on the table
