@@ -246,7 +246,6 @@ def lever(lower: float, upper: float) -> KinematicTree:
 
 def test_a_joint_limit_is_never_crossed_and_holds_the_bar():
     from yasps.articulated import add_joint_limits
-    from yasps.articulated.limits import barrier, UNBOUNDED  # noqa: F401
     scene = yasps.scene("limited_lever")
     body = add_articulated_body(scene, lever(-0.3, 0.3))
     scene.addMinimizeTarget(body.targets)

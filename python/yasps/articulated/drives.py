@@ -10,8 +10,8 @@ v)`` is minus the gradient of
     dt^2 kp/2 (q - q*)^2 + dt kd/2 (q - q_0 - dt v*)^2,
 
 which implicit Euler minimises beside its inertia ``m/2 |x - x_hat|^2`` (the
-potentials' dt^2 written out), so the drive is implicit: stiff drives stay
-stable at any time step. Targets are stored values: changing them per
+potentials' dt^2 written out): the drive's force is taken at the step's
+end, as every other force of the step is. Targets are stored values: changing them per
 frame recompiles nothing. :meth:`JointDrives.attach` has a stepper set
 ``q_0`` at every step's start; :meth:`JointDrives.torques` reads the force
 of each drive after a step (the joint torque that holds a load).
